@@ -1,0 +1,243 @@
+/* generate.c: the deterministic sample terrain of `make demo`.
+ *
+ * Our own gradient noise (Perlin's 2002 improved-noise idea: hashed
+ * gradients at lattice points, a quintic fade), summed as fractal Brownian
+ * motion and as a ridged multifractal (Musgrave, "Texturing & Modeling",
+ * ch. 16), the domain warped by a second noise (Quilez's domain warping),
+ * then particle hydraulic erosion (water droplets that pick up sediment
+ * on steep descents and drop it when slowing, after Mei et al. 2007 and
+ * many game-terrain writeups) and thermal erosion (slopes above a talus
+ * angle relax, Musgrave, Kolb & Mace 1989). Integer hashing and a
+ * fixed-order loop make the result identical for a seed on any platform
+ * with IEEE doubles. */
+#include "terrain_internal.h"
+
+#include <math.h>
+#include <string.h>
+
+static uint32_t hash3(uint32_t x, uint32_t y, uint32_t s)
+{
+    uint32_t h = x * 0x8da6b343u ^ y * 0xd8163841u ^ s * 0xcb1ab31fu;
+    h ^= h >> 16;
+    h *= 0x7feb352du;
+    h ^= h >> 15;
+    h *= 0x846ca68bu;
+    h ^= h >> 16;
+    return h;
+}
+
+static double fade(double t) { return t * t * t * (t * (t * 6 - 15) + 10); }
+
+/* Gradient noise in about [-1, 1]; 16 gradient directions. */
+static double noise(double x, double y, uint32_t seed)
+{
+    double fx = floor(x), fy = floor(y);
+    int64_t ix = (int64_t)fx, iy = (int64_t)fy;
+    double tx = x - fx, ty = y - fy;
+    double v[4];
+    for (int k = 0; k < 4; k++) {
+        int dx = k & 1, dy = k >> 1;
+        uint32_t h = hash3((uint32_t)(ix + dx), (uint32_t)(iy + dy), seed) & 15u;
+        double a = h * (2 * 3.14159265358979323846 / 16);
+        v[k] = cos(a) * (tx - dx) + sin(a) * (ty - dy);
+    }
+    double u = fade(tx), w = fade(ty);
+    double a = v[0] + u * (v[1] - v[0]), b = v[2] + u * (v[3] - v[2]);
+    return 1.41421356 * (a + w * (b - a));
+}
+
+static double fbm(double x, double y, int octaves, uint32_t seed)
+{
+    double sum = 0, amp = 0.5, norm = 0;
+    for (int o = 0; o < octaves; o++) {
+        sum += amp * noise(x, y, seed + (uint32_t)o * 1013u);
+        norm += amp;
+        /* rotate a little between octaves to hide the lattice */
+        double nx = 1.6 * x - 1.2 * y, ny = 1.2 * x + 1.6 * y;
+        x = nx + 17.3;
+        y = ny - 9.1;
+        amp *= 0.5;
+    }
+    return sum / norm;
+}
+
+static double ridged(double x, double y, int octaves, uint32_t seed)
+{
+    double sum = 0, amp = 0.5, weight = 1, norm = 0;
+    for (int o = 0; o < octaves; o++) {
+        double n = 1 - fabs(noise(x, y, seed + 7919u + (uint32_t)o * 31u));
+        n *= n;
+        n *= weight;
+        weight = n * 2 > 1 ? 1 : n * 2;
+        sum += n * amp;
+        norm += amp;
+        double nx = 1.6 * x - 1.2 * y, ny = 1.2 * x + 1.6 * y;
+        x = nx - 3.7;
+        y = ny + 11.9;
+        amp *= 0.5;
+    }
+    return sum / norm;
+}
+
+static double smoothstep(double a, double b, double x)
+{
+    double t = (x - a) / (b - a);
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    return t * t * (3 - 2 * t);
+}
+
+typedef struct rng {
+    uint64_t s;
+} rng;
+
+static uint32_t rng_next(rng *r)
+{
+    /* PCG-XSH-RR 64/32 */
+    uint64_t old = r->s;
+    r->s = old * 6364136223846793005ull + 1442695040888963407ull;
+    uint32_t xs = (uint32_t)(((old >> 18) ^ old) >> 27), rot = (uint32_t)(old >> 59);
+    return (xs >> rot) | (xs << ((32 - rot) & 31));
+}
+
+static double rng_unit(rng *r) { return rng_next(r) * (1.0 / 4294967296.0); }
+
+/* Height and gradient of the bilinear interpolant at (x, y). */
+static double sample_grad(const double *h, uint32_t w, double x, double y, double *gx, double *gy)
+{
+    uint32_t c = (uint32_t)x, r = (uint32_t)y;
+    double u = x - c, v = y - r;
+    const double *p = h + (size_t)r * w + c;
+    double a = p[0], b = p[1], cc = p[w], d = p[w + 1];
+    *gx = (b - a) * (1 - v) + (d - cc) * v;
+    *gy = (cc - a) * (1 - u) + (d - b) * u;
+    return a * (1 - u) * (1 - v) + b * u * (1 - v) + cc * (1 - u) * v + d * u * v;
+}
+
+static void hydraulic_erosion(double *h, uint32_t w, uint32_t ht, uint32_t seed)
+{
+    const double inertia = 0.05, capacity_k = 4, min_capacity = 0.01, erode_k = 0.3, deposit_k = 0.3,
+                 evaporate = 0.02, gravity = 4;
+    const int max_steps = 48;
+    rng r = {(uint64_t)seed * 0x9E3779B97F4A7C15ull + 12345};
+    uint64_t droplets = (uint64_t)w * ht / 3;
+    for (uint64_t d = 0; d < droplets; d++) {
+        double x = rng_unit(&r) * (w - 1.001), y = rng_unit(&r) * (ht - 1.001);
+        double dx = 0, dy = 0, speed = 1, water = 1, sediment = 0;
+        for (int step = 0; step < max_steps; step++) {
+            double gx, gy;
+            uint32_t c = (uint32_t)x, rr = (uint32_t)y;
+            double u = x - c, v = y - rr;
+            double hh = sample_grad(h, w, x, y, &gx, &gy);
+            dx = dx * inertia - gx * (1 - inertia);
+            dy = dy * inertia - gy * (1 - inertia);
+            double len = sqrt(dx * dx + dy * dy);
+            if (len < 1e-12)
+                break;
+            dx /= len;
+            dy /= len;
+            double nx = x + dx, ny = y + dy;
+            if (nx < 0 || ny < 0 || nx >= w - 1.001 || ny >= ht - 1.001)
+                break;
+            double g2x, g2y;
+            double dh = sample_grad(h, w, nx, ny, &g2x, &g2y) - hh;
+            double cap = -dh * speed * water * capacity_k;
+            if (cap < min_capacity * water * 0.01)
+                cap = min_capacity * water * 0.01;
+            double wts[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
+            size_t idx[4] = {(size_t)rr * w + c, (size_t)rr * w + c + 1, (size_t)(rr + 1) * w + c,
+                             (size_t)(rr + 1) * w + c + 1};
+            if (sediment > cap || dh > 0) {
+                double amt = dh > 0 ? (dh < sediment ? dh : sediment) : (sediment - cap) * deposit_k;
+                sediment -= amt;
+                for (int k = 0; k < 4; k++)
+                    h[idx[k]] += amt * wts[k];
+            } else {
+                double amt = (cap - sediment) * erode_k;
+                if (amt > -dh)
+                    amt = -dh;
+                for (int k = 0; k < 4; k++)
+                    h[idx[k]] -= amt * wts[k];
+                sediment += amt;
+            }
+            double s2 = speed * speed - dh * gravity;
+            speed = s2 > 0 ? sqrt(s2) : 0;
+            water *= 1 - evaporate;
+            x = nx;
+            y = ny;
+        }
+    }
+}
+
+static void thermal_erosion(double *h, uint32_t w, uint32_t ht, double talus, uint32_t iterations)
+{
+    for (uint32_t it = 0; it < iterations; it++)
+        for (uint32_t r = 0; r + 1 < ht; r++)
+            for (uint32_t c = 0; c + 1 < w; c++) {
+                size_t i = (size_t)r * w + c;
+                size_t nb[2] = {i + 1, i + w};
+                for (int k = 0; k < 2; k++) {
+                    double d = h[i] - h[nb[k]];
+                    double ad = fabs(d);
+                    if (ad > talus) {
+                        double move = 0.25 * (ad - talus) * (d > 0 ? 1 : -1);
+                        h[i] -= move;
+                        h[nb[k]] += move;
+                    }
+                }
+            }
+}
+
+void tsr_terrain_generate(tsr_heightfield *hf, const tsr_generate_options *opts)
+{
+    static const tsr_generate_options defaults = {0};
+    const tsr_generate_options *o = opts ? opts : &defaults;
+    uint32_t w = hf->width, ht = hf->height, seed = o->seed;
+    double relief = o->relief > 0 ? o->relief : 1200;
+    double feature = o->feature_size > 0 ? o->feature_size : (w > ht ? w : ht) / 3.0;
+    uint32_t thermal_iters = o->erosion_iterations ? o->erosion_iterations : 40;
+    size_t n = (size_t)w * ht;
+    const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
+    double *h = tsr_alloc(a, n * sizeof *h);
+    if (!h) { /* degrade gracefully: no erosion buffer, plain noise */
+        for (size_t i = 0; i < n; i++)
+            hf->data[i] = (float)(relief * 0.5 * (1 + fbm((i % w) / feature, (i / w) / feature, 6, seed)));
+        return;
+    }
+    double lo = INFINITY, hi = -INFINITY;
+    for (uint32_t r = 0; r < ht; r++)
+        for (uint32_t c = 0; c < w; c++) {
+            double x = c / feature, y = r / feature;
+            double wx = fbm(x * 0.7 + 5.2, y * 0.7 + 1.3, 4, seed + 101);
+            double wy = fbm(x * 0.7 - 3.1, y * 0.7 + 8.7, 4, seed + 202);
+            double qx = x + 0.45 * wx, qy = y + 0.45 * wy;
+            double base = fbm(qx, qy, 8, seed);
+            double mountains = ridged(qx * 1.3, qy * 1.3, 8, seed);
+            double mask = smoothstep(-0.25, 0.35, fbm(x * 0.45 + 40, y * 0.45 - 20, 3, seed + 303));
+            double v = 0.55 * base + mask * (mountains - 0.3) * 1.1;
+            h[(size_t)r * w + c] = v;
+            lo = v < lo ? v : lo;
+            hi = v > hi ? v : hi;
+        }
+    /* Normalise, flatten valleys a little (a power curve), and express
+     * heights in cell units with a relief of 4% of the side (1200 m over
+     * 1025 cells of 30 m), so erosion sees the slopes of real terrain
+     * whatever the resolution. */
+    double span = hi > lo ? hi - lo : 1;
+    double side = w > ht ? w : ht;
+    for (size_t i = 0; i < n; i++)
+        h[i] = pow((h[i] - lo) / span, 1.35) * 0.04 * side;
+    if (w >= 8 && ht >= 8) {
+        hydraulic_erosion(h, w, ht, seed);
+        thermal_erosion(h, w, ht, 0.8 /* tan 39 degrees */, thermal_iters);
+    }
+    lo = INFINITY;
+    hi = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        lo = h[i] < lo ? h[i] : lo;
+        hi = h[i] > hi ? h[i] : hi;
+    }
+    span = hi > lo ? hi - lo : 1;
+    for (size_t i = 0; i < n; i++)
+        hf->data[i] = (float)((h[i] - lo) / span * relief);
+    tsr_free(a, h);
+}

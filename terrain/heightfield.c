@@ -1,0 +1,317 @@
+/* heightfield.c: the heightfield container, loading (image bridge or raw
+ * samples), checks of the values, statistics and saving. */
+#include "terrain_internal.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+static bool size_ok(uint64_t w, uint64_t h)
+{
+    return w >= TSR_HEIGHTFIELD_MIN_SIDE && h >= TSR_HEIGHTFIELD_MIN_SIDE && w <= TSR_HEIGHTFIELD_MAX_SIDE &&
+           h <= TSR_HEIGHTFIELD_MAX_SIDE && w * h <= TSR_HEIGHTFIELD_MAX_SAMPLES;
+}
+
+tsr_heightfield *tsr_heightfield_create(uint32_t width, uint32_t height, const tsr_allocator *alloc)
+{
+    if (!size_ok(width, height))
+        return NULL;
+    tsr_heightfield *hf = tsr_alloc(alloc, sizeof *hf);
+    if (!hf)
+        return NULL;
+    memset(hf, 0, sizeof *hf);
+    if (alloc)
+        hf->alloc = *alloc;
+    hf->width = width;
+    hf->height = height;
+    hf->dx = hf->dy = hf->dz = 1;
+    size_t n = (size_t)width * height;
+    hf->data = tsr_alloc(alloc, n * sizeof(float));
+    if (!hf->data) {
+        tsr_free(alloc, hf);
+        return NULL;
+    }
+    memset(hf->data, 0, n * sizeof(float));
+    snprintf(hf->source_format, sizeof hf->source_format, "memory");
+    return hf;
+}
+
+void tsr_heightfield_destroy(tsr_heightfield *hf)
+{
+    if (!hf)
+        return;
+    tsr_allocator a = hf->alloc;
+    const tsr_allocator *ap = a.realloc ? &a : NULL;
+    tsr_free(ap, hf->data);
+    tsr_free(ap, hf);
+}
+
+uint32_t tsr_heightfield_width(const tsr_heightfield *hf) { return hf->width; }
+uint32_t tsr_heightfield_height(const tsr_heightfield *hf) { return hf->height; }
+float *tsr_heightfield_data(tsr_heightfield *hf) { return hf->data; }
+const float *tsr_heightfield_cdata(const tsr_heightfield *hf) { return hf->data; }
+const char *tsr_heightfield_source_format(const tsr_heightfield *hf) { return hf->source_format; }
+
+void tsr_heightfield_set_spacing(tsr_heightfield *hf, double dx, double dy, double dz)
+{
+    hf->dx = dx;
+    hf->dy = dy;
+    hf->dz = dz;
+}
+
+void tsr_heightfield_spacing(const tsr_heightfield *hf, double *dx, double *dy, double *dz)
+{
+    if (dx)
+        *dx = hf->dx;
+    if (dy)
+        *dy = hf->dy;
+    if (dz)
+        *dz = hf->dz;
+}
+
+tsr_raw_type tsr_raw_type_parse(const char *s)
+{
+    if (!strcasecmp(s, "u16") || !strcasecmp(s, "uint16"))
+        return TSR_RAW_U16;
+    if (!strcasecmp(s, "i16") || !strcasecmp(s, "int16"))
+        return TSR_RAW_I16;
+    if (!strcasecmp(s, "f32") || !strcasecmp(s, "float32") || !strcasecmp(s, "float"))
+        return TSR_RAW_F32;
+    return TSR_RAW_NONE;
+}
+
+void tsr_heightfield_stats_compute(const tsr_heightfield *hf, tsr_heightfield_stats *st)
+{
+    memset(st, 0, sizeof *st);
+    double mn = INFINITY, mx = -INFINITY, sum = 0;
+    size_t n = (size_t)hf->width * hf->height;
+    for (size_t i = 0; i < n; i++) {
+        float v = hf->data[i];
+        if (isnan(v)) {
+            st->nodata++;
+            continue;
+        }
+        st->valid++;
+        mn = v < mn ? v : mn;
+        mx = v > mx ? v : mx;
+        sum += v;
+    }
+    st->min = st->valid ? mn : NAN;
+    st->max = st->valid ? mx : NAN;
+    st->mean = st->valid ? sum / (double)st->valid : NAN;
+}
+
+static tsr_status load_raw(const char *path, const tsr_load_options *o, tsr_heightfield **out, const tsr_allocator *alloc,
+                           tsr_error *err)
+{
+    static const char *names[] = {"", "u16", "i16", "f32"};
+    size_t bytes = o->raw_type == TSR_RAW_F32 ? 4 : 2;
+    uint64_t w = o->raw_width, h = o->raw_height;
+    if (w < TSR_HEIGHTFIELD_MIN_SIDE || h < TSR_HEIGHTFIELD_MIN_SIDE)
+        return tsr_error_set(err, TSR_ERR_TOO_SMALL, "%s: raw size %llux%llu is below the 2x2 minimum", path,
+                             (unsigned long long)w, (unsigned long long)h);
+    if (!size_ok(w, h))
+        return tsr_error_set(err, TSR_ERR_TOO_LARGE, "%s: raw size %llux%llu is beyond Tessera's limits", path,
+                             (unsigned long long)w, (unsigned long long)h);
+    struct stat stt;
+    if (stat(path, &stt) != 0)
+        return tsr_error_set(err, errno == ENOENT ? TSR_ERR_NOT_FOUND : TSR_ERR_IO, "%s: %s", path, strerror(errno));
+    if (S_ISDIR(stt.st_mode))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: is a folder, not a raw heightfield", path);
+    uint64_t want = w * h * bytes;
+    if (stt.st_size == 0)
+        return tsr_error_set(err, TSR_ERR_EMPTY, "%s: empty file (0 bytes)", path);
+    if ((uint64_t)stt.st_size < want)
+        return tsr_error_set(err, TSR_ERR_TRUNCATED, "%s: raw %s %llux%llu needs %llu bytes but the file has %llu",
+                             path, names[o->raw_type], (unsigned long long)w, (unsigned long long)h,
+                             (unsigned long long)want, (unsigned long long)stt.st_size);
+    if ((uint64_t)stt.st_size > want)
+        return tsr_error_set(err, TSR_ERR_FORMAT,
+                             "%s: raw %s %llux%llu needs %llu bytes but the file has %llu (wrong size or type?)",
+                             path, names[o->raw_type], (unsigned long long)w, (unsigned long long)h,
+                             (unsigned long long)want, (unsigned long long)stt.st_size);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return tsr_error_set(err, TSR_ERR_IO, "%s: %s", path, strerror(errno));
+    tsr_heightfield *hf = tsr_heightfield_create((uint32_t)w, (uint32_t)h, alloc);
+    if (!hf) {
+        fclose(f);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
+    }
+    unsigned char buf[1 << 15];
+    size_t n = (size_t)(w * h), done = 0;
+    while (done < n) {
+        size_t want_n = n - done;
+        if (want_n > sizeof buf / bytes)
+            want_n = sizeof buf / bytes;
+        if (fread(buf, bytes, want_n, f) != want_n) {
+            fclose(f);
+            tsr_heightfield_destroy(hf);
+            return tsr_error_set(err, TSR_ERR_TRUNCATED, "%s: read failed after %zu samples", path, done);
+        }
+        for (size_t i = 0; i < want_n; i++) {
+            const unsigned char *b = buf + i * bytes;
+            float v;
+            if (o->raw_type == TSR_RAW_F32) {
+                uint32_t u = (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+                memcpy(&v, &u, 4);
+            } else {
+                uint16_t u = (uint16_t)(b[0] | b[1] << 8);
+                v = o->raw_type == TSR_RAW_U16 ? (float)u : (float)(int16_t)u;
+            }
+            hf->data[done + i] = v;
+        }
+        done += want_n;
+    }
+    fclose(f);
+    snprintf(hf->source_format, sizeof hf->source_format, "raw %s", names[o->raw_type]);
+    *out = hf;
+    return TSR_OK;
+}
+
+static tsr_status load_image(const char *path, const tsr_load_options *o, tsr_heightfield **out,
+                             const tsr_allocator *alloc, tsr_error *err)
+{
+    float *px = NULL;
+    tsr_image_info info;
+    tsr_status s = tsr_image_read(path, alloc, TSR_HEIGHTFIELD_MAX_SAMPLES, &px, &info, err);
+    if (s != TSR_OK)
+        return s;
+    if (info.width < TSR_HEIGHTFIELD_MIN_SIDE || info.height < TSR_HEIGHTFIELD_MIN_SIDE) {
+        tsr_free(alloc, px);
+        return tsr_error_set(err, TSR_ERR_TOO_SMALL, "%s: image is %ux%u; a heightfield needs at least 2x2 samples",
+                             path, info.width, info.height);
+    }
+    size_t n = (size_t)info.width * info.height, nch = info.channels;
+    tsr_heightfield *hf = tsr_heightfield_create(info.width, info.height, alloc);
+    if (!hf) {
+        tsr_free(alloc, px);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
+    }
+    if (o->decode == TSR_DECODE_TERRAIN_RGB) {
+        if (nch < 3 || strcmp(info.type, "uint8") != 0) {
+            tsr_heightfield_destroy(hf);
+            tsr_free(alloc, px);
+            return tsr_error_set(err, TSR_ERR_FORMAT,
+                                 "%s: Terrain-RGB needs 8-bit RGB or RGBA, but the image has %u channel(s) of %s",
+                                 path, info.width ? info.channels : 0, info.type);
+        }
+        for (size_t i = 0; i < n; i++) {
+            const float *p = px + i * nch;
+            double code = (double)p[0] * 65536.0 + (double)p[1] * 256.0 + (double)p[2];
+            hf->data[i] = (float)(code * 0.1 - 10000.0);
+        }
+    } else {
+        /* Several channels are accepted only when they agree: grey stored
+         * as RGB. An alpha channel is ignored. Anything else is ambiguous. */
+        size_t colour = nch == 2 || nch == 4 ? nch - 1 : nch;
+        for (size_t i = 0; i < n; i++) {
+            const float *p = px + i * nch;
+            for (size_t c = 1; c < colour; c++)
+                if (p[c] != p[0] && !(isnan(p[c]) && isnan(p[0]))) {
+                    tsr_heightfield_destroy(hf);
+                    tsr_free(alloc, px);
+                    return tsr_error_set(err, TSR_ERR_FORMAT,
+                                         "%s: a colour image (channels differ at column %zu, row %zu); "
+                                         "use --decode terrain-rgb for Terrain-RGB tiles",
+                                         path, i % info.width, i / info.width);
+                }
+            hf->data[i] = info.has_scale ? (float)(p[0] * info.scale + info.offset) : p[0];
+        }
+    }
+    tsr_free(alloc, px);
+    snprintf(hf->source_format, sizeof hf->source_format, "%s %s%s", info.format, info.type,
+             o->decode == TSR_DECODE_TERRAIN_RGB ? " terrain-rgb" : "");
+    *out = hf;
+    return TSR_OK;
+}
+
+tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts, const tsr_allocator *alloc,
+                                tsr_heightfield **out, tsr_error *err)
+{
+    static const tsr_load_options defaults = {0};
+    const tsr_load_options *o = opts ? opts : &defaults;
+    *out = NULL;
+    if (!path || !*path)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "no input file given");
+    tsr_heightfield *hf = NULL;
+    tsr_status s;
+    if (o->raw_type != TSR_RAW_NONE)
+        s = load_raw(path, o, &hf, alloc, err);
+    else if (o->decode == TSR_DECODE_NONE && tsr_pnm_is_grey(path))
+        s = tsr_pnm_read(path, alloc, &hf, err);
+    else
+        s = load_image(path, o, &hf, alloc, err);
+    if (s != TSR_OK)
+        return s;
+    size_t n = (size_t)hf->width * hf->height;
+    uint64_t valid = 0;
+    for (size_t i = 0; i < n; i++) {
+        float v = hf->data[i];
+        if (o->has_nodata && (double)v == o->nodata)
+            hf->data[i] = v = NAN;
+        if (isinf(v)) {
+            uint32_t c = (uint32_t)(i % hf->width), r = (uint32_t)(i / hf->width);
+            tsr_heightfield_destroy(hf);
+            return tsr_error_set(err, TSR_ERR_VALUE, "%s: infinite height at column %u, row %u", path, c, r);
+        }
+        valid += !isnan(v);
+    }
+    if (valid == 0) {
+        tsr_heightfield_destroy(hf);
+        return tsr_error_set(err, TSR_ERR_VALUE, "%s: every sample is no-data (NaN%s)", path,
+                             o->has_nodata ? " or the no-data value" : "");
+    }
+    *out = hf;
+    return TSR_OK;
+}
+
+tsr_status tsr_heightfield_save(const tsr_heightfield *hf, const char *path, tsr_save_info *info, tsr_error *err)
+{
+    const char *dot = strrchr(path, '.');
+    bool png = dot && !strcasecmp(dot, ".png");
+    bool flt = dot && (!strcasecmp(dot, ".tif") || !strcasecmp(dot, ".tiff") || !strcasecmp(dot, ".exr"));
+    if (!png && !flt)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: unknown heightfield format (use .png, .tif or .exr)", path);
+    double scale = 1, offset = 0;
+    const float *values = hf->data;
+    float *q = NULL;
+    size_t n = (size_t)hf->width * hf->height;
+    if (png) {
+        tsr_heightfield_stats st;
+        tsr_heightfield_stats_compute(hf, &st);
+        bool integral = st.valid > 0 && st.min >= 0 && st.max <= 65535;
+        for (size_t i = 0; i < n && integral; i++)
+            integral = isnan(hf->data[i]) || hf->data[i] == floorf(hf->data[i]);
+        if (!integral && st.valid > 0) {
+            offset = st.min;
+            scale = st.max > st.min ? (st.max - st.min) / 65535.0 : 1.0;
+        }
+        const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
+        q = tsr_alloc(a, n * sizeof(float));
+        if (!q)
+            return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
+        for (size_t i = 0; i < n; i++)
+            q[i] = isnan(hf->data[i]) ? NAN : (float)floor((hf->data[i] - offset) / scale + 0.5);
+        values = q;
+    }
+    char tmp[4096];
+    tsr_status s = tsr_atomic_begin(path, tmp, sizeof tmp, err);
+    if (s == TSR_OK) {
+        s = tsr_image_write(path, tmp, hf->width, hf->height, values, png, scale, offset, err);
+        if (s == TSR_OK)
+            s = tsr_atomic_commit(tmp, path, err);
+        else
+            tsr_atomic_abort(tmp);
+    }
+    if (q)
+        tsr_free(hf->alloc.realloc ? &hf->alloc : NULL, q);
+    if (s == TSR_OK && info) {
+        info->scale = scale;
+        info->offset = offset;
+    }
+    return s;
+}

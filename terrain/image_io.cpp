@@ -1,0 +1,193 @@
+// image_io.cpp: the one bridge from Tessera's C to OpenImageIO's C++ API.
+// Reads in strips of scanlines so a large image never needs its native
+// copy and its float copy in memory at once.
+#include "terrain_internal.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <sys/stat.h>
+#include <vector>
+
+using OIIO::ImageInput;
+using OIIO::ImageOutput;
+using OIIO::ImageSpec;
+using OIIO::TypeDesc;
+
+static std::string one_line(std::string s)
+{
+    for (char &c : s)
+        if (c == '\n' || c == '\r')
+            c = ' ';
+    while (!s.empty() && s.back() == ' ')
+        s.pop_back();
+    if (s.size() > 300)
+        s = s.substr(0, 300) + "...";
+    return s;
+}
+
+static const char *attr_name = "Tessera:HeightScaleOffset";
+
+extern "C" tsr_status tsr_image_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples,
+                                     float **pixels, tsr_image_info *info, tsr_error *err)
+{
+    *pixels = nullptr;
+    std::memset(info, 0, sizeof *info);
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return tsr_error_set(err, errno == ENOENT ? TSR_ERR_NOT_FOUND : TSR_ERR_IO, "%s: %s", path,
+                             std::strerror(errno));
+    if (S_ISDIR(st.st_mode))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: is a folder, not an image", path);
+    if (st.st_size == 0)
+        return tsr_error_set(err, TSR_ERR_EMPTY, "%s: empty file (0 bytes)", path);
+
+    auto in = ImageInput::open(path);
+    if (!in) {
+        std::string e = one_line(OIIO::geterror());
+        return tsr_error_set(err, TSR_ERR_FORMAT, "%s: not an image Tessera can read (%s)", path,
+                             e.empty() ? "unknown format" : e.c_str());
+    }
+    const ImageSpec &spec = in->spec();
+    if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
+        return tsr_error_set(err, TSR_ERR_FORMAT, "%s: image header gives no pixels (%dx%d, %d channels)", path,
+                             spec.width, spec.height, spec.nchannels);
+    if (spec.depth > 1)
+        return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "%s: volume images (depth %d) are not heightfields", path,
+                             spec.depth);
+    uint64_t w = (uint64_t)spec.width, h = (uint64_t)spec.height;
+    info->width = (uint32_t)std::min<uint64_t>(w, UINT32_MAX);
+    info->height = (uint32_t)std::min<uint64_t>(h, UINT32_MAX);
+    info->channels = (uint32_t)spec.nchannels;
+    std::snprintf(info->format, sizeof info->format, "%s", in->format_name());
+    std::snprintf(info->type, sizeof info->type, "%s", spec.format.c_str());
+    if (w > TSR_HEIGHTFIELD_MAX_SIDE || h > TSR_HEIGHTFIELD_MAX_SIDE || w * h > max_samples)
+        return tsr_error_set(err, TSR_ERR_TOO_LARGE,
+                             "%s: image is %llux%llu; Tessera accepts at most %u per side and %llu samples", path,
+                             (unsigned long long)w, (unsigned long long)h, TSR_HEIGHTFIELD_MAX_SIDE,
+                             (unsigned long long)max_samples);
+    if (spec.nchannels > 4)
+        return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "%s: %d channels; a heightfield has 1 (or RGB(A))", path,
+                             spec.nchannels);
+    std::string so = spec.get_string_attribute(attr_name);
+    if (!so.empty() && std::sscanf(so.c_str(), "%lf %lf", &info->scale, &info->offset) == 2 &&
+        std::isfinite(info->scale) && std::isfinite(info->offset) && info->scale != 0)
+        info->has_scale = true;
+
+    // Integer samples are read in their own type so they keep their
+    // integer values; everything else is read as float.
+    TypeDesc rt = TypeDesc::FLOAT;
+    switch (spec.format.basetype) {
+    case TypeDesc::UINT8: rt = TypeDesc::UINT8; break;
+    case TypeDesc::UINT16: rt = TypeDesc::UINT16; break;
+    case TypeDesc::INT16: rt = TypeDesc::INT16; break;
+    case TypeDesc::INT8: rt = TypeDesc::INT8; break;
+    default: break;
+    }
+    size_t nch = (size_t)spec.nchannels;
+    size_t total = (size_t)(w * h * nch);
+    float *out = (float *)tsr_alloc(alloc, total * sizeof(float));
+    if (!out)
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %llux%llu samples", path,
+                             (unsigned long long)w, (unsigned long long)h);
+    const int strip = 256;
+    std::vector<unsigned char> buf;
+    try {
+        buf.resize((size_t)strip * (size_t)w * nch * rt.size());
+    } catch (...) {
+        tsr_free(alloc, out);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
+    }
+    for (int y0 = 0; y0 < spec.height; y0 += strip) {
+        int y1 = std::min(spec.height, y0 + strip);
+        if (!in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, 0, 0, spec.nchannels, rt, buf.data())) {
+            std::string e = one_line(in->geterror());
+            tsr_free(alloc, out);
+            return tsr_error_set(err, TSR_ERR_TRUNCATED, "%s: truncated or corrupt pixel data at row %d (%s)", path,
+                                 y0, e.empty() ? "read failed" : e.c_str());
+        }
+        size_t n = (size_t)(y1 - y0) * (size_t)w * nch;
+        float *dst = out + (size_t)y0 * (size_t)w * nch;
+        switch (rt.basetype) {
+        case TypeDesc::UINT8:
+            for (size_t i = 0; i < n; i++) dst[i] = buf[i];
+            break;
+        case TypeDesc::INT8:
+            for (size_t i = 0; i < n; i++) dst[i] = (signed char)buf[i];
+            break;
+        case TypeDesc::UINT16: {
+            const uint16_t *s = (const uint16_t *)buf.data();
+            for (size_t i = 0; i < n; i++) dst[i] = s[i];
+            break;
+        }
+        case TypeDesc::INT16: {
+            const int16_t *s = (const int16_t *)buf.data();
+            for (size_t i = 0; i < n; i++) dst[i] = s[i];
+            break;
+        }
+        default: std::memcpy(dst, buf.data(), n * sizeof(float)); break;
+        }
+    }
+    // A reader may report success on a file cut short; OIIO records it.
+    if (in->has_error()) {
+        std::string e = one_line(in->geterror());
+        tsr_free(alloc, out);
+        return tsr_error_set(err, TSR_ERR_TRUNCATED, "%s: truncated or corrupt pixel data (%s)", path, e.c_str());
+    }
+    in->close();
+    *pixels = out;
+    return TSR_OK;
+}
+
+extern "C" tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
+                                      const float *values, bool as_u16, double scale, double offset,
+                                      tsr_error *err)
+{
+    auto out = ImageOutput::create(tmp);
+    if (!out) {
+        std::string e = one_line(OIIO::geterror());
+        return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "%s: cannot write this image format (%s)", path, e.c_str());
+    }
+    ImageSpec spec((int)width, (int)height, 1, as_u16 ? TypeDesc::UINT16 : TypeDesc::FLOAT);
+    spec.channelnames = {"Y"};
+    if (as_u16) {
+        char so[96];
+        std::snprintf(so, sizeof so, "%.17g %.17g", scale, offset);
+        spec.attribute(attr_name, so);
+        char desc[160];
+        std::snprintf(desc, sizeof desc, "Tessera heightfield: height = value * %.17g + %.17g", scale, offset);
+        spec.attribute("ImageDescription", desc);
+    } else {
+        spec.attribute("compression", "zip");
+    }
+    if (!out->open(tmp, spec)) {
+        std::string e = one_line(out->geterror());
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path, e.c_str());
+    }
+    bool ok = true;
+    if (as_u16) {
+        std::vector<uint16_t> row(width);
+        for (uint32_t y = 0; y < height && ok; y++) {
+            for (uint32_t x = 0; x < width; x++) {
+                float v = values[(size_t)y * width + x];
+                double q = std::isnan(v) ? 0.0 : std::floor(v + 0.5);
+                row[x] = (uint16_t)std::min(65535.0, std::max(0.0, q));
+            }
+            ok = out->write_scanline((int)y, 0, TypeDesc::UINT16, row.data());
+        }
+    } else {
+        ok = out->write_image(TypeDesc::FLOAT, values);
+    }
+    std::string e = ok ? std::string() : one_line(out->geterror());
+    if (!out->close() && ok) {
+        ok = false;
+        e = one_line(out->geterror());
+    }
+    if (!ok)
+        return tsr_error_set(err, TSR_ERR_IO, "%s: write failed (%s)", path, e.c_str());
+    return TSR_OK;
+}

@@ -1,0 +1,137 @@
+/* terrain.h: heightfields. Loading (through OpenImageIO, or raw files),
+ * saving, statistics, a deterministic sample-terrain generator, and the
+ * regular-grid mesh of a heightfield.
+ *
+ * Coordinate convention, kept everywhere in Tessera:
+ *   sample (column c, row r), 0 <= c < width, 0 <= r < height, sits at
+ *       x = c * dx,   y = r * dy,   z = h(c, r) * dz
+ *   Row 0 is the first row of the image file (its top line). Samples are
+ *   stored row-major: h(c, r) = data[r * width + c].
+ *   A NaN height marks no-data: such samples are holes, never zeros.
+ *
+ * Heights are float32 in the file's own units: 8- and 16-bit integer images
+ * give their integer values (0..255, 0..65535), not OpenImageIO's
+ * normalised 0..1, unless the file carries a Tessera scale and offset (see
+ * tsr_heightfield_save), which are then applied.
+ */
+#ifndef TSR_TERRAIN_H
+#define TSR_TERRAIN_H
+
+#include "tessellate/tessellate.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct tsr_heightfield tsr_heightfield;
+
+/* Sizes Tessera accepts: each side at least 2 and at most 1,048,576
+ * samples, and at most 2^31 samples in all (8 GiB of float32). */
+#define TSR_HEIGHTFIELD_MIN_SIDE 2u
+#define TSR_HEIGHTFIELD_MAX_SIDE (1u << 20)
+#define TSR_HEIGHTFIELD_MAX_SAMPLES ((uint64_t)1 << 31)
+
+typedef enum tsr_decode {
+    TSR_DECODE_NONE = 0,    /* one channel, or several equal ones (grey as RGB) */
+    TSR_DECODE_TERRAIN_RGB  /* h = (R*65536 + G*256 + B) * 0.1 - 10000 */
+} tsr_decode;
+
+typedef enum tsr_raw_type {
+    TSR_RAW_NONE = 0, /* not raw: the format comes from the file's bytes */
+    TSR_RAW_U16,      /* little-endian unsigned 16-bit */
+    TSR_RAW_I16,      /* little-endian signed 16-bit */
+    TSR_RAW_F32       /* little-endian IEEE float32 */
+} tsr_raw_type;
+
+/* Zero means default for every field. */
+typedef struct tsr_load_options {
+    tsr_decode decode;
+    tsr_raw_type raw_type;  /* when set, the file is headerless samples ... */
+    uint32_t raw_width;     /* ... of exactly raw_width * raw_height values */
+    uint32_t raw_height;
+    bool has_nodata;        /* samples equal to nodata become NaN */
+    double nodata;
+} tsr_load_options;
+
+/* Parses "u16", "i16" or "f32" (also "uint16", "int16", "float32"). */
+tsr_raw_type tsr_raw_type_parse(const char *s);
+
+/* Loads a heightfield. Formats: PNG (8/16-bit grey, or RGB(A) with
+ * decode), TIFF and GeoTIFF (8/16-bit integer, float32), OpenEXR, PGM, and
+ * anything else OpenImageIO reads as one channel; raw samples when
+ * opts->raw_type is set. Rejects sizes outside the limits above, infinite
+ * heights, and files with no valid (non-NaN) sample. On success *out owns
+ * the samples; on failure *out is NULL and err names path and problem. */
+tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts,
+                                const tsr_allocator *alloc, tsr_heightfield **out, tsr_error *err);
+
+/* A width × height heightfield of zeros with dx = dy = dz = 1; NULL when
+ * out of memory or outside the size limits. */
+tsr_heightfield *tsr_heightfield_create(uint32_t width, uint32_t height, const tsr_allocator *alloc);
+void tsr_heightfield_destroy(tsr_heightfield *hf);
+
+uint32_t tsr_heightfield_width(const tsr_heightfield *hf);
+uint32_t tsr_heightfield_height(const tsr_heightfield *hf);
+/* Row-major samples, width * height floats; valid until destroy. */
+float *tsr_heightfield_data(tsr_heightfield *hf);
+const float *tsr_heightfield_cdata(const tsr_heightfield *hf);
+/* Sample spacing and height scale (the convention above); default 1. */
+void tsr_heightfield_set_spacing(tsr_heightfield *hf, double dx, double dy, double dz);
+void tsr_heightfield_spacing(const tsr_heightfield *hf, double *dx, double *dy, double *dz);
+/* What the samples were read from, e.g. "png uint16" or "raw f32". */
+const char *tsr_heightfield_source_format(const tsr_heightfield *hf);
+
+typedef struct tsr_heightfield_stats {
+    double min, max, mean; /* over valid samples, in file units (before dz) */
+    uint64_t valid;        /* samples that are not NaN */
+    uint64_t nodata;       /* NaN samples */
+} tsr_heightfield_stats;
+
+void tsr_heightfield_stats_compute(const tsr_heightfield *hf, tsr_heightfield_stats *st);
+
+/* What tsr_heightfield_save used for a 16-bit PNG: the file's integer q
+ * stands for h = q * scale + offset. For float formats scale 1, offset 0. */
+typedef struct tsr_save_info {
+    double scale, offset;
+} tsr_save_info;
+
+/* Saves by path's extension: .png (16-bit grey, the valid range mapped onto
+ * 0..65535 unless the heights are already integers in 0..65535, the
+ * scale and offset stored in the file's metadata and returned in *info),
+ * .tif/.tiff (float32) or .exr (float32). NaN is written as NaN in float
+ * formats and as 0 in PNG (PNG has no no-data). Written to a temporary
+ * and renamed, so failure leaves no file. info may be NULL. */
+tsr_status tsr_heightfield_save(const tsr_heightfield *hf, const char *path, tsr_save_info *info,
+                                tsr_error *err);
+
+/* ---- Sample terrain ---------------------------------------------------- */
+
+/* Zero means default for every field. */
+typedef struct tsr_generate_options {
+    uint32_t seed;       /* any value; same seed, same terrain */
+    double relief;       /* height range in metres; default 1200 */
+    double feature_size; /* largest features, in samples; default width / 3 */
+    uint32_t erosion_iterations; /* thermal erosion passes; default 40 */
+} tsr_generate_options;
+
+/* Fills hf with a realistic terrain: domain-warped fractal noise blended
+ * with ridged multifractal mountains, then thermal erosion that relaxes
+ * slopes above the talus angle. Deterministic for a given seed and size,
+ * on every platform (integer hashing, no library random numbers). */
+void tsr_terrain_generate(tsr_heightfield *hf, const tsr_generate_options *opts);
+
+/* ---- Grid mesh --------------------------------------------------------- */
+
+/* The regular-grid mesh of the samples at every step-th column and row
+ * (the last column and row always included), in world coordinates
+ * (x = c*dx, y = r*dy, z = h*dz), triangles counter-clockwise from +z,
+ * two per cell. Cells with a NaN corner are left out: no-data becomes a
+ * hole. Normals, when asked, come from central differences of the full
+ * heightfield. The mesh must be initialised (tsr_mesh_init) and empty. */
+tsr_status tsr_terrain_grid_mesh(const tsr_heightfield *hf, uint32_t step, bool normals,
+                                 tsr_mesh *mesh, tsr_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* TSR_TERRAIN_H */

@@ -1,0 +1,49 @@
+/* terrain_internal.h: shared between terrain/ files; not public. */
+#ifndef TSR_TERRAIN_INTERNAL_H
+#define TSR_TERRAIN_INTERNAL_H
+
+#include "terrain/terrain.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+struct tsr_heightfield {
+    uint32_t width, height;
+    double dx, dy, dz;
+    float *data;
+    char source_format[64];
+    tsr_allocator alloc;
+};
+
+/* What the image bridge found in a file. */
+typedef struct tsr_image_info {
+    uint32_t width, height, channels;
+    char format[16]; /* OpenImageIO's format name: "png", "tiff", "openexr"... */
+    char type[16];   /* sample type: "uint8", "uint16", "float"... */
+    bool has_scale;  /* a Tessera scale/offset found in the metadata */
+    double scale, offset;
+} tsr_image_info;
+
+/* Reads every channel of the first subimage as float values in the file's
+ * own units (uint8 0..255, uint16 0..65535, int16 -32768..32767, floats as
+ * they are) into *pixels (width*height*channels, from alloc). Refuses
+ * images over max_samples pixels or with more than 4 channels before
+ * allocating anything. Implemented in C++ over OpenImageIO (image_io.cpp). */
+tsr_status tsr_image_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, float **pixels,
+                          tsr_image_info *info, tsr_error *err);
+
+/* Writes one channel to `tmp` (whose extension picks the format); messages
+ * name `path`. float32 unless as_u16, in which case the values are rounded
+ * and clamped to 0..65535 and scale/offset are stored in the metadata. */
+tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
+                           const float *values, bool as_u16, double scale, double offset, tsr_error *err);
+
+/* Greyscale Netpbm (P2, P5) read exactly (pnm.c). */
+bool tsr_pnm_is_grey(const char *path);
+tsr_status tsr_pnm_read(const char *path, const tsr_allocator *alloc, tsr_heightfield **out, tsr_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,243 @@
+/* tessellate.h: Tessera's kernel. Status codes, allocators, the indexed
+ * triangle mesh and its writers, atomic file output, and mesh validation.
+ *
+ * The kernel knows no kind of surface and no GPU (../shared/DESIGN.md).
+ *
+ * Conventions used everywhere in Tessera:
+ *  - Positions are float32 x, y, z with z up. Triangles are counter-clockwise
+ *    seen from the side their normal points to (for a terrain, from +z).
+ *  - Functions that can fail on input return a tsr_status and, when the
+ *    caller passes a tsr_error, fill it with a one-line message naming the
+ *    file, line or element at fault. A NULL tsr_error is allowed everywhere.
+ *  - Objects take an optional allocator; NULL means the C library's
+ *    malloc/realloc/free. No function keeps global state, so two meshes or
+ *    heightfields may be used from two threads at once.
+ *
+ * Public headers compile as C11 and as C++ (checked by a test).
+ */
+#ifndef TSR_TESSELLATE_H
+#define TSR_TESSELLATE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- Status ------------------------------------------------------------ */
+
+/* One table of codes; tsr_status_str() gives each its message. */
+typedef enum tsr_status {
+    TSR_OK = 0,
+    TSR_ERR_ARGUMENT,     /* a caller passed an invalid argument */
+    TSR_ERR_NOT_FOUND,    /* a file does not exist */
+    TSR_ERR_IO,           /* reading or writing failed */
+    TSR_ERR_EMPTY,        /* a file has no bytes */
+    TSR_ERR_FORMAT,       /* bytes are not a file of the expected format */
+    TSR_ERR_TRUNCATED,    /* a file ends before its header says it should */
+    TSR_ERR_TOO_LARGE,    /* dimensions beyond what Tessera accepts */
+    TSR_ERR_TOO_SMALL,    /* dimensions below what Tessera accepts */
+    TSR_ERR_VALUE,        /* a value is out of range (infinite height...) */
+    TSR_ERR_UNSUPPORTED,  /* a valid file using something not supported */
+    TSR_ERR_NOMEM,        /* an allocation failed */
+    TSR_ERR_INVALID_MESH, /* a mesh failed validation */
+    TSR_STATUS_COUNT
+} tsr_status;
+
+/* A short static message for a code, never NULL. */
+const char *tsr_status_str(tsr_status s);
+
+/* The detail of a failure: the code and a one-line message such as
+ * "terrain.png: truncated file (PNG read failed: ...)". */
+typedef struct tsr_error {
+    tsr_status status;
+    char message[512];
+} tsr_error;
+
+/* Sets err (if not NULL) to status and a printf-style message; returns
+ * status so callers can write `return tsr_error_set(err, ...)`. */
+tsr_status tsr_error_set(tsr_error *err, tsr_status status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* ---- Allocator --------------------------------------------------------- */
+
+/* One function in the manner of Lua's lua_Alloc: size 0 frees ptr and
+ * returns NULL; otherwise it behaves like realloc (ptr NULL allocates).
+ * A NULL tsr_allocator pointer anywhere means the C library's. */
+typedef struct tsr_allocator {
+    void *(*realloc)(void *user, void *ptr, size_t size);
+    void *user;
+} tsr_allocator;
+
+void *tsr_alloc(const tsr_allocator *a, size_t size);
+void *tsr_realloc(const tsr_allocator *a, void *ptr, size_t size);
+void tsr_free(const tsr_allocator *a, void *ptr);
+
+/* ---- Mesh -------------------------------------------------------------- */
+
+/* An indexed triangle mesh. positions holds 3 floats per vertex; normals
+ * (3 per vertex) and uvs (2 per vertex) are NULL when absent (and may be
+ * NULL while the mesh has no vertex yet); indices holds
+ * 3 per triangle. The arrays belong to the mesh and its allocator; fields
+ * may be read freely, and written within the counts. */
+typedef struct tsr_mesh {
+    uint32_t vertex_count;
+    uint32_t triangle_count;
+    float *positions;
+    float *normals;
+    float *uvs;
+    uint32_t *indices;
+    uint32_t vertex_capacity;
+    uint32_t triangle_capacity;
+    unsigned attributes; /* TSR_MESH_NORMALS | TSR_MESH_UVS, set at init */
+    tsr_allocator alloc;
+} tsr_mesh;
+
+enum { TSR_MESH_NORMALS = 1, TSR_MESH_UVS = 2 };
+
+/* Initialises an empty mesh; attributes is a mask of TSR_MESH_NORMALS and
+ * TSR_MESH_UVS. alloc may be NULL. */
+void tsr_mesh_init(tsr_mesh *m, unsigned attributes, const tsr_allocator *alloc);
+/* Frees every array and leaves an empty mesh. */
+void tsr_mesh_free(tsr_mesh *m);
+/* Grows capacity to at least the counts given (never shrinks). */
+tsr_status tsr_mesh_reserve(tsr_mesh *m, uint32_t vertices, uint32_t triangles);
+/* Appends a vertex (normal and uv may be NULL, read only when the mesh
+ * has them) and returns its index, or UINT32_MAX when out of memory. */
+uint32_t tsr_mesh_add_vertex(tsr_mesh *m, const float p[3], const float *n, const float *uv);
+/* Appends a triangle a, b, c (counter-clockwise); false when out of memory. */
+bool tsr_mesh_add_triangle(tsr_mesh *m, uint32_t a, uint32_t b, uint32_t c);
+/* Computes area-weighted vertex normals from the triangles, allocating the
+ * normal array when absent. */
+tsr_status tsr_mesh_compute_normals(tsr_mesh *m);
+
+/* ---- Writers ----------------------------------------------------------- */
+
+typedef enum tsr_mesh_format {
+    TSR_FORMAT_UNKNOWN = 0,
+    TSR_FORMAT_OBJ,  /* Wavefront OBJ, text, 1-based indices */
+    TSR_FORMAT_PLY,  /* binary little-endian PLY */
+    TSR_FORMAT_STL,  /* binary STL (unindexed, facet normals) */
+    TSR_FORMAT_GLB   /* glTF 2.0 binary, one mesh, uint32 indices */
+} tsr_mesh_format;
+
+/* The format named by a path's extension (case-insensitive), or UNKNOWN. */
+tsr_mesh_format tsr_mesh_format_from_path(const char *path);
+const char *tsr_mesh_format_name(tsr_mesh_format f);
+
+/* Writes m to path in format f (UNKNOWN: from the extension). The file is
+ * written under a temporary name in the same folder and renamed when
+ * complete, so a failure leaves no file at path. A mesh without triangles
+ * is refused (TSR_ERR_ARGUMENT), as are indices out of range.
+ * Coordinates are written as they are (z up) except in .glb, where glTF's
+ * +y-up frame is used: (x, y, z) is written as (x, z, -y), a rotation, so
+ * winding and handedness are kept. */
+tsr_status tsr_mesh_write(const tsr_mesh *m, const char *path, tsr_mesh_format f, tsr_error *err);
+
+/* ---- Atomic output ----------------------------------------------------- */
+
+/* Creates an empty temporary file beside `path`, keeping its extension
+ * (libraries that pick a format from the name still work), and puts its
+ * name in tmp (capacity cap). Fails with a message naming path when the
+ * folder is not writable. */
+tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *err);
+/* Renames tmp over path; on failure removes tmp and sets err. */
+tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err);
+/* Removes tmp after a failed write. */
+void tsr_atomic_abort(const char *tmp);
+
+/* ---- Half-edge view ---------------------------------------------------- */
+
+#define TSR_NO_TWIN UINT32_MAX        /* a boundary half-edge */
+#define TSR_NONMANIFOLD (UINT32_MAX - 1) /* edge used by 3 or more triangles */
+
+/* Half-edge h = 3*t + k runs from indices[3t+k] to indices[3t+(k+1)%3];
+ * the next half-edge in its triangle is 3t + (k+1)%3. twin[h] is the
+ * opposite half-edge, TSR_NO_TWIN on the boundary, TSR_NONMANIFOLD where
+ * the undirected edge has more than two half-edges. Half-edges of a
+ * degenerate triangle (repeated index) get TSR_NO_TWIN. */
+typedef struct tsr_halfedges {
+    uint32_t count; /* 3 * triangle_count */
+    uint32_t *twin;
+    uint32_t edge_count; /* distinct undirected edges */
+    tsr_allocator alloc;
+} tsr_halfedges;
+
+tsr_status tsr_halfedges_build(tsr_halfedges *he, const tsr_mesh *m, const tsr_allocator *alloc);
+void tsr_halfedges_free(tsr_halfedges *he);
+
+/* ---- Validation -------------------------------------------------------- */
+
+typedef struct tsr_validate_options {
+    /* Distance under which a vertex counts as lying on an edge or on
+     * another vertex; 0 means 1e-6 of the bounding box diagonal. */
+    double epsilon;
+    /* When true, triangles whose normal has z <= 0 are counted as wrongly
+     * oriented (a terrain's triangles all face +z). */
+    bool expect_up;
+} tsr_validate_options;
+
+#define TSR_VALIDATE_MAX_LOOPS 16
+
+/* What the checks found. Counts of zero mean a check passed; each failing
+ * check also records where it first failed. */
+typedef struct tsr_validation {
+    uint32_t vertices;   /* referenced vertices */
+    uint32_t edges;      /* distinct undirected edges */
+    uint32_t triangles;
+    int64_t euler;       /* vertices - edges + triangles */
+
+    uint32_t bad_indices;          /* index >= vertex_count */
+    uint32_t nonfinite_positions;  /* NaN or infinite coordinates */
+    uint32_t degenerate_triangles; /* repeated index or zero area */
+    uint32_t duplicate_triangles;  /* same three vertices as another */
+    uint32_t nonmanifold_edges;    /* used by more than two triangles */
+    uint32_t misoriented_edges;    /* two triangles traverse it the same way */
+    uint32_t t_junctions;          /* vertex inside another triangle's edge */
+    uint32_t coincident_vertices;  /* distinct indices at one position */
+    uint32_t downward_triangles;   /* normal z <= 0 (counted when expect_up) */
+    uint32_t boundary_edges;
+    uint32_t boundary_loops;
+    uint32_t loop_length[TSR_VALIDATE_MAX_LOOPS]; /* edges per loop, first loops */
+
+    /* Where each check first failed (UINT32_MAX where it did not). */
+    uint32_t first_bad_triangle;        /* bad index or non-finite corner */
+    uint32_t first_degenerate;          /* triangle */
+    uint32_t first_duplicate[2];        /* triangle, its twin */
+    uint32_t first_nonmanifold[2];      /* edge's vertices */
+    uint32_t first_misoriented[2];      /* edge's vertices */
+    uint32_t first_t_junction[3];       /* vertex, edge's vertices */
+    uint32_t first_coincident[2];       /* two vertices */
+    uint32_t first_downward;            /* triangle */
+} tsr_validation;
+
+/* Runs every check on m. opts may be NULL (defaults). Fails only when out
+ * of memory; the findings are in *out. Cost O(T log T) plus the spatial
+ * hashing of the conformity check. */
+tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts, tsr_validation *out);
+
+/* True when the mesh is an oriented, edge-manifold, conforming surface with
+ * no bad, degenerate or duplicate triangles (boundaries allowed). */
+bool tsr_validation_ok(const tsr_validation *v);
+
+/* Writes a one-line summary of the failures ("ok" when none) into buf. */
+void tsr_validation_describe(const tsr_validation *v, char *buf, size_t cap);
+
+/* Checks that every boundary edge of m lies on the border of the rectangle
+ * [x0,x1]×[y0,y1] (within eps, in x and y) and that the boundary forms a
+ * single loop: the test of "the only boundary is the domain's outer
+ * rectangle". Returns true when it holds; otherwise *bad_vertex (if not
+ * NULL) names a boundary vertex off the rectangle, or UINT32_MAX when the
+ * failure is the number of loops. */
+bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x1, double y1,
+                               double eps, uint32_t *bad_vertex);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* TSR_TESSELLATE_H */

@@ -1,0 +1,630 @@
+/* validate.c: the half-edge view of an indexed mesh and the checks every
+ * test uses: orientation, manifoldness, conformity (T-junctions), boundary
+ * loops, degenerate and duplicate triangles, Euler characteristic.
+ *
+ * Edges are found by sorting (edge key, half-edge) pairs, so the cost is
+ * O(T log T) with no hashing assumptions. T-junctions are found with a
+ * uniform spatial hash of the vertices: each edge visits the cells its
+ * (slightly inflated) bounding box covers. */
+#include "tessellate/tessellate.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct kv {
+    uint64_t key;
+    uint32_t val;
+} kv;
+
+static int kv_cmp(const void *a, const void *b)
+{
+    const kv *x = a, *y = b;
+    if (x->key != y->key)
+        return x->key < y->key ? -1 : 1;
+    return x->val < y->val ? -1 : x->val > y->val;
+}
+
+static uint64_t edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
+}
+
+tsr_status tsr_halfedges_build(tsr_halfedges *he, const tsr_mesh *m, const tsr_allocator *alloc)
+{
+    memset(he, 0, sizeof *he);
+    if (alloc)
+        he->alloc = *alloc;
+    size_t n = 3 * (size_t)m->triangle_count;
+    he->count = (uint32_t)n;
+    he->twin = tsr_alloc(alloc, n * sizeof *he->twin);
+    kv *e = tsr_alloc(alloc, n * sizeof *e);
+    if (!he->twin || !e) {
+        tsr_free(alloc, e);
+        tsr_halfedges_free(he);
+        return TSR_ERR_NOMEM;
+    }
+    size_t ne = 0;
+    for (size_t h = 0; h < n; h++) {
+        he->twin[h] = TSR_NO_TWIN;
+        size_t t = h / 3, k = h % 3;
+        uint32_t a = m->indices[h], b = m->indices[3 * t + (k + 1) % 3];
+        if (a == b)
+            continue;
+        e[ne].key = edge_key(a, b);
+        e[ne].val = (uint32_t)h;
+        ne++;
+    }
+    qsort(e, ne, sizeof *e, kv_cmp);
+    uint32_t edges = 0;
+    for (size_t i = 0; i < ne;) {
+        size_t j = i + 1;
+        while (j < ne && e[j].key == e[i].key)
+            j++;
+        edges++;
+        if (j - i == 2) {
+            he->twin[e[i].val] = e[i + 1].val;
+            he->twin[e[i + 1].val] = e[i].val;
+        } else if (j - i > 2) {
+            for (size_t k = i; k < j; k++)
+                he->twin[e[k].val] = TSR_NONMANIFOLD;
+        }
+        i = j;
+    }
+    he->edge_count = edges;
+    tsr_free(alloc, e);
+    return TSR_OK;
+}
+
+void tsr_halfedges_free(tsr_halfedges *he)
+{
+    tsr_allocator a = he->alloc;
+    tsr_free(a.realloc ? &a : NULL, he->twin);
+    memset(he, 0, sizeof *he);
+}
+
+static uint32_t he_from(const tsr_mesh *m, uint32_t h) { return m->indices[h]; }
+static uint32_t he_to(const tsr_mesh *m, uint32_t h) { return m->indices[3 * (h / 3) + (h % 3 + 1) % 3]; }
+
+/* ---- spatial hash of vertices ---- */
+
+typedef struct grid {
+    double origin[3], inv_cell;
+    uint32_t mask;   /* table size - 1 */
+    uint32_t *start; /* mask + 2 entries */
+    uint32_t *items; /* vertex indices grouped by bucket */
+} grid;
+
+static uint32_t cell_hash(int64_t x, int64_t y, int64_t z, uint32_t mask)
+{
+    uint64_t h = (uint64_t)x * 0x9E3779B97F4A7C15ull ^ (uint64_t)y * 0xC2B2AE3D27D4EB4Full ^
+                 (uint64_t)z * 0x165667B19E3779F9ull;
+    h ^= h >> 29;
+    return (uint32_t)h & mask;
+}
+
+static void cell_of(const grid *g, const float *p, int64_t c[3])
+{
+    for (int k = 0; k < 3; k++)
+        c[k] = (int64_t)floor((p[k] - g->origin[k]) * g->inv_cell);
+}
+
+static bool point_on_open_segment(const float *p, const float *a, const float *b, double eps)
+{
+    double ab[3], ap[3], l2 = 0, t = 0;
+    for (int k = 0; k < 3; k++) {
+        ab[k] = (double)b[k] - a[k];
+        ap[k] = (double)p[k] - a[k];
+        l2 += ab[k] * ab[k];
+        t += ab[k] * ap[k];
+    }
+    if (l2 <= 0)
+        return false;
+    t /= l2;
+    double len = sqrt(l2);
+    /* strictly inside: farther than eps from both ends along the edge */
+    if (t * len <= eps || (1 - t) * len <= eps)
+        return false;
+    double d2 = 0;
+    for (int k = 0; k < 3; k++) {
+        double q = ap[k] - t * ab[k];
+        d2 += q * q;
+    }
+    return d2 <= eps * eps;
+}
+
+tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts, tsr_validation *v)
+{
+    memset(v, 0, sizeof *v);
+    v->first_bad_triangle = v->first_degenerate = v->first_downward = UINT32_MAX;
+    v->first_duplicate[0] = v->first_duplicate[1] = UINT32_MAX;
+    v->first_nonmanifold[0] = v->first_nonmanifold[1] = UINT32_MAX;
+    v->first_misoriented[0] = v->first_misoriented[1] = UINT32_MAX;
+    v->first_t_junction[0] = v->first_t_junction[1] = v->first_t_junction[2] = UINT32_MAX;
+    v->first_coincident[0] = v->first_coincident[1] = UINT32_MAX;
+    v->triangles = m->triangle_count;
+    const tsr_allocator *al = m->alloc.realloc ? &m->alloc : NULL;
+    size_t nv = m->vertex_count, nt = m->triangle_count;
+
+    /* Bounding box, non-finite positions. */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    unsigned char *bad_vertex = tsr_alloc(al, nv + 1);
+    unsigned char *used = tsr_alloc(al, nv + 1);
+    if (!bad_vertex || !used) {
+        tsr_free(al, bad_vertex);
+        tsr_free(al, used);
+        return TSR_ERR_NOMEM;
+    }
+    memset(used, 0, nv + 1);
+    for (size_t i = 0; i < nv; i++) {
+        const float *p = m->positions + 3 * i;
+        bad_vertex[i] = !(isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]));
+        if (bad_vertex[i]) {
+            v->nonfinite_positions++;
+            continue;
+        }
+        for (int k = 0; k < 3; k++) {
+            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+            hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+        }
+    }
+    double diag = 0;
+    for (int k = 0; k < 3; k++)
+        diag += hi[k] > lo[k] ? (hi[k] - lo[k]) * (hi[k] - lo[k]) : 0;
+    diag = sqrt(diag);
+    double eps = opts && opts->epsilon > 0 ? opts->epsilon : 1e-6 * (diag > 0 ? diag : 1);
+
+    /* Per-triangle checks. A triangle with a bad index or a non-finite
+     * corner is excluded from every later check (it has no geometry). */
+    unsigned char *skip = tsr_alloc(al, nt + 1);
+    kv *tri_keys = tsr_alloc(al, (nt + 1) * sizeof *tri_keys);
+    if (!skip || !tri_keys) {
+        tsr_free(al, skip);
+        tsr_free(al, tri_keys);
+        tsr_free(al, bad_vertex);
+        tsr_free(al, used);
+        return TSR_ERR_NOMEM;
+    }
+    size_t nkeys = 0;
+    for (size_t t = 0; t < nt; t++) {
+        const uint32_t *ix = m->indices + 3 * t;
+        skip[t] = 0;
+        if (ix[0] >= nv || ix[1] >= nv || ix[2] >= nv) {
+            v->bad_indices++;
+            skip[t] = 1;
+        } else if (bad_vertex[ix[0]] || bad_vertex[ix[1]] || bad_vertex[ix[2]]) {
+            skip[t] = 1;
+        }
+        if (skip[t]) {
+            if (v->first_bad_triangle == UINT32_MAX)
+                v->first_bad_triangle = (uint32_t)t;
+            continue;
+        }
+        used[ix[0]] = used[ix[1]] = used[ix[2]] = 1;
+        const float *p0 = m->positions + 3 * (size_t)ix[0];
+        const float *p1 = m->positions + 3 * (size_t)ix[1];
+        const float *p2 = m->positions + 3 * (size_t)ix[2];
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; k++) {
+            e1[k] = (double)p1[k] - p0[k];
+            e2[k] = (double)p2[k] - p0[k];
+        }
+        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                       e1[0] * e2[1] - e1[1] * e2[0]};
+        double area2 = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        /* zero area: twice the area below eps times the longest edge */
+        double l1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+        double l2 = sqrt(e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]);
+        double lmax = l1 > l2 ? l1 : l2;
+        if (ix[0] == ix[1] || ix[1] == ix[2] || ix[0] == ix[2] || area2 <= eps * lmax * 1e-3) {
+            v->degenerate_triangles++;
+            if (v->first_degenerate == UINT32_MAX)
+                v->first_degenerate = (uint32_t)t;
+        }
+        if (opts && opts->expect_up && !(n[2] > 0)) {
+            v->downward_triangles++;
+            if (v->first_downward == UINT32_MAX)
+                v->first_downward = (uint32_t)t;
+        }
+        /* sorted triple, packed as 3 x 21 bits is not enough in general,
+         * so hash the sorted triple and compare exactly on collisions */
+        uint32_t s[3] = {ix[0], ix[1], ix[2]}, tmp;
+        if (s[0] > s[1]) { tmp = s[0]; s[0] = s[1]; s[1] = tmp; }
+        if (s[1] > s[2]) { tmp = s[1]; s[1] = s[2]; s[2] = tmp; }
+        if (s[0] > s[1]) { tmp = s[0]; s[0] = s[1]; s[1] = tmp; }
+        uint64_t h = s[0] * 0x9E3779B97F4A7C15ull;
+        h = (h ^ s[1]) * 0xC2B2AE3D27D4EB4Full;
+        h = (h ^ s[2]) * 0x165667B19E3779F9ull;
+        tri_keys[nkeys].key = h;
+        tri_keys[nkeys].val = (uint32_t)t;
+        nkeys++;
+    }
+    qsort(tri_keys, nkeys, sizeof *tri_keys, kv_cmp);
+    for (size_t i = 0; i + 1 < nkeys; i++) {
+        for (size_t j = i + 1; j < nkeys && tri_keys[j].key == tri_keys[i].key; j++) {
+            const uint32_t *a = m->indices + 3 * (size_t)tri_keys[i].val;
+            const uint32_t *b = m->indices + 3 * (size_t)tri_keys[j].val;
+            int same = 0;
+            for (int x = 0; x < 3; x++)
+                for (int y = 0; y < 3; y++)
+                    if (a[x] == b[y]) {
+                        same++;
+                        break;
+                    }
+            if (same == 3) {
+                v->duplicate_triangles++;
+                if (v->first_duplicate[0] == UINT32_MAX) {
+                    v->first_duplicate[0] = tri_keys[i].val;
+                    v->first_duplicate[1] = tri_keys[j].val;
+                }
+                break;
+            }
+        }
+    }
+    tsr_free(al, tri_keys);
+
+    /* Edges: half-edge view built over the usable triangles only. */
+    tsr_mesh sub = *m;
+    uint32_t *sub_idx = NULL;
+    if (v->bad_indices || v->first_bad_triangle != UINT32_MAX) {
+        sub_idx = tsr_alloc(al, (nt + 1) * 3 * sizeof *sub_idx);
+        if (!sub_idx) {
+            tsr_free(al, skip);
+            tsr_free(al, bad_vertex);
+            tsr_free(al, used);
+            return TSR_ERR_NOMEM;
+        }
+        size_t k = 0;
+        for (size_t t = 0; t < nt; t++)
+            if (!skip[t])
+                memcpy(sub_idx + 3 * k++, m->indices + 3 * t, 3 * sizeof *sub_idx);
+        sub.indices = sub_idx;
+        sub.triangle_count = (uint32_t)k;
+    }
+    tsr_free(al, skip);
+    tsr_halfedges he;
+    tsr_status st = tsr_halfedges_build(&he, &sub, al);
+    if (st != TSR_OK) {
+        tsr_free(al, sub_idx);
+        tsr_free(al, bad_vertex);
+        tsr_free(al, used);
+        return st;
+    }
+    v->edges = he.edge_count;
+    uint32_t *bnext = NULL; /* per vertex: a boundary half-edge leaving it */
+    for (uint32_t h = 0; h < he.count; h++) {
+        uint32_t a = he_from(&sub, h), b = he_to(&sub, h);
+        if (a == b)
+            continue;
+        uint32_t tw = he.twin[h];
+        if (tw == TSR_NONMANIFOLD)
+            continue; /* counted below, once per edge */
+        if (tw == TSR_NO_TWIN) {
+            v->boundary_edges++;
+            continue;
+        }
+        if (h < tw && he_from(&sub, tw) == a) {
+            v->misoriented_edges++;
+            if (v->first_misoriented[0] == UINT32_MAX) {
+                v->first_misoriented[0] = a;
+                v->first_misoriented[1] = b;
+            }
+        }
+    }
+    /* Non-manifold edges: count distinct keys among NONMANIFOLD half-edges. */
+    {
+        size_t nn = 0;
+        for (uint32_t h = 0; h < he.count; h++)
+            nn += he.twin[h] == TSR_NONMANIFOLD;
+        if (nn) {
+            kv *e = tsr_alloc(al, nn * sizeof *e);
+            if (e) {
+                size_t k = 0;
+                for (uint32_t h = 0; h < he.count; h++)
+                    if (he.twin[h] == TSR_NONMANIFOLD) {
+                        e[k].key = edge_key(he_from(&sub, h), he_to(&sub, h));
+                        e[k++].val = h;
+                    }
+                qsort(e, nn, sizeof *e, kv_cmp);
+                for (size_t i = 0; i < nn; i++)
+                    if (i == 0 || e[i].key != e[i - 1].key) {
+                        v->nonmanifold_edges++;
+                        if (v->first_nonmanifold[0] == UINT32_MAX) {
+                            v->first_nonmanifold[0] = (uint32_t)(e[i].key >> 32);
+                            v->first_nonmanifold[1] = (uint32_t)e[i].key;
+                        }
+                    }
+                tsr_free(al, e);
+            } else {
+                st = TSR_ERR_NOMEM;
+            }
+        }
+    }
+
+    /* Boundary loops: follow boundary half-edges head to tail. At a vertex
+     * where several boundary loops meet, any unused outgoing one is taken. */
+    if (st == TSR_OK && v->boundary_edges) {
+        bnext = tsr_alloc(al, (nv + 1) * sizeof *bnext);
+        uint32_t *chain = tsr_alloc(al, (he.count + 1) * sizeof *chain);
+        unsigned char *done = tsr_alloc(al, he.count + 1);
+        if (!bnext || !chain || !done) {
+            st = TSR_ERR_NOMEM;
+        } else {
+            for (size_t i = 0; i < nv; i++)
+                bnext[i] = UINT32_MAX;
+            memset(done, 0, he.count + 1);
+            /* chain[h] links boundary half-edges leaving the same vertex */
+            for (uint32_t h = 0; h < he.count; h++) {
+                chain[h] = UINT32_MAX;
+                if (he.twin[h] != TSR_NO_TWIN || he_from(&sub, h) == he_to(&sub, h))
+                    continue;
+                uint32_t a = he_from(&sub, h);
+                chain[h] = bnext[a];
+                bnext[a] = h;
+            }
+            for (uint32_t h = 0; h < he.count; h++) {
+                if (he.twin[h] != TSR_NO_TWIN || done[h] || he_from(&sub, h) == he_to(&sub, h))
+                    continue;
+                uint32_t len = 0, cur = h;
+                while (cur != UINT32_MAX && !done[cur]) {
+                    done[cur] = 1;
+                    len++;
+                    uint32_t b = he_to(&sub, cur), nx = bnext[b];
+                    while (nx != UINT32_MAX && done[nx])
+                        nx = chain[nx];
+                    cur = nx;
+                }
+                if (v->boundary_loops < TSR_VALIDATE_MAX_LOOPS)
+                    v->loop_length[v->boundary_loops] = len;
+                v->boundary_loops++;
+            }
+        }
+        tsr_free(al, chain);
+        tsr_free(al, done);
+    }
+    tsr_free(al, bnext);
+
+    /* Referenced vertices and Euler characteristic. */
+    for (size_t i = 0; i < nv; i++)
+        v->vertices += used[i];
+    v->euler = (int64_t)v->vertices - (int64_t)v->edges + (int64_t)sub.triangle_count;
+
+    /* Spatial hash: coincident vertices and T-junctions. */
+    if (st == TSR_OK && v->vertices > 0) {
+        grid g;
+        uint32_t tsize = 1;
+        while (tsize < 2 * v->vertices)
+            tsize <<= 1;
+        g.mask = tsize - 1;
+        /* cell: the mean edge length, never below 4 eps */
+        double sum = 0;
+        uint32_t cnt = 0;
+        for (uint32_t h = 0; h < he.count; h++) {
+            uint32_t a = he_from(&sub, h), b = he_to(&sub, h);
+            if (a == b)
+                continue;
+            const float *pa = m->positions + 3 * (size_t)a, *pb = m->positions + 3 * (size_t)b;
+            double d2 = 0;
+            for (int k = 0; k < 3; k++)
+                d2 += ((double)pa[k] - pb[k]) * ((double)pa[k] - pb[k]);
+            sum += sqrt(d2);
+            cnt++;
+        }
+        double cell = cnt ? sum / cnt : 1;
+        if (cell < 4 * eps)
+            cell = 4 * eps;
+        g.inv_cell = 1 / cell;
+        for (int k = 0; k < 3; k++)
+            g.origin[k] = lo[k];
+        g.start = tsr_alloc(al, ((size_t)tsize + 2) * sizeof *g.start);
+        g.items = tsr_alloc(al, ((size_t)v->vertices + 1) * sizeof *g.items);
+        uint32_t *bucket = tsr_alloc(al, (nv + 1) * sizeof *bucket);
+        if (!g.start || !g.items || !bucket) {
+            st = TSR_ERR_NOMEM;
+        } else {
+            memset(g.start, 0, ((size_t)tsize + 2) * sizeof *g.start);
+            for (size_t i = 0; i < nv; i++) {
+                if (!used[i])
+                    continue;
+                int64_t c[3];
+                cell_of(&g, m->positions + 3 * i, c);
+                bucket[i] = cell_hash(c[0], c[1], c[2], g.mask);
+                g.start[bucket[i] + 2]++;
+            }
+            for (uint32_t b = 0; b <= tsize; b++)
+                g.start[b + 1] += g.start[b];
+            for (size_t i = 0; i < nv; i++)
+                if (used[i])
+                    g.items[g.start[bucket[i] + 1]++] = (uint32_t)i;
+            /* now bucket b holds items[start[b] .. start[b+1]) */
+
+            /* coincident vertices: same or neighbouring cell within eps */
+            for (size_t i = 0; i < nv; i++) {
+                if (!used[i])
+                    continue;
+                const float *p = m->positions + 3 * i;
+                int64_t c[3];
+                cell_of(&g, p, c);
+                for (int dx = -1; dx <= 1; dx++)
+                    for (int dy = -1; dy <= 1; dy++)
+                        for (int dz = -1; dz <= 1; dz++) {
+                            uint32_t b = cell_hash(c[0] + dx, c[1] + dy, c[2] + dz, g.mask);
+                            for (uint32_t k = g.start[b]; k < g.start[b + 1]; k++) {
+                                uint32_t j = g.items[k];
+                                if (j <= i)
+                                    continue;
+                                const float *q = m->positions + 3 * (size_t)j;
+                                int64_t cj[3];
+                                cell_of(&g, q, cj);
+                                if (cj[0] != c[0] + dx || cj[1] != c[1] + dy || cj[2] != c[2] + dz)
+                                    continue; /* hash collision: another cell */
+                                double d2 = 0;
+                                for (int a = 0; a < 3; a++)
+                                    d2 += ((double)p[a] - q[a]) * ((double)p[a] - q[a]);
+                                if (d2 <= eps * eps) {
+                                    v->coincident_vertices++;
+                                    if (v->first_coincident[0] == UINT32_MAX) {
+                                        v->first_coincident[0] = (uint32_t)i;
+                                        v->first_coincident[1] = j;
+                                    }
+                                }
+                            }
+                        }
+            }
+            /* T-junctions: for each undirected edge (visited from its
+             * lower-numbered half-edge or its boundary half-edge), the
+             * vertices in the cells of its inflated bounding box. When the
+             * box covers more cells than there are vertices, scan all. */
+            for (uint32_t h = 0; h < he.count; h++) {
+                uint32_t a = he_from(&sub, h), b = he_to(&sub, h), tw = he.twin[h];
+                if (a == b)
+                    continue;
+                if (tw != TSR_NO_TWIN && tw != TSR_NONMANIFOLD && tw < h)
+                    continue;
+                const float *pa = m->positions + 3 * (size_t)a, *pb = m->positions + 3 * (size_t)b;
+                float bl[3], bh[3];
+                for (int k = 0; k < 3; k++) {
+                    bl[k] = (float)((pa[k] < pb[k] ? pa[k] : pb[k]) - eps);
+                    bh[k] = (float)((pa[k] > pb[k] ? pa[k] : pb[k]) + eps);
+                }
+                int64_t c0[3], c1[3];
+                cell_of(&g, bl, c0);
+                cell_of(&g, bh, c1);
+                double cells = 1;
+                for (int k = 0; k < 3; k++)
+                    cells *= (double)(c1[k] - c0[k] + 1);
+                if (cells > v->vertices) {
+                    for (size_t j = 0; j < nv; j++) {
+                        if (!used[j] || j == a || j == b)
+                            continue;
+                        if (point_on_open_segment(m->positions + 3 * j, pa, pb, eps)) {
+                            v->t_junctions++;
+                            if (v->first_t_junction[0] == UINT32_MAX) {
+                                v->first_t_junction[0] = (uint32_t)j;
+                                v->first_t_junction[1] = a;
+                                v->first_t_junction[2] = b;
+                            }
+                        }
+                    }
+                    continue;
+                }
+                for (int64_t x = c0[0]; x <= c1[0]; x++)
+                    for (int64_t y = c0[1]; y <= c1[1]; y++)
+                        for (int64_t z = c0[2]; z <= c1[2]; z++) {
+                            uint32_t bk = cell_hash(x, y, z, g.mask);
+                            for (uint32_t k = g.start[bk]; k < g.start[bk + 1]; k++) {
+                                uint32_t j = g.items[k];
+                                if (j == a || j == b)
+                                    continue;
+                                int64_t cj[3];
+                                cell_of(&g, m->positions + 3 * (size_t)j, cj);
+                                if (cj[0] != x || cj[1] != y || cj[2] != z)
+                                    continue; /* hash collision: another cell */
+                                if (point_on_open_segment(m->positions + 3 * (size_t)j, pa, pb, eps)) {
+                                    v->t_junctions++;
+                                    if (v->first_t_junction[0] == UINT32_MAX) {
+                                        v->first_t_junction[0] = j;
+                                        v->first_t_junction[1] = a;
+                                        v->first_t_junction[2] = b;
+                                    }
+                                }
+                            }
+                        }
+            }
+        }
+        tsr_free(al, g.start);
+        tsr_free(al, g.items);
+        tsr_free(al, bucket);
+    }
+    tsr_halfedges_free(&he);
+    tsr_free(al, sub_idx);
+    tsr_free(al, bad_vertex);
+    tsr_free(al, used);
+    return st;
+}
+
+bool tsr_validation_ok(const tsr_validation *v)
+{
+    return v->bad_indices == 0 && v->first_bad_triangle == UINT32_MAX && v->degenerate_triangles == 0 &&
+           v->duplicate_triangles == 0 && v->nonmanifold_edges == 0 && v->misoriented_edges == 0 &&
+           v->t_junctions == 0 && v->downward_triangles == 0;
+}
+
+void tsr_validation_describe(const tsr_validation *v, char *buf, size_t cap)
+{
+    size_t n = 0;
+    buf[0] = '\0';
+#define ADD(...)                                                                                   \
+    do {                                                                                           \
+        if (n < cap) {                                                                             \
+            int w = snprintf(buf + n, cap - n, __VA_ARGS__);                                      \
+            if (w > 0)                                                                             \
+                n += (size_t)w;                                                                    \
+        }                                                                                          \
+    } while (0)
+    if (v->bad_indices)
+        ADD("%u triangles with out-of-range indices (first: triangle %u); ", v->bad_indices,
+            v->first_bad_triangle);
+    else if (v->first_bad_triangle != UINT32_MAX)
+        ADD("triangles with non-finite corners (first: triangle %u); ", v->first_bad_triangle);
+    if (v->degenerate_triangles)
+        ADD("%u degenerate triangles (first: %u); ", v->degenerate_triangles, v->first_degenerate);
+    if (v->duplicate_triangles)
+        ADD("%u duplicate triangles (first: %u and %u); ", v->duplicate_triangles, v->first_duplicate[0],
+            v->first_duplicate[1]);
+    if (v->nonmanifold_edges)
+        ADD("%u non-manifold edges (first: %u-%u); ", v->nonmanifold_edges, v->first_nonmanifold[0],
+            v->first_nonmanifold[1]);
+    if (v->misoriented_edges)
+        ADD("%u inconsistently oriented edges (first: %u-%u); ", v->misoriented_edges,
+            v->first_misoriented[0], v->first_misoriented[1]);
+    if (v->t_junctions)
+        ADD("%u T-junctions (first: vertex %u on edge %u-%u); ", v->t_junctions, v->first_t_junction[0],
+            v->first_t_junction[1], v->first_t_junction[2]);
+    if (v->downward_triangles)
+        ADD("%u triangles facing down (first: %u); ", v->downward_triangles, v->first_downward);
+    if (n == 0)
+        ADD("ok: %u vertices, %u edges, %u triangles, %u boundary loops, Euler %lld", v->vertices, v->edges,
+            v->triangles, v->boundary_loops, (long long)v->euler);
+    else if (n >= 2 && n < cap)
+        buf[n - 2] = '\0';
+#undef ADD
+}
+
+bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x1, double y1, double eps,
+                               uint32_t *bad_vertex)
+{
+    if (bad_vertex)
+        *bad_vertex = UINT32_MAX;
+    tsr_validation v;
+    if (tsr_mesh_validate(m, NULL, &v) != TSR_OK || v.boundary_loops != 1)
+        return false;
+    tsr_halfedges he;
+    if (tsr_halfedges_build(&he, m, m->alloc.realloc ? &m->alloc : NULL) != TSR_OK)
+        return false;
+    bool ok = true;
+    for (uint32_t h = 0; h < he.count && ok; h++) {
+        if (he.twin[h] != TSR_NO_TWIN)
+            continue;
+        uint32_t ends[2] = {he_from(m, h), he_to(m, h)};
+        if (ends[0] == ends[1])
+            continue;
+        const float *p = m->positions + 3 * (size_t)ends[0], *q = m->positions + 3 * (size_t)ends[1];
+        /* both ends on one common side of the rectangle */
+        bool left = fabs(p[0] - x0) <= eps && fabs(q[0] - x0) <= eps;
+        bool right = fabs(p[0] - x1) <= eps && fabs(q[0] - x1) <= eps;
+        bool bottom = fabs(p[1] - y0) <= eps && fabs(q[1] - y0) <= eps;
+        bool top = fabs(p[1] - y1) <= eps && fabs(q[1] - y1) <= eps;
+        if (!(left || right || bottom || top)) {
+            ok = false;
+            if (bad_vertex) {
+                bool p_on = fabs(p[0] - x0) <= eps || fabs(p[0] - x1) <= eps || fabs(p[1] - y0) <= eps ||
+                            fabs(p[1] - y1) <= eps;
+                *bad_vertex = p_on ? ends[1] : ends[0];
+            }
+        }
+    }
+    tsr_halfedges_free(&he);
+    return ok;
+}

@@ -1,0 +1,439 @@
+/* write.c: mesh writers (OBJ, binary PLY, binary STL, glTF 2.0 .glb) and
+ * atomic file output. Binary formats are written byte by byte in little
+ * endian, so the files are the same on any host. */
+#define _GNU_SOURCE /* mkstemps */
+#include "tessellate/tessellate.h"
+
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+
+/* ---- Atomic output ---------------------------------------------------- */
+
+tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *err)
+{
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    const char *dot = strrchr(base, '.');
+    const char *ext = dot ? dot : "";
+    size_t dirlen = (size_t)(base - path);
+    int n = snprintf(tmp, cap, "%.*s.%.*s.tsr-tmp-XXXXXX%s", (int)dirlen, path,
+                     (int)(dot ? (size_t)(dot - base) : strlen(base)), base, ext);
+    if (*base == '\0')
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path names a folder, not a file", path);
+    if (n < 0 || (size_t)n >= cap)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path too long", path);
+    int fd = mkstemps(tmp, (int)strlen(ext));
+    if (fd < 0)
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
+    close(fd);
+    return TSR_OK;
+}
+
+tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err)
+{
+    if (rename(tmp, path) != 0) {
+        int e = errno;
+        remove(tmp);
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: %s", path, strerror(e));
+    }
+    return TSR_OK;
+}
+
+void tsr_atomic_abort(const char *tmp) { remove(tmp); }
+
+/* ---- Formats ---------------------------------------------------------- */
+
+tsr_mesh_format tsr_mesh_format_from_path(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    if (!dot || strchr(dot, '/'))
+        return TSR_FORMAT_UNKNOWN;
+    if (!strcasecmp(dot, ".obj"))
+        return TSR_FORMAT_OBJ;
+    if (!strcasecmp(dot, ".ply"))
+        return TSR_FORMAT_PLY;
+    if (!strcasecmp(dot, ".stl"))
+        return TSR_FORMAT_STL;
+    if (!strcasecmp(dot, ".glb"))
+        return TSR_FORMAT_GLB;
+    return TSR_FORMAT_UNKNOWN;
+}
+
+const char *tsr_mesh_format_name(tsr_mesh_format f)
+{
+    switch (f) {
+    case TSR_FORMAT_OBJ: return "obj";
+    case TSR_FORMAT_PLY: return "ply";
+    case TSR_FORMAT_STL: return "stl";
+    case TSR_FORMAT_GLB: return "glb";
+    default: return "unknown";
+    }
+}
+
+/* A buffered little-endian writer that remembers the first failure. */
+typedef struct out {
+    FILE *f;
+    unsigned char buf[1 << 16];
+    size_t n;
+    bool failed;
+} out;
+
+static void out_flush(out *o)
+{
+    if (o->n && !o->failed && fwrite(o->buf, 1, o->n, o->f) != o->n)
+        o->failed = true;
+    o->n = 0;
+}
+
+static void out_bytes(out *o, const void *p, size_t n)
+{
+    const unsigned char *s = p;
+    while (n) {
+        if (o->n == sizeof o->buf)
+            out_flush(o);
+        size_t k = sizeof o->buf - o->n;
+        if (k > n)
+            k = n;
+        memcpy(o->buf + o->n, s, k);
+        o->n += k;
+        s += k;
+        n -= k;
+    }
+}
+
+static void out_u32(out *o, uint32_t v)
+{
+    unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8), (unsigned char)(v >> 16),
+                          (unsigned char)(v >> 24)};
+    out_bytes(o, b, 4);
+}
+
+static void out_u16(out *o, uint16_t v)
+{
+    unsigned char b[2] = {(unsigned char)v, (unsigned char)(v >> 8)};
+    out_bytes(o, b, 2);
+}
+
+static void out_f32(out *o, float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    out_u32(o, u);
+}
+
+static void out_printf(out *o, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+static void out_printf(out *o, const char *fmt, ...)
+{
+    char line[256];
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    if (n > 0)
+        out_bytes(o, line, (size_t)n < sizeof line ? (size_t)n : sizeof line - 1);
+}
+
+/* ---- OBJ ---- */
+static void write_obj(out *o, const tsr_mesh *m)
+{
+    out_printf(o, "# Tessera mesh: %u vertices, %u triangles\n", m->vertex_count, m->triangle_count);
+    for (uint32_t i = 0; i < m->vertex_count; i++) {
+        const float *p = m->positions + 3 * (size_t)i;
+        out_printf(o, "v %.9g %.9g %.9g\n", p[0], p[1], p[2]);
+    }
+    if (m->uvs)
+        for (uint32_t i = 0; i < m->vertex_count; i++)
+            out_printf(o, "vt %.9g %.9g\n", m->uvs[2 * (size_t)i], m->uvs[2 * (size_t)i + 1]);
+    if (m->normals)
+        for (uint32_t i = 0; i < m->vertex_count; i++) {
+            const float *n = m->normals + 3 * (size_t)i;
+            out_printf(o, "vn %.9g %.9g %.9g\n", n[0], n[1], n[2]);
+        }
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t *ix = m->indices + 3 * (size_t)t;
+        uint32_t a = ix[0] + 1, b = ix[1] + 1, c = ix[2] + 1;
+        if (m->normals && m->uvs)
+            out_printf(o, "f %u/%u/%u %u/%u/%u %u/%u/%u\n", a, a, a, b, b, b, c, c, c);
+        else if (m->normals)
+            out_printf(o, "f %u//%u %u//%u %u//%u\n", a, a, b, b, c, c);
+        else if (m->uvs)
+            out_printf(o, "f %u/%u %u/%u %u/%u\n", a, a, b, b, c, c);
+        else
+            out_printf(o, "f %u %u %u\n", a, b, c);
+    }
+}
+
+/* ---- PLY ---- */
+static void write_ply(out *o, const tsr_mesh *m)
+{
+    out_printf(o, "ply\nformat binary_little_endian 1.0\ncomment Tessera\nelement vertex %u\n"
+                  "property float x\nproperty float y\nproperty float z\n",
+               m->vertex_count);
+    if (m->normals)
+        out_printf(o, "property float nx\nproperty float ny\nproperty float nz\n");
+    if (m->uvs)
+        out_printf(o, "property float s\nproperty float t\n");
+    out_printf(o, "element face %u\nproperty list uchar uint vertex_indices\nend_header\n",
+               m->triangle_count);
+    for (uint32_t i = 0; i < m->vertex_count; i++) {
+        for (int k = 0; k < 3; k++)
+            out_f32(o, m->positions[3 * (size_t)i + k]);
+        if (m->normals)
+            for (int k = 0; k < 3; k++)
+                out_f32(o, m->normals[3 * (size_t)i + k]);
+        if (m->uvs)
+            for (int k = 0; k < 2; k++)
+                out_f32(o, m->uvs[2 * (size_t)i + k]);
+    }
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        unsigned char three = 3;
+        out_bytes(o, &three, 1);
+        for (int k = 0; k < 3; k++)
+            out_u32(o, m->indices[3 * (size_t)t + k]);
+    }
+}
+
+/* ---- STL ---- */
+static void write_stl(out *o, const tsr_mesh *m)
+{
+    char header[80] = {0};
+    /* Must not begin with "solid": readers would take it for ASCII STL. */
+    snprintf(header, sizeof header, "Tessera binary STL");
+    out_bytes(o, header, 80);
+    out_u32(o, m->triangle_count);
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t *ix = m->indices + 3 * (size_t)t;
+        const float *p[3] = {m->positions + 3 * (size_t)ix[0], m->positions + 3 * (size_t)ix[1],
+                             m->positions + 3 * (size_t)ix[2]};
+        double e1[3], e2[3], n[3];
+        for (int k = 0; k < 3; k++) {
+            e1[k] = (double)p[1][k] - p[0][k];
+            e2[k] = (double)p[2][k] - p[0][k];
+        }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int k = 0; k < 3; k++)
+            out_f32(o, l > 0 ? (float)(n[k] / l) : 0.0f);
+        for (int v = 0; v < 3; v++)
+            for (int k = 0; k < 3; k++)
+                out_f32(o, p[v][k]);
+        out_u16(o, 0);
+    }
+}
+
+/* ---- GLB ---- */
+static cJSON *json_vec(const float *v, int n)
+{
+    cJSON *a = cJSON_CreateArray();
+    for (int i = 0; i < n; i++)
+        cJSON_AddItemToArray(a, cJSON_CreateNumber((double)v[i]));
+    return a;
+}
+
+static int add_view(cJSON *views, size_t offset, size_t length, int target)
+{
+    cJSON *v = cJSON_CreateObject();
+    cJSON_AddNumberToObject(v, "buffer", 0);
+    cJSON_AddNumberToObject(v, "byteOffset", (double)offset);
+    cJSON_AddNumberToObject(v, "byteLength", (double)length);
+    cJSON_AddNumberToObject(v, "target", target);
+    cJSON_AddItemToArray(views, v);
+    return cJSON_GetArraySize(views) - 1;
+}
+
+static int add_accessor(cJSON *accs, int view, int ctype, uint32_t count, const char *type,
+                        const float *mn, const float *mx, int n)
+{
+    cJSON *a = cJSON_CreateObject();
+    cJSON_AddNumberToObject(a, "bufferView", view);
+    cJSON_AddNumberToObject(a, "componentType", ctype);
+    cJSON_AddNumberToObject(a, "count", count);
+    cJSON_AddStringToObject(a, "type", type);
+    if (mn) {
+        cJSON_AddItemToObject(a, "min", json_vec(mn, n));
+        cJSON_AddItemToObject(a, "max", json_vec(mx, n));
+    }
+    cJSON_AddItemToArray(accs, a);
+    return cJSON_GetArraySize(accs) - 1;
+}
+
+/* glTF is +y up; Tessera is +z up: (x, y, z) -> (x, z, -y). */
+static void to_gltf(const float *p, float *q)
+{
+    q[0] = p[0];
+    q[1] = p[2];
+    q[2] = p[1] == 0.0f ? 0.0f : -p[1];
+}
+
+static tsr_status write_glb(out *o, const tsr_mesh *m)
+{
+    size_t nv = m->vertex_count, nt = m->triangle_count;
+    size_t pos_off = 0, pos_len = nv * 12;
+    size_t nrm_off = pos_off + pos_len, nrm_len = m->normals ? nv * 12 : 0;
+    size_t uv_off = nrm_off + nrm_len, uv_len = m->uvs ? nv * 8 : 0;
+    size_t idx_off = uv_off + uv_len, idx_len = nt * 12;
+    size_t bin_len = idx_off + idx_len; /* every part is a multiple of 4 */
+
+    float mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < nv; i++) {
+        float q[3];
+        to_gltf(m->positions + 3 * i, q);
+        for (int k = 0; k < 3; k++) {
+            mn[k] = q[k] < mn[k] ? q[k] : mn[k];
+            mx[k] = q[k] > mx[k] ? q[k] : mx[k];
+        }
+    }
+
+    cJSON *root = cJSON_CreateObject();
+    cJSON *asset = cJSON_AddObjectToObject(root, "asset");
+    cJSON_AddStringToObject(asset, "version", "2.0");
+    cJSON_AddStringToObject(asset, "generator", "Tessera");
+    cJSON_AddNumberToObject(root, "scene", 0);
+    cJSON *scenes = cJSON_AddArrayToObject(root, "scenes");
+    cJSON *scene = cJSON_CreateObject();
+    cJSON *nodes_ix = cJSON_AddArrayToObject(scene, "nodes");
+    cJSON_AddItemToArray(nodes_ix, cJSON_CreateNumber(0));
+    cJSON_AddItemToArray(scenes, scene);
+    cJSON *nodes = cJSON_AddArrayToObject(root, "nodes");
+    cJSON *node = cJSON_CreateObject();
+    cJSON_AddNumberToObject(node, "mesh", 0);
+    cJSON_AddItemToArray(nodes, node);
+
+    cJSON *views = cJSON_AddArrayToObject(root, "bufferViews");
+    cJSON *accs = cJSON_AddArrayToObject(root, "accessors");
+    cJSON *attrs = cJSON_CreateObject();
+    int v = add_view(views, pos_off, pos_len, 34962);
+    cJSON_AddNumberToObject(attrs, "POSITION", add_accessor(accs, v, 5126, (uint32_t)nv, "VEC3", mn, mx, 3));
+    if (m->normals) {
+        v = add_view(views, nrm_off, nrm_len, 34962);
+        cJSON_AddNumberToObject(attrs, "NORMAL", add_accessor(accs, v, 5126, (uint32_t)nv, "VEC3", NULL, NULL, 0));
+    }
+    if (m->uvs) {
+        v = add_view(views, uv_off, uv_len, 34962);
+        cJSON_AddNumberToObject(attrs, "TEXCOORD_0", add_accessor(accs, v, 5126, (uint32_t)nv, "VEC2", NULL, NULL, 0));
+    }
+    v = add_view(views, idx_off, idx_len, 34963);
+    int ia = add_accessor(accs, v, 5125, (uint32_t)(3 * nt), "SCALAR", NULL, NULL, 0);
+
+    cJSON *meshes = cJSON_AddArrayToObject(root, "meshes");
+    cJSON *mesh = cJSON_CreateObject();
+    cJSON *prims = cJSON_AddArrayToObject(mesh, "primitives");
+    cJSON *prim = cJSON_CreateObject();
+    cJSON_AddItemToObject(prim, "attributes", attrs);
+    cJSON_AddNumberToObject(prim, "indices", ia);
+    cJSON_AddNumberToObject(prim, "mode", 4);
+    cJSON_AddItemToArray(prims, prim);
+    cJSON_AddItemToArray(meshes, mesh);
+    cJSON *buffers = cJSON_AddArrayToObject(root, "buffers");
+    cJSON *buf = cJSON_CreateObject();
+    cJSON_AddNumberToObject(buf, "byteLength", (double)bin_len);
+    cJSON_AddItemToArray(buffers, buf);
+
+    char *json = cJSON_PrintUnformatted(root);
+    cJSON_Delete(root);
+    if (!json)
+        return TSR_ERR_NOMEM;
+    size_t jlen = strlen(json), jpad = (4 - jlen % 4) % 4;
+    uint64_t total = 12 + 8 + jlen + jpad + 8 + bin_len;
+    if (total > UINT32_MAX) {
+        free(json);
+        return TSR_ERR_TOO_LARGE;
+    }
+    out_u32(o, 0x46546C67u); /* "glTF" */
+    out_u32(o, 2);
+    out_u32(o, (uint32_t)total);
+    out_u32(o, (uint32_t)(jlen + jpad));
+    out_u32(o, 0x4E4F534Au); /* "JSON" */
+    out_bytes(o, json, jlen);
+    out_bytes(o, "    ", jpad);
+    free(json);
+    out_u32(o, (uint32_t)bin_len);
+    out_u32(o, 0x004E4942u); /* "BIN\0" */
+    for (size_t i = 0; i < nv; i++) {
+        float q[3];
+        to_gltf(m->positions + 3 * i, q);
+        for (int k = 0; k < 3; k++)
+            out_f32(o, q[k]);
+    }
+    if (m->normals)
+        for (size_t i = 0; i < nv; i++) {
+            float q[3];
+            to_gltf(m->normals + 3 * i, q);
+            for (int k = 0; k < 3; k++)
+                out_f32(o, q[k]);
+        }
+    if (m->uvs)
+        for (size_t i = 0; i < 2 * nv; i++)
+            out_f32(o, m->uvs[i]);
+    for (size_t i = 0; i < 3 * nt; i++)
+        out_u32(o, m->indices[i]);
+    return TSR_OK;
+}
+
+tsr_status tsr_mesh_write(const tsr_mesh *m, const char *path, tsr_mesh_format f, tsr_error *err)
+{
+    if (f == TSR_FORMAT_UNKNOWN)
+        f = tsr_mesh_format_from_path(path);
+    if (f == TSR_FORMAT_UNKNOWN)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT,
+                             "%s: unknown mesh format (use .obj, .ply, .stl or .glb)", path);
+    if (m->triangle_count == 0)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: the mesh has no triangles; nothing written", path);
+    for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
+        if (m->indices[i] >= m->vertex_count)
+            return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: triangle %zu has vertex index %u of %u",
+                                 path, i / 3, m->indices[i], m->vertex_count);
+    char tmp[4096];
+    tsr_status s = tsr_atomic_begin(path, tmp, sizeof tmp, err);
+    if (s != TSR_OK)
+        return s;
+    out *o = malloc(sizeof *o);
+    if (!o) {
+        tsr_atomic_abort(tmp);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
+    }
+    o->n = 0;
+    o->failed = false;
+    o->f = fopen(tmp, "wb");
+    if (!o->f) {
+        int e = errno;
+        free(o);
+        tsr_atomic_abort(tmp);
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: %s", path, strerror(e));
+    }
+    s = TSR_OK;
+    switch (f) {
+    case TSR_FORMAT_OBJ: write_obj(o, m); break;
+    case TSR_FORMAT_PLY: write_ply(o, m); break;
+    case TSR_FORMAT_STL: write_stl(o, m); break;
+    default: s = write_glb(o, m); break;
+    }
+    out_flush(o);
+    int e = o->failed ? errno : 0;
+    if (fclose(o->f) != 0 && !e)
+        e = errno ? errno : EIO;
+    bool failed = o->failed || e;
+    free(o);
+    if (s != TSR_OK || failed) {
+        tsr_atomic_abort(tmp);
+        if (s == TSR_ERR_TOO_LARGE)
+            return tsr_error_set(err, s, "%s: mesh too large for a .glb (over 4 GiB)", path);
+        if (s != TSR_OK)
+            return tsr_error_set(err, s, "%s: %s", path, tsr_status_str(s));
+        return tsr_error_set(err, TSR_ERR_IO, "%s: write failed: %s", path, strerror(e ? e : EIO));
+    }
+    return tsr_atomic_commit(tmp, path, err);
+}

@@ -1,0 +1,215 @@
+/* Mesh container, normals, formats, atomic output, and the binary layouts
+ * of the writers (read back here byte by byte; the independent readers,
+ * assimp and the Khronos validator, run in tests/tools/writers.sh). */
+#include "check.h"
+#include "tessellate/tessellate.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+static bool exists(const char *p)
+{
+    struct stat st;
+    return stat(p, &st) == 0;
+}
+
+static long file_size(const char *p)
+{
+    struct stat st;
+    return stat(p, &st) == 0 ? (long)st.st_size : -1;
+}
+
+/* A unit square pyramid-ish fan: 5 vertices, 4 triangles. */
+static void fan(tsr_mesh *m, unsigned attrs)
+{
+    tsr_mesh_init(m, attrs, NULL);
+    float p[5][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5f, 0.5f, 0.25f}};
+    float uv[5][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0.5f, 0.5f}};
+    for (int i = 0; i < 5; i++)
+        tsr_mesh_add_vertex(m, p[i], NULL, uv[i]);
+    for (uint32_t i = 0; i < 4; i++)
+        tsr_mesh_add_triangle(m, i, (i + 1) % 4, 4);
+}
+
+static uint32_t rd32(const unsigned char *b) { return b[0] | b[1] << 8 | b[2] << 16 | (uint32_t)b[3] << 24; }
+
+TEST(container_grows)
+{
+    tsr_mesh m;
+    tsr_mesh_init(&m, TSR_MESH_NORMALS | TSR_MESH_UVS, NULL);
+    for (int i = 0; i < 10000; i++) {
+        float p[3] = {(float)i, 0, 0}, n[3] = {0, 0, 1}, uv[2] = {0.5f, 0.25f};
+        CHECK(tsr_mesh_add_vertex(&m, p, n, uv) == (uint32_t)i);
+    }
+    for (int i = 0; i + 2 < 10000; i++)
+        CHECK(tsr_mesh_add_triangle(&m, i, i + 1, i + 2));
+    CHECK(m.vertex_count == 10000 && m.triangle_count == 9998);
+    CHECK(m.positions[3 * 9999] == 9999.0f && m.uvs[2 * 9999 + 1] == 0.25f && m.normals[3 * 5000 + 2] == 1.0f);
+    tsr_mesh_free(&m);
+    CHECK(m.vertex_count == 0 && m.positions == NULL);
+}
+
+TEST(normals_face_up)
+{
+    tsr_mesh m;
+    fan(&m, 0);
+    CHECK(tsr_mesh_compute_normals(&m) == TSR_OK);
+    CHECK(m.normals != NULL);
+    for (uint32_t i = 0; i < m.vertex_count; i++) {
+        const float *n = m.normals + 3 * i;
+        CHECK_NEAR(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1.0, 1e-5);
+        CHECK(n[2] > 0.5f);
+    }
+    CHECK_NEAR(m.normals[3 * 4 + 2], 1.0, 1e-6); /* apex of a symmetric fan */
+    tsr_mesh_free(&m);
+}
+
+TEST(format_from_path)
+{
+    CHECK(tsr_mesh_format_from_path("a/b.OBJ") == TSR_FORMAT_OBJ);
+    CHECK(tsr_mesh_format_from_path("x.ply") == TSR_FORMAT_PLY);
+    CHECK(tsr_mesh_format_from_path("x.stl") == TSR_FORMAT_STL);
+    CHECK(tsr_mesh_format_from_path("x.glb") == TSR_FORMAT_GLB);
+    CHECK(tsr_mesh_format_from_path("x.gltf") == TSR_FORMAT_UNKNOWN);
+    CHECK(tsr_mesh_format_from_path("dir.obj/x") == TSR_FORMAT_UNKNOWN);
+    CHECK(tsr_mesh_format_from_path("noext") == TSR_FORMAT_UNKNOWN);
+}
+
+TEST(unwritable_output_leaves_nothing)
+{
+    tsr_mesh m;
+    fan(&m, 0);
+    tsr_error err = {0};
+    CHECK(tsr_mesh_write(&m, "/nonexistent-dir/x.obj", TSR_FORMAT_UNKNOWN, &err) == TSR_ERR_IO);
+    CHECK(strstr(err.message, "/nonexistent-dir/x.obj") != NULL);
+    CHECK(!exists("/nonexistent-dir/x.obj"));
+    const char *dir = check_temp_dir();
+    char path[512];
+    snprintf(path, sizeof path, "%s/ro", dir);
+    CHECK(mkdir(path, 0500) == 0);
+    snprintf(path, sizeof path, "%s/ro/x.ply", dir);
+    tsr_status s = tsr_mesh_write(&m, path, TSR_FORMAT_UNKNOWN, &err);
+    if (geteuid() != 0) { /* root may write anywhere */
+        CHECK(s == TSR_ERR_IO);
+        CHECK(!exists(path));
+    }
+    /* an index out of range is refused before anything is written */
+    snprintf(path, sizeof path, "%s/bad.obj", dir);
+    m.indices[2] = 77;
+    CHECK(tsr_mesh_write(&m, path, TSR_FORMAT_UNKNOWN, &err) == TSR_ERR_ARGUMENT);
+    CHECK(!exists(path));
+    /* an empty mesh is refused */
+    tsr_mesh e;
+    tsr_mesh_init(&e, 0, NULL);
+    CHECK(tsr_mesh_write(&e, path, TSR_FORMAT_UNKNOWN, &err) == TSR_ERR_ARGUMENT);
+    CHECK(!exists(path));
+    tsr_mesh_free(&m);
+}
+
+TEST(binary_layouts)
+{
+    tsr_mesh m;
+    fan(&m, TSR_MESH_UVS);
+    tsr_mesh_compute_normals(&m);
+    const char *dir = check_temp_dir();
+    char path[512];
+    tsr_error err = {0};
+
+    snprintf(path, sizeof path, "%s/m.stl", dir);
+    CHECK(tsr_mesh_write(&m, path, TSR_FORMAT_UNKNOWN, &err) == TSR_OK);
+    CHECK(file_size(path) == 84 + 50 * 4);
+    FILE *f = fopen(path, "rb");
+    unsigned char buf[4096];
+    size_t n = fread(buf, 1, sizeof buf, f);
+    fclose(f);
+    CHECK(n == 284 && memcmp(buf, "solid", 5) != 0 && rd32(buf + 80) == 4);
+
+    snprintf(path, sizeof path, "%s/m.ply", dir);
+    CHECK(tsr_mesh_write(&m, path, TSR_FORMAT_UNKNOWN, &err) == TSR_OK);
+    f = fopen(path, "rb");
+    n = fread(buf, 1, sizeof buf, f);
+    fclose(f);
+    buf[n < sizeof buf ? n : sizeof buf - 1] = 0;
+    char *end = strstr((char *)buf, "end_header\n");
+    CHECK(end != NULL);
+    if (end) {
+        size_t header = (size_t)(end - (char *)buf) + 11;
+        CHECK(n == header + 5 * 8 * 4 + 4 * 13);
+        CHECK(strstr((char *)buf, "element vertex 5") && strstr((char *)buf, "element face 4"));
+        float x;
+        memcpy(&x, buf + header + 8 * 4 * 4 + 0, 4); /* vertex 4's x */
+        CHECK(x == 0.5f);
+    }
+
+    snprintf(path, sizeof path, "%s/m.glb", dir);
+    CHECK(tsr_mesh_write(&m, path, TSR_FORMAT_UNKNOWN, &err) == TSR_OK);
+    f = fopen(path, "rb");
+    n = fread(buf, 1, sizeof buf, f);
+    fclose(f);
+    CHECK(rd32(buf) == 0x46546C67u && rd32(buf + 4) == 2 && rd32(buf + 8) == n);
+    uint32_t jlen = rd32(buf + 12);
+    CHECK(jlen % 4 == 0 && rd32(buf + 16) == 0x4E4F534Au);
+    uint32_t blen = rd32(buf + 20 + jlen);
+    CHECK(blen == 5 * 12 + 5 * 12 + 5 * 8 + 4 * 12);
+    CHECK(20 + jlen + 8 + blen == n);
+
+    snprintf(path, sizeof path, "%s/m.obj", dir);
+    CHECK(tsr_mesh_write(&m, path, TSR_FORMAT_UNKNOWN, &err) == TSR_OK);
+    f = fopen(path, "r");
+    char line[256];
+    int v = 0, vt = 0, vn = 0, fc = 0;
+    while (fgets(line, sizeof line, f)) {
+        v += !strncmp(line, "v ", 2);
+        vt += !strncmp(line, "vt ", 3);
+        vn += !strncmp(line, "vn ", 3);
+        fc += !strncmp(line, "f ", 2);
+    }
+    fclose(f);
+    CHECK(v == 5 && vt == 5 && vn == 5 && fc == 4);
+    tsr_mesh_free(&m);
+}
+
+TEST(status_table)
+{
+    for (int s = 0; s < TSR_STATUS_COUNT; s++)
+        CHECK(tsr_status_str((tsr_status)s) != NULL && strlen(tsr_status_str((tsr_status)s)) > 0);
+    CHECK(strcmp(tsr_status_str((tsr_status)999), "unknown status") == 0);
+    tsr_error e;
+    CHECK(tsr_error_set(&e, TSR_ERR_VALUE, "%s: %d", "f.png", 3) == TSR_ERR_VALUE);
+    CHECK(strcmp(e.message, "f.png: 3") == 0 && e.status == TSR_ERR_VALUE);
+    CHECK(tsr_error_set(NULL, TSR_ERR_IO, "x") == TSR_ERR_IO);
+}
+
+static size_t counted;
+static void *counting_realloc(void *user, void *p, size_t n)
+{
+    (void)user;
+    if (n == 0) {
+        free(p);
+        counted--;
+        return NULL;
+    }
+    if (!p)
+        counted++;
+    return realloc(p, n);
+}
+
+TEST(custom_allocator_is_used_and_balanced)
+{
+    tsr_allocator a = {counting_realloc, NULL};
+    tsr_mesh m;
+    tsr_mesh_init(&m, TSR_MESH_NORMALS, &a);
+    float p[3] = {0, 0, 0};
+    for (int i = 0; i < 100; i++)
+        tsr_mesh_add_vertex(&m, p, NULL, NULL);
+    tsr_mesh_add_triangle(&m, 0, 1, 2);
+    CHECK(counted == 3);
+    tsr_validation v;
+    CHECK(tsr_mesh_validate(&m, NULL, &v) == TSR_OK);
+    CHECK(counted == 3);
+    tsr_mesh_free(&m);
+    CHECK(counted == 0);
+}
+
+TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing),
+          T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced))

@@ -1,0 +1,258 @@
+/* Validation checks, each against meshes whose defects are known by
+ * construction: the oracle is how the mesh was built. */
+#include "check.h"
+#include "tessellate/tessellate.h"
+
+/* An n x n grid of unit quads in the z = 0 plane, two CCW triangles each. */
+static void grid(tsr_mesh *m, int n)
+{
+    tsr_mesh_init(m, 0, NULL);
+    for (int j = 0; j <= n; j++)
+        for (int i = 0; i <= n; i++) {
+            float p[3] = {(float)i, (float)j, 0};
+            tsr_mesh_add_vertex(m, p, NULL, NULL);
+        }
+    for (int j = 0; j < n; j++)
+        for (int i = 0; i < n; i++) {
+            uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+            tsr_mesh_add_triangle(m, a, b, d);
+            tsr_mesh_add_triangle(m, a, d, c);
+        }
+}
+
+static tsr_validation validate(const tsr_mesh *m, bool up)
+{
+    tsr_validation v;
+    tsr_validate_options o = {0};
+    o.expect_up = up;
+    CHECK(tsr_mesh_validate(m, &o, &v) == TSR_OK);
+    return v;
+}
+
+TEST(grid_is_valid)
+{
+    tsr_mesh m;
+    grid(&m, 8);
+    tsr_validation v = validate(&m, true);
+    char msg[512];
+    tsr_validation_describe(&v, msg, sizeof msg);
+    CHECK_MSG(tsr_validation_ok(&v), "%s", msg);
+    CHECK(v.vertices == 81 && v.triangles == 128);
+    CHECK(v.edges == 8 * 9 * 2 + 64);
+    CHECK(v.euler == 1);
+    CHECK(v.boundary_loops == 1 && v.loop_length[0] == 32 && v.boundary_edges == 32);
+    CHECK(tsr_mesh_boundary_is_rect(&m, 0, 0, 8, 8, 1e-6, NULL));
+    CHECK(!tsr_mesh_boundary_is_rect(&m, 0, 0, 9, 8, 1e-6, NULL));
+    tsr_mesh_free(&m);
+}
+
+TEST(flipped_triangle)
+{
+    tsr_mesh m;
+    grid(&m, 4);
+    uint32_t *t = m.indices + 3 * 5;
+    uint32_t tmp = t[1];
+    t[1] = t[2];
+    t[2] = tmp;
+    tsr_validation v = validate(&m, true);
+    CHECK(!tsr_validation_ok(&v));
+    CHECK(v.misoriented_edges == 3);
+    CHECK(v.downward_triangles == 1 && v.first_downward == 5);
+    tsr_mesh_free(&m);
+}
+
+TEST(nonmanifold_edge)
+{
+    tsr_mesh m;
+    grid(&m, 2);
+    float p[3] = {0.5f, 0.5f, 1};
+    uint32_t x = tsr_mesh_add_vertex(&m, p, NULL, NULL);
+    tsr_mesh_add_triangle(&m, 0, 4, x); /* third triangle on the interior edge 0-4 */
+    tsr_validation v = validate(&m, false);
+    CHECK(v.nonmanifold_edges == 1);
+    CHECK(v.first_nonmanifold[0] == 0 && v.first_nonmanifold[1] == 4);
+    CHECK(!tsr_validation_ok(&v));
+    tsr_mesh_free(&m);
+}
+
+TEST(t_junction)
+{
+    /* Left: one square as two triangles; right: two squares stacked, each
+     * half the height. The right column's middle vertex (2, 1) lies on the
+     * left square's edge (2,0)-(2,2): a T-junction and a crack. */
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    float pts[][3] = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {2, 2, 0}, {3, 0, 0}, {3, 1, 0}, {3, 2, 0}, {2, 1, 0}};
+    for (int i = 0; i < 8; i++)
+        tsr_mesh_add_vertex(&m, pts[i], NULL, NULL);
+    tsr_mesh_add_triangle(&m, 0, 1, 3);
+    tsr_mesh_add_triangle(&m, 0, 3, 2);
+    tsr_mesh_add_triangle(&m, 1, 4, 5);
+    tsr_mesh_add_triangle(&m, 1, 5, 7);
+    tsr_mesh_add_triangle(&m, 7, 5, 6);
+    tsr_mesh_add_triangle(&m, 7, 6, 3);
+    tsr_validation v = validate(&m, true);
+    CHECK(v.t_junctions == 1);
+    CHECK(v.first_t_junction[0] == 7);
+    CHECK(!tsr_validation_ok(&v));
+    /* The fix: split the left square's right triangle at (2, 1). */
+    m.indices[0 * 3 + 0] = 0; m.indices[1] = 1; m.indices[2] = 7;
+    tsr_mesh_add_triangle(&m, 0, 7, 3);
+    v = validate(&m, true);
+    char msg[512];
+    tsr_validation_describe(&v, msg, sizeof msg);
+    CHECK_MSG(tsr_validation_ok(&v), "%s", msg);
+    CHECK(v.boundary_loops == 1);
+    tsr_mesh_free(&m);
+}
+
+TEST(t_junction_in_3d_long_edge)
+{
+    /* A long edge far from the vertex cloud's typical spacing still finds
+     * the vertex on it (the brute-force path of the spatial search). */
+    tsr_mesh m;
+    grid(&m, 40);
+    /* a big triangle below the grid sharing no vertex, with one grid
+     * vertex exactly on its long edge */
+    float a[3] = {-1, 20, 0}, b[3] = {41, 20, 0}, c[3] = {20, 19.5f, -5};
+    uint32_t ia = tsr_mesh_add_vertex(&m, a, NULL, NULL), ib = tsr_mesh_add_vertex(&m, b, NULL, NULL),
+             ic = tsr_mesh_add_vertex(&m, c, NULL, NULL);
+    tsr_mesh_add_triangle(&m, ia, ib, ic);
+    tsr_validation v = validate(&m, false);
+    CHECK(v.t_junctions == 41); /* every grid vertex of row 20 */
+    tsr_mesh_free(&m);
+}
+
+TEST(degenerate_and_duplicate)
+{
+    tsr_mesh m;
+    grid(&m, 3);
+    tsr_mesh_add_triangle(&m, 0, 0, 1);   /* repeated index */
+    tsr_mesh_add_triangle(&m, 0, 1, 2);   /* collinear: zero area */
+    tsr_mesh_add_triangle(&m, 5, 6, 10);  /* same vertex set as triangle 2*(1*3+1) */
+    tsr_validation v = validate(&m, false);
+    CHECK(v.degenerate_triangles == 2);
+    CHECK(v.first_degenerate == 18);
+    CHECK(v.duplicate_triangles == 1);
+    CHECK(!tsr_validation_ok(&v));
+    tsr_mesh_free(&m);
+}
+
+TEST(closed_tetrahedron)
+{
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    float p[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int i = 0; i < 4; i++)
+        tsr_mesh_add_vertex(&m, p[i], NULL, NULL);
+    tsr_mesh_add_triangle(&m, 0, 2, 1);
+    tsr_mesh_add_triangle(&m, 0, 1, 3);
+    tsr_mesh_add_triangle(&m, 1, 2, 3);
+    tsr_mesh_add_triangle(&m, 2, 0, 3);
+    tsr_validation v = validate(&m, false);
+    CHECK(tsr_validation_ok(&v));
+    CHECK(v.euler == 2 && v.boundary_edges == 0 && v.boundary_loops == 0 && v.edges == 6);
+    /* the half-edge view pairs every half-edge with its reverse */
+    tsr_halfedges he;
+    CHECK(tsr_halfedges_build(&he, &m, NULL) == TSR_OK);
+    for (uint32_t h = 0; h < he.count; h++) {
+        uint32_t t = he.twin[h];
+        CHECK(t < he.count && he.twin[t] == h);
+        CHECK(m.indices[h] == m.indices[3 * (t / 3) + (t % 3 + 1) % 3]);
+    }
+    tsr_halfedges_free(&he);
+    tsr_mesh_free(&m);
+}
+
+TEST(holes_count_loops)
+{
+    /* a 6x6 grid with the triangles of two separate inner squares removed */
+    tsr_mesh m;
+    grid(&m, 6);
+    tsr_mesh out;
+    tsr_mesh_init(&out, 0, NULL);
+    for (uint32_t i = 0; i < m.vertex_count; i++)
+        tsr_mesh_add_vertex(&out, m.positions + 3 * i, NULL, NULL);
+    for (uint32_t t = 0; t < m.triangle_count; t++) {
+        uint32_t q = t / 2, qi = q % 6, qj = q / 6;
+        if ((qi == 1 && qj == 1) || (qi == 4 && qj == 3))
+            continue;
+        const uint32_t *ix = m.indices + 3 * t;
+        tsr_mesh_add_triangle(&out, ix[0], ix[1], ix[2]);
+    }
+    tsr_validation v = validate(&out, true);
+    CHECK(tsr_validation_ok(&v));
+    CHECK(v.boundary_loops == 3);
+    CHECK(v.euler == 1 - 2); /* a disc with two holes */
+    uint32_t bad;
+    CHECK(!tsr_mesh_boundary_is_rect(&out, 0, 0, 6, 6, 1e-6, &bad));
+    tsr_mesh_free(&m);
+    tsr_mesh_free(&out);
+}
+
+TEST(coincident_vertices_make_a_crack)
+{
+    /* two grids side by side, not welded: the seam has coincident vertices
+     * and shows as boundary, but no T-junction */
+    tsr_mesh m;
+    grid(&m, 2);
+    uint32_t base = m.vertex_count;
+    for (int j = 0; j <= 2; j++)
+        for (int i = 0; i <= 2; i++) {
+            float p[3] = {(float)(i + 2), (float)j, 0};
+            tsr_mesh_add_vertex(&m, p, NULL, NULL);
+        }
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 2; i++) {
+            uint32_t a = base + j * 3 + i, b = a + 1, c = a + 3, d = c + 1;
+            tsr_mesh_add_triangle(&m, a, b, d);
+            tsr_mesh_add_triangle(&m, a, d, c);
+        }
+    tsr_validation v = validate(&m, true);
+    CHECK(v.coincident_vertices == 3);
+    CHECK(v.t_junctions == 0);
+    CHECK(v.boundary_loops == 2);
+    tsr_mesh_free(&m);
+}
+
+TEST(bad_index_and_nan_position)
+{
+    tsr_mesh m;
+    grid(&m, 2);
+    tsr_mesh_add_triangle(&m, 0, 1, 99);
+    m.positions[3 * 8 + 2] = NAN; /* corner of the last two grid triangles */
+    tsr_validation v = validate(&m, false);
+    CHECK(v.bad_indices == 1);
+    CHECK(v.nonfinite_positions == 1);
+    CHECK(v.first_bad_triangle == 6);
+    CHECK(!tsr_validation_ok(&v));
+    char msg[512];
+    tsr_validation_describe(&v, msg, sizeof msg);
+    CHECK(strstr(msg, "out-of-range") != NULL);
+    tsr_mesh_free(&m);
+}
+
+TEST(random_grids_with_one_defect)
+{
+    /* Property check: adding a copy of any triangle of a grid makes one
+     * duplicate, and each of its three edges becomes either non-manifold
+     * (an interior edge, now used three times) or misoriented (a boundary
+     * edge, now traversed twice the same way). */
+    unsigned seed = 12345;
+    for (int trial = 0; trial < 20; trial++) {
+        seed = seed * 1103515245u + 12345u;
+        int n = 3 + (int)(seed >> 16) % 10;
+        tsr_mesh m;
+        grid(&m, n);
+        uint32_t t = (seed >> 8) % m.triangle_count;
+        tsr_mesh_add_triangle(&m, m.indices[3 * t], m.indices[3 * t + 1], m.indices[3 * t + 2]);
+        tsr_validation v = validate(&m, true);
+        CHECK(v.duplicate_triangles == 1);
+        CHECK(v.nonmanifold_edges + v.misoriented_edges == 3);
+        tsr_mesh_free(&m);
+    }
+}
+
+TEST_MAIN(T(grid_is_valid), T(flipped_triangle), T(nonmanifold_edge), T(t_junction), T(t_junction_in_3d_long_edge),
+          T(degenerate_and_duplicate), T(closed_tetrahedron), T(holes_count_loops), T(coincident_vertices_make_a_crack),
+          T(bad_index_and_nan_position), T(random_grids_with_one_defect))

@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# cli_cases.sh TESSERA MAKE_FIXTURES CASE: one bad-input case of the CLI.
+# Every failing case must exit 1 (or 2 for bad usage) -- never a crash or a
+# sanitizer report -- print exactly one line naming the file and the
+# problem, and leave no output file behind.
+set -u
+tessera=$1 fixtures=$2 case=$3
+dir=$(mktemp -d "${TMPDIR:-/tmp}/tsr-cli-XXXXXX")
+cap=$(mktemp -d "${TMPDIR:-/tmp}/tsr-cli-out-XXXXXX")
+trap 'rm -rf "$dir" "$cap"' EXIT
+"$fixtures" "$dir" || { echo "fixtures failed"; exit 1; }
+
+fail() { echo "FAIL [$case]: $*"; exit 1; }
+
+# expect_error WANT_EXIT PATTERN -- command...: runs the command, checks the
+# exit code, one stderr line matching PATTERN, and no stray output files.
+expect_error() {
+  local want=$1 pattern=$2
+  shift 3
+  local before after
+  before=$(ls -A "$dir" | sort)
+  "$@" >"$cap/stdout" 2>"$cap/stderr"
+  local rc=$?
+  after=$(ls -A "$dir" | sort)
+  local err
+  err=$(cat "$cap/stderr")
+  [ "$rc" -eq "$want" ] || fail "exit $rc, wanted $want; stderr: $err"
+  [ "$(printf '%s\n' "$err" | wc -l)" -eq 1 ] || fail "stderr is not one line: $err"
+  printf '%s\n' "$err" | grep -qE -- "$pattern" || fail "stderr '$err' does not match '$pattern'"
+  [ "$before" = "$after" ] || fail "files changed: before [$before] after [$after]"
+  echo "ok [$case]: $err"
+}
+
+out="$dir/out.obj"
+case "$case" in
+missing_file)
+  expect_error 1 "nope\.png: No such file" -- "$tessera" info "$dir/nope.png"
+  expect_error 1 "nope\.png: No such file" -- "$tessera" mesh "$dir/nope.png" -o "$out" ;;
+empty_file)
+  expect_error 1 "empty\.png: empty file" -- "$tessera" mesh "$dir/empty.png" -o "$out" ;;
+truncated_png)
+  "$tessera" generate --size 64 -o "$dir/good.png" 2>/dev/null || fail "generate failed"
+  head -c 600 "$dir/good.png" > "$dir/truncated.png"; rm "$dir/good.png"
+  expect_error 1 "truncated\.png: (truncated|not an image)" -- "$tessera" mesh "$dir/truncated.png" -o "$out" ;;
+random_bytes_png)
+  expect_error 1 "random\.png: not an image" -- "$tessera" mesh "$dir/random.png" -o "$out" ;;
+huge_header_png)
+  expect_error 1 "huge\.png: image is 1000000x1000000" -- "$tessera" mesh "$dir/huge.png" -o "$out"
+  expect_error 1 "huge\.png: image is 1000000x1000000" -- "$tessera" info "$dir/huge.png" ;;
+one_by_one_image)
+  oiiotool --create 1x1 1 -d uint16 -o "$dir/one.png" || fail "oiiotool failed"
+  expect_error 1 "one\.png: image is 1x1; a heightfield needs at least 2x2" -- "$tessera" mesh "$dir/one.png" -o "$out" ;;
+nan_height)
+  # NaN is no-data: it loads, is counted, and becomes a hole in the mesh
+  "$tessera" info "$dir/nan.f32" --raw 4 4 f32 --json > "$dir/info.json" || fail "info failed"
+  grep -q '"nodata":[[:space:]]*1' "$dir/info.json" || fail "nodata count: $(cat "$dir/info.json")"
+  "$tessera" mesh "$dir/nan.f32" --raw 4 4 f32 -o "$dir/nan.obj" --quiet || fail "mesh failed"
+  # 9 cells, 18 triangles; each of the 4 cells around the NaN sample
+  # (column 1, row 1) keeps only the triangle of its other three corners
+  [ "$(grep -c '^f ' "$dir/nan.obj")" -eq 14 ] || fail "triangles: $(grep -c '^f ' "$dir/nan.obj")"
+  [ "$(grep -c '^v ' "$dir/nan.obj")" -eq 15 ] || fail "vertices"
+  ! grep -qi nan "$dir/nan.obj" || fail "NaN written into the mesh"
+  echo "ok [$case]" ;;
+all_nan_height)
+  expect_error 1 "allnan\.f32: every sample is no-data" -- "$tessera" mesh "$dir/allnan.f32" --raw 4 4 f32 -o "$out" ;;
+inf_height)
+  expect_error 1 "inf\.f32: infinite height at column 1, row 2" -- "$tessera" mesh "$dir/inf.f32" --raw 4 4 f32 -o "$out" ;;
+unwritable_output)
+  "$tessera" generate --size 16 -o "$dir/g.png" 2>/dev/null || fail "generate failed"
+  expect_error 1 "/no/such/dir/x\.obj: cannot write" -- "$tessera" mesh "$dir/g.png" -o /no/such/dir/x.obj
+  expect_error 1 "x\.png: cannot write" -- "$tessera" generate --size 16 -o /no/such/dir/x.png
+  if [ "$(id -u)" -ne 0 ]; then
+    mkdir "$dir/ro" && chmod 500 "$dir/ro"
+    expect_error 1 "ro/x\.glb: cannot write" -- "$tessera" mesh "$dir/g.png" -o "$dir/ro/x.glb"
+  fi ;;
+raw_wrong_size)
+  expect_error 1 "nan\.f32: raw f32 5x4 needs 80 bytes but the file has 64" -- "$tessera" info "$dir/nan.f32" --raw 5 4 f32 ;;
+bad_options)
+  "$tessera" generate --size 16 -o "$dir/g.png" 2>/dev/null || fail "generate failed"
+  expect_error 2 "--dx abc: not a finite number" -- "$tessera" mesh "$dir/g.png" -o "$out" --dx abc
+  expect_error 2 "unknown mesh format" -- "$tessera" mesh "$dir/g.png" -o "$dir/out.xyz"
+  expect_error 2 "unknown option '--frobnicate'" -- "$tessera" info "$dir/g.png" --frobnicate
+  expect_error 2 "unknown command 'nosuch'" -- "$tessera" nosuch ;;
+*) fail "unknown case" ;;
+esac
+exit 0

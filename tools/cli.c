@@ -1,0 +1,167 @@
+/* cli.c: shared helpers of the tessera subcommands. */
+#define _POSIX_C_SOURCE 200809L
+#include "cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <fcntl.h>
+#include <time.h>
+#include <unistd.h>
+
+void cli_error(const char *cmd, const char *fmt, ...)
+{
+    fprintf(stderr, "tessera%s%s: ", cmd ? " " : "", cmd ? cmd : "");
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+}
+
+bool cli_parse_double(const char *s, double *out)
+{
+    if (!s || !*s)
+        return false;
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (*end != '\0' || errno == ERANGE || !isfinite(v))
+        return false;
+    *out = v;
+    return true;
+}
+
+bool cli_parse_u32(const char *s, uint32_t min, uint32_t max, uint32_t *out)
+{
+    if (!s || !*s || *s == '-' || *s == '+')
+        return false;
+    char *end;
+    errno = 0;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (*end != '\0' || errno == ERANGE || v < min || v > max)
+        return false;
+    *out = (uint32_t)v;
+    return true;
+}
+
+bool cli_is_help(const char *arg) { return !strcmp(arg, "-h") || !strcmp(arg, "--help"); }
+
+double cli_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+int cli_heightfield_option(const char *cmd, int argc, char **argv, int *i, cli_heightfield_options *o)
+{
+    const char *a = argv[*i];
+    if (!strcmp(a, "--decode")) {
+        if (*i + 1 >= argc) {
+            cli_error(cmd, "--decode needs a value (terrain-rgb)");
+            return -1;
+        }
+        const char *v = argv[++*i];
+        if (strcmp(v, "terrain-rgb") && strcmp(v, "terrainrgb")) {
+            cli_error(cmd, "--decode %s: unknown decoding (known: terrain-rgb)", v);
+            return -1;
+        }
+        o->load.decode = TSR_DECODE_TERRAIN_RGB;
+        return 1;
+    }
+    if (!strcmp(a, "--raw")) {
+        if (*i + 3 >= argc) {
+            cli_error(cmd, "--raw needs three values: W H TYPE (TYPE u16, i16 or f32)");
+            return -1;
+        }
+        uint32_t w, h;
+        if (!cli_parse_u32(argv[*i + 1], 1, UINT32_MAX, &w) || !cli_parse_u32(argv[*i + 2], 1, UINT32_MAX, &h)) {
+            cli_error(cmd, "--raw %s %s: width and height must be positive integers", argv[*i + 1], argv[*i + 2]);
+            return -1;
+        }
+        tsr_raw_type t = tsr_raw_type_parse(argv[*i + 3]);
+        if (t == TSR_RAW_NONE) {
+            cli_error(cmd, "--raw: unknown sample type '%s' (use u16, i16 or f32)", argv[*i + 3]);
+            return -1;
+        }
+        o->load.raw_type = t;
+        o->load.raw_width = w;
+        o->load.raw_height = h;
+        *i += 3;
+        return 1;
+    }
+    double *target = !strcmp(a, "--nodata") ? &o->load.nodata
+                     : !strcmp(a, "--dx")   ? &o->dx
+                     : !strcmp(a, "--dy")   ? &o->dy
+                     : !strcmp(a, "--dz")   ? &o->dz
+                                            : NULL;
+    if (!target)
+        return 0;
+    if (*i + 1 >= argc) {
+        cli_error(cmd, "%s needs a number", a);
+        return -1;
+    }
+    double v;
+    if (!cli_parse_double(argv[*i + 1], &v)) {
+        cli_error(cmd, "%s %s: not a finite number", a, argv[*i + 1]);
+        return -1;
+    }
+    if (target != &o->load.nodata && !(v > 0)) {
+        cli_error(cmd, "%s %s: must be positive", a, argv[*i + 1]);
+        return -1;
+    }
+    if (target == &o->load.nodata)
+        o->load.has_nodata = true;
+    *target = v;
+    ++*i;
+    return 1;
+}
+
+tsr_heightfield *cli_load_heightfield(const char *cmd, const char *path, const cli_heightfield_options *o)
+{
+    tsr_heightfield *hf = NULL;
+    tsr_error err = {0};
+    /* Image libraries underneath (libpng, libtiff) may print their own
+     * warnings to stderr; our one-line error says the same with the file
+     * name, so their noise is held back while loading. */
+    fflush(stderr);
+    int saved = dup(2), devnull = open("/dev/null", O_WRONLY);
+    if (saved >= 0 && devnull >= 0)
+        dup2(devnull, 2);
+    tsr_status s = tsr_heightfield_load(path, &o->load, NULL, &hf, &err);
+    if (saved >= 0 && devnull >= 0)
+        dup2(saved, 2);
+    if (saved >= 0)
+        close(saved);
+    if (devnull >= 0)
+        close(devnull);
+    if (s != TSR_OK) {
+        cli_error(cmd, "%s", err.message);
+        return NULL;
+    }
+    double dx = o->dx > 0 ? o->dx : 1, dy = o->dy > 0 ? o->dy : dx, dz = o->dz > 0 ? o->dz : 1;
+    tsr_heightfield_set_spacing(hf, dx, dy, dz);
+    return hf;
+}
+
+tsr_status cli_write_text(const char *path, const char *text, tsr_error *err)
+{
+    char tmp[4096];
+    tsr_status s = tsr_atomic_begin(path, tmp, sizeof tmp, err);
+    if (s != TSR_OK)
+        return s;
+    FILE *f = fopen(tmp, "w");
+    size_t n = strlen(text);
+    bool ok = f && fwrite(text, 1, n, f) == n;
+    if (f && fclose(f) != 0)
+        ok = false;
+    if (!ok) {
+        int e = errno;
+        tsr_atomic_abort(tmp);
+        return tsr_error_set(err, TSR_ERR_IO, "%s: write failed: %s", path, strerror(e ? e : EIO));
+    }
+    return tsr_atomic_commit(tmp, path, err);
+}

@@ -1,0 +1,67 @@
+/* cli.h: what the tessera subcommands share: the command table, strict
+ * number parsing, the heightfield options of `tessera info`, and error
+ * reporting. */
+#ifndef TSR_CLI_H
+#define TSR_CLI_H
+
+#include "terrain/terrain.h"
+
+#include <stdio.h>
+
+typedef struct cli_command {
+    const char *name;
+    const char *summary;
+    int (*run)(int argc, char **argv); /* argv[0] is the command name */
+    void (*help)(FILE *f);
+} cli_command;
+
+/* Exit codes: 0 success, 1 failure on input or output, 2 bad usage. */
+enum { CLI_OK = 0, CLI_FAIL = 1, CLI_USAGE = 2 };
+
+/* Prints "tessera CMD: message" to stderr. */
+void cli_error(const char *cmd, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* Strict parsers: the whole string must be a finite number in range. */
+bool cli_parse_double(const char *s, double *out);
+bool cli_parse_u32(const char *s, uint32_t min, uint32_t max, uint32_t *out);
+
+/* The heightfield options every command that reads one accepts:
+ * --decode terrain-rgb, --raw W H TYPE, --nodata V, --dx S, --dy S, --dz S. */
+typedef struct cli_heightfield_options {
+    tsr_load_options load;
+    double dx, dy, dz; /* 0: not given */
+} cli_heightfield_options;
+
+#define CLI_HEIGHTFIELD_HELP                                                                        \
+    "  --decode terrain-rgb  decode an RGB(A) Terrain-RGB tile:\n"                                 \
+    "                        h = (R*65536 + G*256 + B) * 0.1 - 10000\n"                            \
+    "  --raw W H TYPE        headerless little-endian samples, TYPE u16, i16 or f32\n"              \
+    "  --nodata V            samples equal to V are no-data (holes)\n"                             \
+    "  --dx S, --dy S        sample spacing in x and y (default 1; --dy defaults to --dx)\n"       \
+    "  --dz S                height scale: z = h * S (default 1)\n"
+
+/* If argv[*i] is one of those options, consumes it and its values
+ * (advancing *i) and returns 1; returns 0 if it is not; prints an error
+ * and returns -1 on a bad value. */
+int cli_heightfield_option(const char *cmd, int argc, char **argv, int *i, cli_heightfield_options *o);
+
+/* Loads the heightfield with the options and applies spacing; prints the
+ * error and returns NULL on failure. */
+tsr_heightfield *cli_load_heightfield(const char *cmd, const char *path, const cli_heightfield_options *o);
+
+/* True when argv[*i] is -h or --help. */
+bool cli_is_help(const char *arg);
+
+/* Seconds from a monotonic clock. */
+double cli_now(void);
+
+/* Writes text to path atomically (temporary, then rename). */
+tsr_status cli_write_text(const char *path, const char *text, tsr_error *err);
+
+extern const cli_command cli_cmd_info, cli_cmd_generate, cli_cmd_mesh;
+
+#endif

@@ -1,0 +1,80 @@
+/* cmd_info.c: `tessera info FILE`: what a heightfield holds. */
+#include "cli.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void help(FILE *f)
+{
+    fprintf(f, "usage: tessera info FILE [options]\n\n"
+               "Prints a heightfield's format, size, minimum, maximum, mean height and no-data count.\n"
+               "Heights are in the file's units (8/16-bit images give their integer values).\n\n"
+               "options:\n"
+               "  --json                print the same as a JSON object\n" CLI_HEIGHTFIELD_HELP
+               "  -h, --help            this help\n");
+}
+
+static int run(int argc, char **argv)
+{
+    cli_heightfield_options o = {0};
+    const char *path = NULL;
+    bool json = false;
+    for (int i = 1; i < argc; i++) {
+        if (cli_is_help(argv[i])) {
+            help(stdout);
+            return CLI_OK;
+        }
+        int r = cli_heightfield_option("info", argc, argv, &i, &o);
+        if (r < 0)
+            return CLI_USAGE;
+        if (r > 0)
+            continue;
+        if (!strcmp(argv[i], "--json"))
+            json = true;
+        else if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            cli_error("info", "unknown option '%s' (see tessera info --help)", argv[i]);
+            return CLI_USAGE;
+        } else if (path) {
+            cli_error("info", "one file at a time ('%s' and '%s' given)", path, argv[i]);
+            return CLI_USAGE;
+        } else
+            path = argv[i];
+    }
+    if (!path) {
+        cli_error("info", "no input file (see tessera info --help)");
+        return CLI_USAGE;
+    }
+    tsr_heightfield *hf = cli_load_heightfield("info", path, &o);
+    if (!hf)
+        return CLI_FAIL;
+    tsr_heightfield_stats st;
+    tsr_heightfield_stats_compute(hf, &st);
+    uint32_t w = tsr_heightfield_width(hf), h = tsr_heightfield_height(hf);
+    if (json) {
+        cJSON *j = cJSON_CreateObject();
+        cJSON_AddStringToObject(j, "file", path);
+        cJSON_AddStringToObject(j, "format", tsr_heightfield_source_format(hf));
+        cJSON_AddNumberToObject(j, "width", w);
+        cJSON_AddNumberToObject(j, "height", h);
+        cJSON_AddNumberToObject(j, "samples", (double)w * h);
+        cJSON_AddNumberToObject(j, "min", st.min);
+        cJSON_AddNumberToObject(j, "max", st.max);
+        cJSON_AddNumberToObject(j, "mean", st.mean);
+        cJSON_AddNumberToObject(j, "nodata", (double)st.nodata);
+        char *s = cJSON_Print(j);
+        printf("%s\n", s);
+        free(s);
+        cJSON_Delete(j);
+    } else {
+        printf("file:    %s\nformat:  %s\nsize:    %u x %u (%llu samples)\nmin:     %.9g\nmax:     %.9g\n"
+               "mean:    %.9g\nnodata:  %llu\n",
+               path, tsr_heightfield_source_format(hf), w, h, (unsigned long long)w * h, st.min, st.max, st.mean,
+               (unsigned long long)st.nodata);
+    }
+    tsr_heightfield_destroy(hf);
+    return CLI_OK;
+}
+
+const cli_command cli_cmd_info = {"info", "print a heightfield's format, size and height statistics", run, help};

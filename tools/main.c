@@ -1,0 +1,51 @@
+/* main.c: the tessera command: a table of subcommands, each in its own
+ * file (cmd_*.c). */
+#include "cli.h"
+
+#include <string.h>
+
+#ifndef TSR_VERSION
+#define TSR_VERSION "0.1.0"
+#endif
+
+static const cli_command *const commands[] = {&cli_cmd_info, &cli_cmd_generate, &cli_cmd_mesh};
+enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: tessera COMMAND [options]\n\n"
+               "Tessera turns heightfields and parametric surfaces into watertight triangle meshes.\n\n"
+               "commands:\n");
+    for (int i = 0; i < NCOMMANDS; i++)
+        fprintf(f, "  %-10s %s\n", commands[i]->name, commands[i]->summary);
+    fprintf(f, "\n'tessera COMMAND --help' describes a command's options.\n"
+               "'tessera --version' prints the version.\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return CLI_USAGE;
+    }
+    const char *name = argv[1];
+    if (cli_is_help(name) || !strcmp(name, "help")) {
+        if (argc >= 3)
+            for (int i = 0; i < NCOMMANDS; i++)
+                if (!strcmp(argv[2], commands[i]->name)) {
+                    commands[i]->help(stdout);
+                    return CLI_OK;
+                }
+        usage(stdout);
+        return CLI_OK;
+    }
+    if (!strcmp(name, "--version") || !strcmp(name, "version")) {
+        printf("tessera %s\n", TSR_VERSION);
+        return CLI_OK;
+    }
+    for (int i = 0; i < NCOMMANDS; i++)
+        if (!strcmp(name, commands[i]->name))
+            return commands[i]->run(argc - 1, argv + 1);
+    cli_error(NULL, "unknown command '%s' (see tessera --help)", name);
+    return CLI_USAGE;
+}
