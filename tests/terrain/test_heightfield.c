@@ -213,7 +213,7 @@ TEST(size_limits)
     tsr_heightfield_destroy(hf);
 }
 
-TEST(terrain_rgb_real_tile)
+TEST(data_terrain_rgb_real_tile)
 {
     const char *data = check_data_dir();
     if (!data)
@@ -239,7 +239,7 @@ TEST(terrain_rgb_real_tile)
     CHECK(strstr(err.message, "terrain-rgb") != NULL);
 }
 
-TEST(real_float_tiffs)
+TEST(data_real_float_tiffs)
 {
     const char *data = check_data_dir();
     if (!data)
@@ -343,6 +343,6 @@ TEST(nodata_becomes_hole)
 }
 
 TEST_MAIN(T(save_and_load_float_formats), T(png16_keeps_scale_and_offset), T(pgm_16bit_written_by_hand), T(raw_types),
-          T(nan_height_is_nodata_and_inf_height_is_refused), T(size_limits), T(terrain_rgb_real_tile),
-          T(real_float_tiffs), T(generator_is_deterministic_and_terrain_like), T(grid_mesh_is_valid_and_exact),
+          T(nan_height_is_nodata_and_inf_height_is_refused), T(size_limits), T(data_terrain_rgb_real_tile),
+          T(data_real_float_tiffs), T(generator_is_deterministic_and_terrain_like), T(grid_mesh_is_valid_and_exact),
           T(nodata_becomes_hole))

@@ -73,6 +73,15 @@ unwritable_output)
     mkdir "$dir/ro" && chmod 500 "$dir/ro"
     expect_error 1 "ro/x\.glb: cannot write" -- "$tessera" mesh "$dir/g.png" -o "$dir/ro/x.glb"
   fi ;;
+random_bytes_every_format)
+  for ext in tif tiff exr pgm jpg; do
+    cp "$dir/random.png" "$dir/random.$ext"
+    expect_error 1 "random\.$ext: not an image" -- "$tessera" mesh "$dir/random.$ext" -o "$out"
+  done
+  printf 'P5\n100 100\n65535\n\001\002' > "$dir/short.pgm"
+  expect_error 1 "short\.pgm: truncated PGM" -- "$tessera" info "$dir/short.pgm"
+  printf 'P5\n3 x\n255\n' > "$dir/badhead.pgm"
+  expect_error 1 "badhead\.pgm: PGM header" -- "$tessera" info "$dir/badhead.pgm" ;;
 raw_wrong_size)
   expect_error 1 "nan\.f32: raw f32 5x4 needs 80 bytes but the file has 64" -- "$tessera" info "$dir/nan.f32" --raw 5 4 f32 ;;
 bad_options)
