@@ -240,4 +240,7 @@ bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x
 #ifdef __cplusplus
 }
 #endif
+
+#include "tessellate/quadtree.h"
+
 #endif /* TSR_TESSELLATE_H */

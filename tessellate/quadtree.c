@@ -1,0 +1,585 @@
+/* quadtree.c: the restricted quadtree over a tsr_surface: selection,
+ * 2:1 balancing, stitch masks, camera error, and the mesh of a cut.
+ *
+ * Split flags live in one bitset per level (complete levels, node (x, y)
+ * of level l at bit y * 2^l + x), so "is this node split?" is one bit
+ * test and neighbours are found by arithmetic on (level, x, y) rather than
+ * by pointers. Balancing (after Sivan & Samet's restricted quadtrees)
+ * walks the split nodes from the deepest level up: a split node's
+ * same-level edge neighbours must exist, so their parents get split (and
+ * those parents' ancestors), which the next, shallower level then
+ * balances in turn; one pass suffices because splitting at level l-1
+ * never creates work at level l or below. */
+#include "tessellate/tessellate.h"
+
+#include <math.h>
+#include <string.h>
+
+typedef struct node_list {
+    uint32_t *xy; /* pairs x, y */
+    uint32_t count, cap;
+} node_list;
+
+struct tsr_quadtree {
+    tsr_surface s;
+    tsr_allocator alloc;
+    uint64_t *split[TSR_QUADTREE_MAX_LEVELS]; /* levels 0 .. s.levels-1 */
+    node_list lists[TSR_QUADTREE_MAX_LEVELS];
+    tsr_qleaf *leaves;
+    uint32_t leaf_count, leaf_cap;
+    uint32_t balance_splits;
+};
+
+static const tsr_allocator *qa(const tsr_quadtree *qt) { return qt->alloc.realloc ? &qt->alloc : NULL; }
+
+uint32_t tsr_quadtree_levels_for(uint32_t tile_n, uint32_t extent_x, uint32_t extent_y)
+{
+    uint32_t levels = 0;
+    uint64_t size = tile_n;
+    while (size < extent_x || size < extent_y) {
+        size <<= 1;
+        levels++;
+    }
+    return levels;
+}
+
+bool tsr_quadtree_node_exists(const tsr_surface *s, tsr_qnode n)
+{
+    if (n.level > s->levels)
+        return false;
+    uint64_t side = 1ull << n.level;
+    if (n.x >= side || n.y >= side)
+        return false;
+    uint64_t w = (uint64_t)s->tile_n << (s->levels - n.level);
+    return (uint64_t)n.x * w < s->extent_x && (uint64_t)n.y * w < s->extent_y;
+}
+
+uint64_t tsr_qnode_key(tsr_qnode n)
+{
+    uint64_t k = 0;
+    for (unsigned b = 0; b < 28; b++) {
+        k |= (uint64_t)((n.x >> b) & 1) << (2 * b);
+        k |= (uint64_t)((n.y >> b) & 1) << (2 * b + 1);
+    }
+    return (uint64_t)n.level << 56 | k;
+}
+
+tsr_quadtree *tsr_quadtree_create(const tsr_surface *s, const tsr_allocator *alloc)
+{
+    if (s->tile_n < TSR_TILE_MIN || s->tile_n > TSR_TILE_MAX || (s->tile_n & 1) ||
+        s->levels >= TSR_QUADTREE_MAX_LEVELS || s->extent_x == 0 || s->extent_y == 0 ||
+        s->extent_x > (s->tile_n << s->levels) || s->extent_y > (s->tile_n << s->levels))
+        return NULL;
+    tsr_quadtree *qt = tsr_alloc(alloc, sizeof *qt);
+    if (!qt)
+        return NULL;
+    memset(qt, 0, sizeof *qt);
+    qt->s = *s;
+    if (alloc)
+        qt->alloc = *alloc;
+    for (uint32_t l = 0; l < s->levels; l++) {
+        size_t bits = (size_t)1 << (2 * l);
+        size_t words = (bits + 63) / 64;
+        qt->split[l] = tsr_alloc(alloc, words * sizeof(uint64_t));
+        if (!qt->split[l]) {
+            tsr_quadtree_destroy(qt);
+            return NULL;
+        }
+        memset(qt->split[l], 0, words * sizeof(uint64_t));
+    }
+    return qt;
+}
+
+void tsr_quadtree_destroy(tsr_quadtree *qt)
+{
+    if (!qt)
+        return;
+    const tsr_allocator *a = qa(qt);
+    for (uint32_t l = 0; l < TSR_QUADTREE_MAX_LEVELS; l++) {
+        tsr_free(a, qt->split[l]);
+        tsr_free(a, qt->lists[l].xy);
+    }
+    tsr_free(a, qt->leaves);
+    tsr_allocator copy = qt->alloc;
+    tsr_free(copy.realloc ? &copy : NULL, qt);
+}
+
+static size_t bit_index(tsr_qnode n) { return ((size_t)n.y << n.level) + n.x; }
+
+bool tsr_quadtree_is_split(const tsr_quadtree *qt, tsr_qnode n)
+{
+    if (n.level >= qt->s.levels)
+        return false;
+    uint64_t side = 1ull << n.level;
+    if (n.x >= side || n.y >= side)
+        return false;
+    size_t b = bit_index(n);
+    return (qt->split[n.level][b >> 6] >> (b & 63)) & 1;
+}
+
+/* Sets the split flag; appends the node to its level's list when new.
+ * Returns 1 if newly split, 0 if it already was, -1 out of memory. */
+static int mark_split(tsr_quadtree *qt, tsr_qnode n)
+{
+    size_t b = bit_index(n);
+    uint64_t *w = &qt->split[n.level][b >> 6], m = 1ull << (b & 63);
+    if (*w & m)
+        return 0;
+    node_list *L = &qt->lists[n.level];
+    if (L->count == L->cap) {
+        uint32_t cap = L->cap ? 2 * L->cap : 64;
+        uint32_t *xy = tsr_realloc(qa(qt), L->xy, (size_t)cap * 2 * sizeof *xy);
+        if (!xy)
+            return -1;
+        L->xy = xy;
+        L->cap = cap;
+    }
+    L->xy[2 * L->count] = n.x;
+    L->xy[2 * L->count + 1] = n.y;
+    L->count++;
+    *w |= m;
+    return 1;
+}
+
+static tsr_qnode child(tsr_qnode n, unsigned k)
+{
+    tsr_qnode c = {2 * n.x + (k & 1), 2 * n.y + (k >> 1), (uint8_t)(n.level + 1)};
+    return c;
+}
+
+static tsr_qnode parent(tsr_qnode n)
+{
+    tsr_qnode p = {n.x >> 1, n.y >> 1, (uint8_t)(n.level - 1)};
+    return p;
+}
+
+/* Edge neighbour at the same level in direction d (0 south: y-1, 1 east:
+ * x+1, 2 north: y+1, 3 west: x-1); false when outside the level's grid. */
+static bool neighbour(tsr_qnode n, int d, tsr_qnode *out)
+{
+    int64_t x = n.x, y = n.y, side = (int64_t)1 << n.level;
+    if (d == 0)
+        y--;
+    else if (d == 1)
+        x++;
+    else if (d == 2)
+        y++;
+    else
+        x--;
+    if (x < 0 || y < 0 || x >= side || y >= side)
+        return false;
+    out->x = (uint32_t)x;
+    out->y = (uint32_t)y;
+    out->level = n.level;
+    return true;
+}
+
+static bool push_leaf(tsr_quadtree *qt, tsr_qnode n)
+{
+    if (qt->leaf_count == qt->leaf_cap) {
+        uint32_t cap = qt->leaf_cap ? 2 * qt->leaf_cap : 256;
+        tsr_qleaf *l = tsr_realloc(qa(qt), qt->leaves, (size_t)cap * sizeof *l);
+        if (!l)
+            return false;
+        qt->leaves = l;
+        qt->leaf_cap = cap;
+    }
+    tsr_qleaf *leaf = &qt->leaves[qt->leaf_count++];
+    leaf->node = n;
+    leaf->stitch = 0;
+    leaf->culled = 0;
+    leaf->morph = 0;
+    return true;
+}
+
+tsr_status tsr_quadtree_select(tsr_quadtree *qt, tsr_refine_fn refine, void *user)
+{
+    const tsr_surface *s = &qt->s;
+    /* clear the previous cut's flags, touching only what was set */
+    for (uint32_t l = 0; l < s->levels; l++) {
+        node_list *L = &qt->lists[l];
+        for (uint32_t i = 0; i < L->count; i++) {
+            tsr_qnode n = {L->xy[2 * i], L->xy[2 * i + 1], (uint8_t)l};
+            size_t b = bit_index(n);
+            qt->split[l][b >> 6] &= ~(1ull << (b & 63));
+        }
+        L->count = 0;
+    }
+    qt->leaf_count = 0;
+    qt->balance_splits = 0;
+
+    /* refine top-down: the level lists double as the work queues */
+    tsr_qnode root = {0, 0, 0};
+    if (s->levels > 0 && refine(user, s, root) && mark_split(qt, root) < 0)
+        return TSR_ERR_NOMEM;
+    for (uint32_t l = 0; l + 1 < s->levels; l++) {
+        node_list *L = &qt->lists[l];
+        for (uint32_t i = 0; i < L->count; i++) {
+            tsr_qnode n = {L->xy[2 * i], L->xy[2 * i + 1], (uint8_t)l};
+            for (unsigned k = 0; k < 4; k++) {
+                tsr_qnode c = child(n, k);
+                if (tsr_quadtree_node_exists(s, c) && refine(user, s, c) && mark_split(qt, c) < 0)
+                    return TSR_ERR_NOMEM;
+            }
+        }
+    }
+
+    /* 2:1 balance, deepest split level first */
+    for (uint32_t l = s->levels; l-- > 1;) {
+        node_list *L = &qt->lists[l];
+        for (uint32_t i = 0; i < L->count; i++) {
+            tsr_qnode n = {L->xy[2 * i], L->xy[2 * i + 1], (uint8_t)l};
+            for (int d = 0; d < 4; d++) {
+                tsr_qnode q;
+                if (!neighbour(n, d, &q) || !tsr_quadtree_node_exists(s, q))
+                    continue;
+                for (tsr_qnode p = parent(q);; p = parent(p)) {
+                    int r = mark_split(qt, p);
+                    if (r < 0)
+                        return TSR_ERR_NOMEM;
+                    qt->balance_splits += (uint32_t)r;
+                    if (r == 0 || p.level == 0)
+                        break;
+                }
+            }
+        }
+    }
+
+    /* leaves and stitch masks */
+    if (s->levels == 0 || !tsr_quadtree_is_split(qt, root)) {
+        if (!push_leaf(qt, root))
+            return TSR_ERR_NOMEM;
+    } else {
+        for (uint32_t l = 0; l < s->levels; l++) {
+            node_list *L = &qt->lists[l];
+            for (uint32_t i = 0; i < L->count; i++) {
+                tsr_qnode n = {L->xy[2 * i], L->xy[2 * i + 1], (uint8_t)l};
+                for (unsigned k = 0; k < 4; k++) {
+                    tsr_qnode c = child(n, k);
+                    if (tsr_quadtree_node_exists(s, c) && !tsr_quadtree_is_split(qt, c) && !push_leaf(qt, c))
+                        return TSR_ERR_NOMEM;
+                }
+            }
+        }
+    }
+    static const uint8_t bits[4] = {TSR_EDGE_SOUTH, TSR_EDGE_EAST, TSR_EDGE_NORTH, TSR_EDGE_WEST};
+    for (uint32_t i = 0; i < qt->leaf_count; i++) {
+        tsr_qleaf *leaf = &qt->leaves[i];
+        if (leaf->node.level == 0)
+            continue;
+        for (int d = 0; d < 4; d++) {
+            tsr_qnode q;
+            if (neighbour(leaf->node, d, &q) && tsr_quadtree_node_exists(s, q) &&
+                !tsr_quadtree_is_split(qt, parent(q)))
+                leaf->stitch |= bits[d];
+        }
+    }
+    return TSR_OK;
+}
+
+uint32_t tsr_quadtree_leaf_count(const tsr_quadtree *qt) { return qt->leaf_count; }
+const tsr_qleaf *tsr_quadtree_leaves(const tsr_quadtree *qt) { return qt->leaves; }
+uint32_t tsr_quadtree_balance_splits(const tsr_quadtree *qt) { return qt->balance_splits; }
+
+/* ---- criteria ---------------------------------------------------------- */
+
+bool tsr_refine_tolerance(void *tolerance_ptr, const tsr_surface *s, tsr_qnode node)
+{
+    return s->error(s->user, node) > *(const double *)tolerance_ptr;
+}
+
+static void cross3(const double a[3], const double b[3], double o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static bool normalize3(double v[3])
+{
+    double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (!(l > 0) || !isfinite(l))
+        return false;
+    v[0] /= l;
+    v[1] /= l;
+    v[2] /= l;
+    return true;
+}
+
+bool tsr_camera_prepare(tsr_camera *c)
+{
+    double f[3] = {c->target[0] - c->eye[0], c->target[1] - c->eye[1], c->target[2] - c->eye[2]};
+    if (!normalize3(f) || !(c->fovy_deg > 0 && c->fovy_deg < 179) || !(c->width > 0) || !(c->height > 0) ||
+        !(c->near_dist > 0))
+        return false;
+    double zup[3] = {0, 0, 1}, r[3], u[3];
+    cross3(f, zup, r);
+    if (!normalize3(r) || fabs(f[2]) > 0.99999)
+        return false;
+    cross3(r, f, u);
+    memcpy(c->fwd, f, sizeof f);
+    memcpy(c->right, r, sizeof r);
+    memcpy(c->up, u, sizeof u);
+    c->tan_y = tan(c->fovy_deg * 3.14159265358979323846 / 360.0);
+    c->tan_x = c->tan_y * c->width / c->height;
+    c->K = c->height / (2 * c->tan_y);
+    return true;
+}
+
+void tsr_camera_project(const tsr_camera *c, const double p[3], double *sx, double *sy, double *depth)
+{
+    double d[3] = {p[0] - c->eye[0], p[1] - c->eye[1], p[2] - c->eye[2]};
+    double r = d[0] * c->right[0] + d[1] * c->right[1] + d[2] * c->right[2];
+    double u = d[0] * c->up[0] + d[1] * c->up[1] + d[2] * c->up[2];
+    double f = d[0] * c->fwd[0] + d[1] * c->fwd[1] + d[2] * c->fwd[2];
+    *depth = f;
+    *sx = c->width / 2 + c->K * r / f;
+    *sy = c->height / 2 - c->K * u / f;
+}
+
+/* Why this bounds the error. A sample p and the mesh point q = p + d
+ * above or below it differ by d = (0, 0, e), |e| <= delta = error(node),
+ * and both lie in the node's bounds. In camera coordinates (r, u, f) the
+ * projections differ by
+ *     pi(q) - pi(p) = K (d_r - xi_p d_f, d_u - eta_p d_f) / q_f,
+ * with (xi_p, eta_p) = (p_r, p_u) / p_f, and symmetrically with p and q
+ * swapped. Counted samples have both points beyond the near plane and one
+ * of them, say p, inside the viewport: |xi_p| <= tan_x, |eta_p| <= tan_y,
+ * and (xi_p, eta_p) also lies in the range of r/f, u/f over the bounds'
+ * corners (a linear-fractional map attains its extremes over a box at the
+ * corners when f > 0 there). So the error is at most
+ *     K delta max |(z_r - xi z_f, z_u - eta z_f)| / max(near, min f)
+ * over that (xi, eta) rectangle, z being world +z in camera coordinates;
+ * the norm is convex in (xi, eta), so its maximum is at the rectangle's
+ * corners. The usual K delta / z omits the factor, which reaches
+ * sqrt(1 + tan_x^2 + tan_y^2) (1.54 at the corner of a 60-degree 16:9
+ * view) when vertical displacements are seen obliquely near the edges,
+ * and is as small as |xi| near the centre of a top-down view. */
+double tsr_camera_node_error(const tsr_camera *c, const tsr_surface *s, tsr_qnode node)
+{
+    float lo[3], hi[3];
+    s->bounds(s->user, node, lo, hi);
+    if (!(lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2]))
+        return 0;
+    double fmin = INFINITY, xi0 = INFINITY, xi1 = -INFINITY, eta0 = INFINITY, eta1 = -INFINITY;
+    bool all_front = true;
+    /* frustum planes as half-spaces; count corners outside each */
+    int out_near = 0, out_l = 0, out_r = 0, out_b = 0, out_t = 0;
+    for (int k = 0; k < 8; k++) {
+        double p[3] = {k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]};
+        double d[3] = {p[0] - c->eye[0], p[1] - c->eye[1], p[2] - c->eye[2]};
+        double r = d[0] * c->right[0] + d[1] * c->right[1] + d[2] * c->right[2];
+        double u = d[0] * c->up[0] + d[1] * c->up[1] + d[2] * c->up[2];
+        double f = d[0] * c->fwd[0] + d[1] * c->fwd[1] + d[2] * c->fwd[2];
+        out_near += f < c->near_dist;
+        out_r += r > c->tan_x * f;
+        out_l += r < -c->tan_x * f;
+        out_t += u > c->tan_y * f;
+        out_b += u < -c->tan_y * f;
+        fmin = f < fmin ? f : fmin;
+        if (f > 0) {
+            double xi = r / f, eta = u / f;
+            xi0 = xi < xi0 ? xi : xi0;
+            xi1 = xi > xi1 ? xi : xi1;
+            eta0 = eta < eta0 ? eta : eta0;
+            eta1 = eta > eta1 ? eta : eta1;
+        } else {
+            all_front = false;
+        }
+    }
+    if (out_near == 8 || out_l == 8 || out_r == 8 || out_t == 8 || out_b == 8)
+        return 0;
+    if (!all_front) {
+        xi0 = eta0 = -INFINITY;
+        xi1 = eta1 = INFINITY;
+    }
+    xi0 = xi0 < -c->tan_x ? -c->tan_x : xi0;
+    xi1 = xi1 > c->tan_x ? c->tan_x : xi1;
+    eta0 = eta0 < -c->tan_y ? -c->tan_y : eta0;
+    eta1 = eta1 > c->tan_y ? c->tan_y : eta1;
+    if (xi0 > xi1 || eta0 > eta1)
+        return 0;
+    double zr = c->right[2], zu = c->up[2], zf = c->fwd[2], factor = 0;
+    for (int k = 0; k < 4; k++) {
+        double xi = k & 1 ? xi1 : xi0, eta = k & 2 ? eta1 : eta0;
+        double a = zr - xi * zf, b = zu - eta * zf, m = sqrt(a * a + b * b);
+        factor = m > factor ? m : factor;
+    }
+    double z = fmin > c->near_dist ? fmin : c->near_dist;
+    double delta = s->error(s->user, node);
+    if (isinf(delta))
+        return INFINITY;
+    return c->K * delta * factor / z;
+}
+
+bool tsr_refine_camera(void *camera, const tsr_surface *s, tsr_qnode node)
+{
+    const tsr_camera *c = camera;
+    return tsr_camera_node_error(c, s, node) > c->pixel_error;
+}
+
+void tsr_quadtree_apply_camera(tsr_quadtree *qt, const tsr_camera *c)
+{
+    for (uint32_t i = 0; i < qt->leaf_count; i++) {
+        tsr_qleaf *leaf = &qt->leaves[i];
+        float lo[3], hi[3];
+        qt->s.bounds(qt->s.user, leaf->node, lo, hi);
+        /* culled when wholly outside one frustum plane */
+        int out[5] = {0};
+        for (int k = 0; k < 8; k++) {
+            double p[3] = {k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]};
+            double d[3] = {p[0] - c->eye[0], p[1] - c->eye[1], p[2] - c->eye[2]};
+            double r = d[0] * c->right[0] + d[1] * c->right[1] + d[2] * c->right[2];
+            double u = d[0] * c->up[0] + d[1] * c->up[1] + d[2] * c->up[2];
+            double f = d[0] * c->fwd[0] + d[1] * c->fwd[1] + d[2] * c->fwd[2];
+            out[0] += f < c->near_dist;
+            out[1] += r > c->tan_x * f;
+            out[2] += r < -c->tan_x * f;
+            out[3] += u > c->tan_y * f;
+            out[4] += u < -c->tan_y * f;
+        }
+        leaf->culled = !(lo[0] <= hi[0]) || out[0] == 8 || out[1] == 8 || out[2] == 8 || out[3] == 8 || out[4] == 8;
+        /* morph: 1 when the parent's error is just above tau (the split
+         * has just happened, so look like the parent), 0 from 2 tau on */
+        if (leaf->node.level > 0 && c->pixel_error > 0) {
+            double ep = tsr_camera_node_error(c, &qt->s, parent(leaf->node));
+            double k = 2.0 - ep / c->pixel_error;
+            leaf->morph = (float)(k < 0 ? 0 : k > 1 ? 1 : k);
+        }
+    }
+}
+
+float tsr_quadtree_vertex_morph(const tsr_qleaf *leaf, uint32_t n, uint32_t i, uint32_t j)
+{
+    if (i == 0 || j == 0 || i == n || j == n)
+        return 0;
+    if (!(i & 1) && !(j & 1))
+        return 0;
+    return leaf->morph;
+}
+
+/* ---- mesh ---------------------------------------------------------------- */
+
+typedef struct vmap {
+    uint64_t *keys; /* key + 1; 0 = empty */
+    uint32_t *vals;
+    size_t mask;
+    size_t count;
+} vmap;
+
+static uint64_t mix64(uint64_t k)
+{
+    k ^= k >> 33;
+    k *= 0xff51afd7ed558ccdull;
+    k ^= k >> 33;
+    k *= 0xc4ceb9fe1a85ec53ull;
+    k ^= k >> 33;
+    return k;
+}
+
+static bool vmap_grow(vmap *m, const tsr_allocator *a)
+{
+    size_t cap = m->mask ? 2 * (m->mask + 1) : 1024;
+    uint64_t *keys = tsr_alloc(a, cap * sizeof *keys);
+    uint32_t *vals = tsr_alloc(a, cap * sizeof *vals);
+    if (!keys || !vals) {
+        tsr_free(a, keys);
+        tsr_free(a, vals);
+        return false;
+    }
+    memset(keys, 0, cap * sizeof *keys);
+    for (size_t i = 0; m->keys && i <= m->mask; i++) {
+        if (!m->keys[i])
+            continue;
+        size_t h = mix64(m->keys[i]) & (cap - 1);
+        while (keys[h])
+            h = (h + 1) & (cap - 1);
+        keys[h] = m->keys[i];
+        vals[h] = m->vals[i];
+    }
+    tsr_free(a, m->keys);
+    tsr_free(a, m->vals);
+    m->keys = keys;
+    m->vals = vals;
+    m->mask = cap - 1;
+    return true;
+}
+
+/* Returns the slot of key (inserting an empty one if absent); *found says
+ * whether it was there. NULL when out of memory. */
+static uint32_t *vmap_slot(vmap *m, uint64_t key, bool *found, const tsr_allocator *a)
+{
+    if ((m->count + 1) * 2 > m->mask + 1 && !vmap_grow(m, a))
+        return NULL;
+    uint64_t k = key + 1;
+    size_t h = mix64(k) & m->mask;
+    while (m->keys[h] && m->keys[h] != k)
+        h = (h + 1) & m->mask;
+    *found = m->keys[h] == k;
+    if (!*found) {
+        m->keys[h] = k;
+        m->count++;
+    }
+    return &m->vals[h];
+}
+
+tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh *m)
+{
+    const tsr_surface *s = &qt->s;
+    const tsr_allocator *a = qa(qt);
+    uint32_t n = s->tile_n, row = n + 1;
+    tsr_tile_patterns pat;
+    tsr_status st = tsr_tile_patterns_init(&pat, n, a);
+    if (st != TSR_OK)
+        return st;
+    uint32_t *local = tsr_alloc(a, (size_t)row * row * sizeof *local);
+    vmap map = {0};
+    if (!local) {
+        tsr_tile_patterns_free(&pat);
+        return TSR_ERR_NOMEM;
+    }
+    bool normals = (m->attributes & TSR_MESH_NORMALS) != 0;
+    for (uint32_t li = 0; li < qt->leaf_count && st == TSR_OK; li++) {
+        const tsr_qleaf *leaf = &qt->leaves[li];
+        if (skip_culled && leaf->culled)
+            continue;
+        uint64_t w = (uint64_t)n << (s->levels - leaf->node.level), step = w / n;
+        uint64_t x0 = leaf->node.x * w, y0 = leaf->node.y * w;
+        for (uint32_t j = 0; j <= n && st == TSR_OK; j++)
+            for (uint32_t i = 0; i <= n; i++) {
+                uint64_t gi = x0 + i * step, gj = y0 + j * step;
+                gi = gi > s->extent_x ? s->extent_x : gi;
+                gj = gj > s->extent_y ? s->extent_y : gj;
+                bool found;
+                uint32_t *slot = vmap_slot(&map, gj * ((uint64_t)s->extent_x + 1) + gi, &found, a);
+                if (!slot) {
+                    st = TSR_ERR_NOMEM;
+                    break;
+                }
+                if (!found) {
+                    float p[3], nr[3];
+                    bool ok = s->evaluate(s->user, (uint32_t)gi, (uint32_t)gj, p, normals ? nr : NULL);
+                    *slot = ok ? tsr_mesh_add_vertex(m, p, normals ? nr : NULL, NULL) : UINT32_MAX - 1;
+                    if (*slot == UINT32_MAX) {
+                        st = TSR_ERR_NOMEM;
+                        break;
+                    }
+                }
+                local[j * row + i] = *slot;
+            }
+        const uint32_t *tri = pat.tri[leaf->stitch & 15];
+        for (uint32_t t = 0; t < pat.count[leaf->stitch & 15] && st == TSR_OK; t++) {
+            uint32_t va = local[tri[3 * t]], vb = local[tri[3 * t + 1]], vc = local[tri[3 * t + 2]];
+            if (va >= UINT32_MAX - 1 || vb >= UINT32_MAX - 1 || vc >= UINT32_MAX - 1 || va == vb || vb == vc ||
+                va == vc)
+                continue;
+            if (!tsr_mesh_add_triangle(m, va, vb, vc))
+                st = TSR_ERR_NOMEM;
+        }
+    }
+    tsr_free(a, local);
+    tsr_free(a, map.keys);
+    tsr_free(a, map.vals);
+    tsr_tile_patterns_free(&pat);
+    return st;
+}
