@@ -131,6 +131,76 @@ void tsr_terrain_generate(tsr_heightfield *hf, const tsr_generate_options *opts)
 tsr_status tsr_terrain_grid_mesh(const tsr_heightfield *hf, uint32_t step, bool normals,
                                  tsr_mesh *mesh, tsr_error *err);
 
+/* ---- Level of detail ---------------------------------------------------- */
+
+/* A terrain for level of detail: a heightfield (borrowed: it must outlive
+ * the terrain and not change) and its pyramid:
+ *  - maximum mipmaps: for mip level k >= 1, the min and max height of each
+ *    block of 2^k x 2^k cells, closed (its border samples included), NaN
+ *    ignored, plus a no-data flag per block;
+ *  - per quadtree node, a conservative, monotone geometric error delta:
+ *    no full-resolution sample in the node is farther, vertically, from
+ *    the node's grid tile (with any stitch mask) than delta.
+ * The quadtree lattice is the samples: (i, j) = (column, row); node
+ * (level, x, y) covers tile_n << (levels - level) cells. */
+typedef struct tsr_terrain tsr_terrain;
+
+typedef struct tsr_terrain_options {
+    uint32_t tile_n; /* quads per tile side: 8, 16, 32, 64 or 128 (default 16) */
+} tsr_terrain_options;
+
+/* Builds the pyramid in one bottom-up pass. Fails on a bad tile size or
+ * spacing (dx, dy, dz must be positive) or out of memory. */
+tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_options *opts, const tsr_allocator *alloc,
+                              tsr_terrain **out, tsr_error *err);
+void tsr_terrain_destroy(tsr_terrain *t);
+
+/* The terrain behind the generic surface interface (valid while t lives).
+ * evaluate gives (c dx, r dy, h dz) and the normal from central
+ * differences; false at NaN samples. bounds are world boxes; error is
+ * delta * dz (INFINITY for a node above the deepest level that covers a
+ * no-data sample, so holes are always meshed at full resolution). */
+const tsr_surface *tsr_terrain_surface(const tsr_terrain *t);
+const tsr_heightfield *tsr_terrain_heightfield(const tsr_terrain *t);
+
+/* Min and max height (file units) of a node; min > max when it has no
+ * valid sample. */
+void tsr_terrain_node_range(const tsr_terrain *t, tsr_qnode n, float *min, float *max);
+
+/* Bytes the terrain keeps beyond the heightfield itself. */
+size_t tsr_terrain_extra_bytes(const tsr_terrain *t);
+
+/* Ray picking: the first intersection, at parameter t >= 0 along
+ * origin + t dir (world coordinates), with the full-resolution surface:
+ * each cell between four valid samples split into two triangles along the
+ * same diagonal as the finest grid tiles (from (c, r) to (c+1, r+1) when
+ * c + r is even, else from (c+1, r) to (c, r+1)). Descends the max mipmap
+ * and skips blocks the ray passes over or under. Returns false when the ray
+ * misses (cells with a NaN corner are holes). */
+bool tsr_terrain_pick(const tsr_terrain *t, const double origin[3], const double dir[3], double *t_hit);
+
+/* ---- Independent error measurement -------------------------------------- */
+
+/* What an output mesh does to the samples, measured by brute force from
+ * the heightfield and the mesh alone (no pyramid, no quadtree): the oracle
+ * of `tessera check terrain` and of the tests. */
+typedef struct tsr_error_report {
+    double max_vertical;    /* max |h dz - z of the mesh above or below| */
+    double max_pixels;      /* max screen error (with a camera) */
+    uint64_t counted;       /* samples counted for max_pixels */
+    uint64_t uncovered;     /* valid samples with no mesh above or below */
+    uint32_t worst_c, worst_r; /* the sample of max_pixels (or max_vertical) */
+} tsr_error_report;
+
+/* For every valid sample s = (c dx, r dy, h dz): the point m of the mesh
+ * vertically above or below s; max_vertical over all of them; with a
+ * camera (prepared, may be NULL), the distance in pixels between the
+ * projections of s and m, counted where both lie beyond the near plane and
+ * at least one projects inside the viewport. The mesh must be a height
+ * field over the (x, y) plane. */
+tsr_status tsr_terrain_measure(const tsr_heightfield *hf, const tsr_mesh *mesh, const tsr_camera *cam,
+                               tsr_error_report *out);
+
 #ifdef __cplusplus
 }
 #endif

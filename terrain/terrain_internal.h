@@ -39,6 +39,16 @@ tsr_status tsr_image_read(const char *path, const tsr_allocator *alloc, uint64_t
 tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
                            const float *values, bool as_u16, double scale, double offset, tsr_error *err);
 
+/* The maximum mipmap of a terrain, as pick.c reads it (lod.c owns it). */
+typedef struct pick_view {
+    const tsr_heightfield *hf;
+    uint32_t mip_levels; /* levels 1..mip_levels; level k: blocks of 2^k cells */
+    const uint32_t *mw, *mh;
+    float *const *mip_min, *const *mip_max;
+} pick_view;
+
+bool tsr_terrain_pick_view(const tsr_terrain *t, pick_view *v);
+
 /* Greyscale Netpbm (P2, P5) read exactly (pnm.c). */
 bool tsr_pnm_is_grey(const char *path);
 tsr_status tsr_pnm_read(const char *path, const tsr_allocator *alloc, tsr_heightfield **out, tsr_error *err);
