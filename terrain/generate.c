@@ -241,3 +241,65 @@ void tsr_terrain_generate(tsr_heightfield *hf, const tsr_generate_options *opts)
         hf->data[i] = (float)((h[i] - lo) / span * relief);
     tsr_free(a, h);
 }
+
+/* Midpoint displacement on the (2^k+1)^2 square that encloses the
+ * heightfield; other sizes are cropped from a temporary square. */
+static double offset_at(uint32_t x, uint32_t y, uint32_t seed)
+{
+    return (hash3(x, y, seed) * (1.0 / 4294967296.0)) - 0.5;
+}
+
+void tsr_terrain_generate_fast(tsr_heightfield *hf, uint32_t seed, double relief)
+{
+    uint32_t w = hf->width, h = hf->height;
+    uint32_t side = 1;
+    while (side + 1 < w || side + 1 < h)
+        side <<= 1;
+    if (side + 1 != w || side + 1 != h) {
+        tsr_heightfield *tmp = tsr_heightfield_create(side + 1, side + 1, hf->alloc.realloc ? &hf->alloc : NULL);
+        if (!tmp)
+            return;
+        tsr_terrain_generate_fast(tmp, seed, relief);
+        for (uint32_t r = 0; r < h; r++)
+            memcpy(hf->data + (size_t)r * w, tmp->data + (size_t)r * (side + 1), w * sizeof(float));
+        tsr_heightfield_destroy(tmp);
+        return;
+    }
+    uint32_t n = side + 1;
+    float *d = hf->data;
+    d[0] = (float)offset_at(0, 0, seed);
+    d[side] = (float)offset_at(side, 0, seed);
+    d[(size_t)side * n] = (float)offset_at(0, side, seed);
+    d[(size_t)side * n + side] = (float)offset_at(side, side, seed);
+    double amp = 1.0;
+    for (uint32_t step = side; step > 1; step /= 2, amp *= 0.5) {
+        uint32_t half = step / 2;
+        /* diamond: centres of squares */
+        for (uint32_t y = half; y < n; y += step)
+            for (uint32_t x = half; x < n; x += step) {
+                double avg = 0.25 * ((double)d[(size_t)(y - half) * n + x - half] + d[(size_t)(y - half) * n + x + half] +
+                                     d[(size_t)(y + half) * n + x - half] + d[(size_t)(y + half) * n + x + half]);
+                d[(size_t)y * n + x] = (float)(avg + amp * offset_at(x, y, seed));
+            }
+        /* square: edge midpoints */
+        for (uint32_t y = 0; y < n; y += half)
+            for (uint32_t x = (y / half) % 2 ? 0 : half; x < n; x += step) {
+                double sum = 0;
+                int cnt = 0;
+                if (x >= half) { sum += d[(size_t)y * n + x - half]; cnt++; }
+                if (x + half < n) { sum += d[(size_t)y * n + x + half]; cnt++; }
+                if (y >= half) { sum += d[(size_t)(y - half) * n + x]; cnt++; }
+                if (y + half < n) { sum += d[(size_t)(y + half) * n + x]; cnt++; }
+                d[(size_t)y * n + x] = (float)(sum / cnt + amp * offset_at(x, y, seed));
+            }
+    }
+    float lo = INFINITY, hi = -INFINITY;
+    size_t total = (size_t)n * n;
+    for (size_t i = 0; i < total; i++) {
+        lo = fminf(lo, d[i]);
+        hi = fmaxf(hi, d[i]);
+    }
+    double span = hi > lo ? hi - lo : 1;
+    for (size_t i = 0; i < total; i++)
+        d[i] = (float)((d[i] - lo) / span * relief);
+}

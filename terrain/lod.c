@@ -203,6 +203,40 @@ static double midpoint_error(const tsr_heightfield *hf, const tile_geom *g)
     return worst;
 }
 
+/* The stitched error of an interior node's tile at its children's
+ * vertices: each merged triangle (A, B on the edge around the dropped odd
+ * vertex, C the inner vertex) contains six child vertices off its
+ * corners, at fixed barycentric weights (lambda_C = y, lambda_B =
+ * (x - y) / 2 in units of the tile spacing from A, x along the edge and y
+ * inwards). */
+static double band_error(const tsr_heightfield *hf, const tile_geom *g)
+{
+    static const double pts[6][2] = {{1, 0}, {0.5, 0}, {1.5, 0}, {1, 0.5}, {0.5, 0.5}, {1.5, 0.5}};
+    uint32_t s = g->s, hs = s / 2, n = g->n;
+    double worst = 0;
+    for (int e = 0; e < 4; e++) {
+        /* origin of the edge and unit steps along it and inwards */
+        int64_t ox = e == 1 ? g->x0 + n * s : g->x0, oy = e == 2 ? g->y0 + n * s : g->y0;
+        int ax = e == 0 || e == 2, ay = !ax, ix = e == 3 ? 1 : e == 1 ? -1 : 0, iy = e == 0 ? 1 : e == 2 ? -1 : 0;
+        for (uint32_t k = 0; k + 1 < n; k += 2) {
+            int64_t Ax = ox + (int64_t)ax * k * s, Ay = oy + (int64_t)ay * k * s;
+            int64_t Bx = Ax + (int64_t)ax * 2 * s, By = Ay + (int64_t)ay * 2 * s;
+            int64_t Cx = Ax + (int64_t)ax * s + (int64_t)ix * s, Cy = Ay + (int64_t)ay * s + (int64_t)iy * s;
+            double ha = H(hf, (uint32_t)Ax, (uint32_t)Ay), hb = H(hf, (uint32_t)Bx, (uint32_t)By),
+                   hc = H(hf, (uint32_t)Cx, (uint32_t)Cy);
+            for (int p = 0; p < 6; p++) {
+                double x = pts[p][0], y = pts[p][1];
+                double lc = y, lb = (x - y) / 2, la = 1 - lb - lc;
+                int64_t px = Ax + (int64_t)(ax * x * 2) * hs + (int64_t)(ix * y * 2) * hs;
+                int64_t py = Ay + (int64_t)(ay * x * 2) * hs + (int64_t)(iy * y * 2) * hs;
+                double err = fabs(H(hf, (uint32_t)px, (uint32_t)py) - (la * ha + lb * hb + lc * hc));
+                worst = err > worst ? err : worst;
+            }
+        }
+    }
+    return worst;
+}
+
 /* Finest tiles: only the odd edge samples move when an edge is stitched. */
 static double finest_stitch_error(const tsr_heightfield *hf, const tile_geom *g)
 {
@@ -351,35 +385,50 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
         memset(t->mip_nan[k], 0, ((cnt + 63) / 64) * sizeof(uint64_t));
     }
     {
+        /* two passes per block row: the min/max down the block's three
+         * sample rows for every column (a straight, vectorisable loop),
+         * then across each block's three columns */
         uint32_t mw = t->mw[1], mh = t->mh[1];
+        float *cmin = tsr_alloc(ta(t), 3 * (size_t)W * sizeof(float)), *cmax = cmin ? cmin + W : NULL,
+              *cnan = cmin ? cmin + 2 * (size_t)W : NULL;
+        if (!cmin) {
+            tsr_terrain_destroy(t);
+            return tsr_error_set(err, TSR_ERR_NOMEM, "out of memory for the terrain pyramid");
+        }
         for (uint32_t by = 0; by < mh; by++) {
             uint32_t r0 = 2 * by, r1 = r0 + 2 > ey ? ey : r0 + 2;
+            const float *a = hf->data + (size_t)r0 * W, *b = hf->data + (size_t)(r0 + 1) * W,
+                        *cc = hf->data + (size_t)r1 * W;
+            for (uint32_t x = 0; x < W; x++) {
+                float va = a[x], vb = b[x], vc = cc[x];
+                /* NaN-ignoring min/max: a NaN operand never wins */
+                float lo = va, hi = va;
+                lo = (vb < lo || lo != lo) ? vb : lo;
+                hi = (vb > hi || hi != hi) ? vb : hi;
+                lo = (vc < lo || lo != lo) ? vc : lo;
+                hi = (vc > hi || hi != hi) ? vc : hi;
+                cmin[x] = lo;
+                cmax[x] = hi;
+                cnan[x] = (va != va || vb != vb || vc != vc) ? 1.0f : 0.0f;
+            }
             float *mn = t->mip_min[1] + (size_t)by * mw, *mx = t->mip_max[1] + (size_t)by * mw;
             for (uint32_t bx = 0; bx < mw; bx++) {
-                mn[bx] = INFINITY;
-                mx[bx] = -INFINITY;
-            }
-            for (uint32_t r = r0; r <= r1; r++) {
-                const float *row = hf->data + (size_t)r * W;
-                for (uint32_t bx = 0; bx < mw; bx++) {
-                    uint32_t c0 = 2 * bx, c1 = c0 + 2 > ex ? ex : c0 + 2;
-                    float lo = mn[bx], hi = mx[bx];
-                    bool has_nan = false;
-                    for (uint32_t c = c0; c <= c1; c++) {
-                        float v = row[c];
-                        has_nan |= isnan(v);
-                        lo = fminf(lo, v);
-                        hi = fmaxf(hi, v);
-                    }
-                    mn[bx] = lo;
-                    mx[bx] = hi;
-                    if (has_nan) {
-                        size_t i = (size_t)by * mw + bx;
-                        t->mip_nan[1][i >> 6] |= 1ull << (i & 63);
-                    }
+                uint32_t c0 = 2 * bx, c1 = c0 + 1, c2 = c0 + 2 > ex ? ex : c0 + 2;
+                float lo = cmin[c0], hi = cmax[c0];
+                lo = (cmin[c1] < lo || lo != lo) ? cmin[c1] : lo;
+                hi = (cmax[c1] > hi || hi != hi) ? cmax[c1] : hi;
+                lo = (cmin[c2] < lo || lo != lo) ? cmin[c2] : lo;
+                hi = (cmax[c2] > hi || hi != hi) ? cmax[c2] : hi;
+                /* all three NaN: no valid sample, an empty range */
+                mn[bx] = lo == lo ? lo : INFINITY;
+                mx[bx] = hi == hi ? hi : -INFINITY;
+                if (cnan[c0] + cnan[c1] + cnan[c2] > 0) {
+                    size_t i = (size_t)by * mw + bx;
+                    t->mip_nan[1][i >> 6] |= 1ull << (i & 63);
                 }
             }
         }
+        tsr_free(ta(t), cmin);
     }
     for (uint32_t k = 2; k <= t->mip_levels; k++) {
         uint32_t mw = t->mw[k], mh = t->mh[k], pw = t->mw[k - 1], ph = t->mh[k - 1];
@@ -392,8 +441,9 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
                     if (cx >= pw || cy >= ph)
                         continue;
                     size_t ci = (size_t)cy * pw + cx;
-                    lo = fminf(lo, t->mip_min[k - 1][ci]);
-                    hi = fmaxf(hi, t->mip_max[k - 1][ci]);
+                    float a = t->mip_min[k - 1][ci], b = t->mip_max[k - 1][ci];
+                    lo = a < lo ? a : lo;
+                    hi = b > hi ? b : hi;
                     has_nan |= nan_bit(t, k - 1, cx, cy);
                 }
                 size_t i = (size_t)by * mw + bx;
@@ -454,7 +504,7 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
                     }
                 } else {
                     du = child_u + midpoint_error(hf, &g);
-                    d = fmax(du, child_u + scan_error(hf, &g, 15, s / 2, true));
+                    d = fmax(du, child_u + band_error(hf, &g));
                 }
                 du = fmax(du, child_u);
                 d = fmax(fmax(d, du), child_d);

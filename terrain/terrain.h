@@ -120,6 +120,13 @@ typedef struct tsr_generate_options {
  * on every platform (integer hashing, no library random numbers). */
 void tsr_terrain_generate(tsr_heightfield *hf, const tsr_generate_options *opts);
 
+/* A fast fractal terrain for benchmarks at large sizes: midpoint
+ * displacement (diamond-square, Fournier, Fussell & Carpenter 1982) with
+ * hashed, seed-determined offsets, roughness 0.5, heights 0..relief; no
+ * erosion. Sizes other than a (2^k + 1) square are cropped from one,
+ * made in a temporary. */
+void tsr_terrain_generate_fast(tsr_heightfield *hf, uint32_t seed, double relief);
+
 /* ---- Grid mesh --------------------------------------------------------- */
 
 /* The regular-grid mesh of the samples at every step-th column and row

@@ -13,6 +13,7 @@
 #include "tessellate/tessellate.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 typedef struct node_list {
@@ -582,4 +583,34 @@ tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh 
     tsr_free(a, map.vals);
     tsr_tile_patterns_free(&pat);
     return st;
+}
+
+bool tsr_quadtree_leaves_balanced(const tsr_quadtree *qt)
+{
+    const tsr_surface *s = &qt->s;
+    size_t side = (size_t)1 << s->levels;
+    signed char *lev = tsr_alloc(qa(qt), side * side);
+    if (!lev)
+        return false;
+    memset(lev, -1, side * side);
+    for (uint32_t i = 0; i < qt->leaf_count; i++) {
+        tsr_qnode n = qt->leaves[i].node;
+        size_t span = (size_t)1 << (s->levels - n.level);
+        for (size_t y = n.y * span; y < (n.y + 1) * span; y++)
+            memset(lev + y * side + n.x * span, n.level, span);
+    }
+    bool ok = true;
+    for (size_t y = 0; y < side && ok; y++)
+        for (size_t x = 0; x < side; x++) {
+            int a = lev[y * side + x];
+            if (a < 0)
+                continue;
+            int r = x + 1 < side ? lev[y * side + x + 1] : -1, u = y + 1 < side ? lev[(y + 1) * side + x] : -1;
+            if ((r >= 0 && abs(a - r) > 1) || (u >= 0 && abs(a - u) > 1)) {
+                ok = false;
+                break;
+            }
+        }
+    tsr_free(qa(qt), lev);
+    return ok;
 }

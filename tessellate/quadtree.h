@@ -126,6 +126,12 @@ bool tsr_quadtree_is_split(const tsr_quadtree *qt, tsr_qnode n);
 /* Whether a node exists, i.e. overlaps the extent. */
 bool tsr_quadtree_node_exists(const tsr_surface *s, tsr_qnode n);
 
+/* Checks the 2:1 restriction from the leaves alone, independently of how
+ * the cut was balanced: every leaf is painted onto the deepest level's
+ * grid and edge-adjacent cells may differ by at most one level. Needs
+ * 4^levels bytes; false also when out of memory. */
+bool tsr_quadtree_leaves_balanced(const tsr_quadtree *qt);
+
 /* Morton key of a node: level in the top byte, x and y interleaved below,
  * so keys of one level sort in Z order. */
 uint64_t tsr_qnode_key(tsr_qnode n);

@@ -1,5 +1,8 @@
 /* status.c: the one table of status codes and messages, and allocators. */
+#define _GNU_SOURCE /* madvise, MADV_HUGEPAGE */
 #include "tessellate/tessellate.h"
+
+#include <sys/mman.h>
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -40,12 +43,26 @@ tsr_status tsr_error_set(tsr_error *err, tsr_status status, const char *fmt, ...
     return status;
 }
 
+/* Large fresh blocks (pyramids, heightfields) are aligned to 2 MiB and
+ * marked for transparent huge pages: on virtual machines a 4 KiB page
+ * fault can cost ~10 us, which made first touch dominate the pyramid
+ * build (a 32 MiB array: 8192 faults, against 16 with huge pages). */
 static void *default_realloc(void *user, void *ptr, size_t size)
 {
     (void)user;
     if (size == 0) {
         free(ptr);
         return NULL;
+    }
+    const size_t huge = (size_t)2 << 20;
+    if (!ptr && size >= 2 * huge) {
+        void *p = NULL;
+        if (posix_memalign(&p, huge, size) != 0)
+            return NULL;
+#ifdef MADV_HUGEPAGE
+        madvise(p, size, MADV_HUGEPAGE); /* advice only: failure is harmless */
+#endif
+        return p;
     }
     return realloc(ptr, size);
 }

@@ -62,6 +62,6 @@ double cli_now(void);
 /* Writes text to path atomically (temporary, then rename). */
 tsr_status cli_write_text(const char *path, const char *text, tsr_error *err);
 
-extern const cli_command cli_cmd_info, cli_cmd_generate, cli_cmd_mesh;
+extern const cli_command cli_cmd_info, cli_cmd_generate, cli_cmd_mesh, cli_cmd_check, cli_cmd_bench;
 
 #endif

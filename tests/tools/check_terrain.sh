@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# check_terrain.sh TESSERA [DATA]: `tessera check terrain` end to end. The
+# check itself is the oracle (brute-force screen error over every sample,
+# validation, 2:1 from the leaves); here we make sure it runs, passes on
+# generated and real terrain, fails when it should, and exports a mesh that
+# an independent reader (assimp) accepts.
+set -u
+tessera=$1 data=${2:-}
+dir=$(mktemp -d "${TMPDIR:-/tmp}/tsr-check-XXXXXX")
+trap 'rm -rf "$dir"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+"$tessera" generate --size 513 --seed 5 -o "$dir/t.png" 2>/dev/null || fail generate
+"$tessera" check terrain "$dir/t.png" --dx 30 --dz 0.3 --cameras 12 --seed 3 > "$dir/out.txt" || fail "check failed: $(tail -3 "$dir/out.txt")"
+grep -q "0 of 12 cameras failed" "$dir/out.txt" || fail "unexpected: $(tail -1 "$dir/out.txt")"
+# not vacuous: the worst camera sees errors of a good part of a pixel
+awk '/^worst/ { for (i = 1; i < NF; i++) if ($i == "max_pixel_error") exit !($(i + 1) > 0.3) }' "$dir/out.txt" \
+  || fail "errors too small to test the bound: $(tail -1 "$dir/out.txt")"
+
+# the check can fail: with a wide (90 degree) view, the textbook criterion
+# delta K / z (no obliquity factor) exceeds the bound, and ours does not
+"$tessera" check terrain "$dir/t.png" --dx 30 --dz 0.3 --cameras 12 --seed 3 --fov 90 > "$dir/wide.txt" \
+  || fail "wide view: $(tail -1 "$dir/wide.txt")"
+"$tessera" check terrain "$dir/t.png" --dx 30 --dz 0.3 --cameras 12 --seed 3 --fov 90 --criterion naive > "$dir/naive.txt"
+[ $? -eq 1 ] || fail "the naive criterion passed: $(tail -1 "$dir/naive.txt")"
+echo "ok naive criterion caught: $(tail -1 "$dir/naive.txt")"
+"$tessera" check terrain "$dir/t.png" --pixel-error 0 2>/dev/null; [ $? -eq 2 ] || fail "--pixel-error 0 accepted"
+echo "ok generated: $(tail -1 "$dir/out.txt")"
+
+# JSON output carries the keys the issue names
+"$tessera" check terrain "$dir/t.png" --dx 30 --cameras 3 --tile 8 --pixel-error 0.5 --json > "$dir/out.json" || fail "json check failed"
+for k in max_pixel_error watertight conforming balanced tiles triangles select_us; do
+  grep -q "\"$k\"" "$dir/out.json" || fail "no key $k in the JSON"
+done
+echo "ok json keys"
+
+# one given camera, mesh exported and read back by assimp
+"$tessera" check terrain "$dir/t.png" --dx 30 --camera 100,100,900,3000,3000,0 --export-mesh "$dir/view.ply" > "$dir/one.txt" \
+  || fail "single camera failed"
+[ -s "$dir/view.ply" ] || fail "no exported mesh"
+want=$(awk '/^camera/ {for (i = 1; i < NF; i++) if ($i == "triangles") print $(i + 1)}' "$dir/one.txt")
+got=$(assimp info "$dir/view.ply" 2>/dev/null | awk '/^Faces:/ {print $2; exit}')
+[ "$want" = "$got" ] || fail "exported mesh has $got faces, check reported $want"
+echo "ok export: $got triangles"
+
+# bad usage fails cleanly
+"$tessera" check terrain "$dir/t.png" --camera 1,2,3 2>/dev/null && fail "malformed camera accepted"
+"$tessera" check terrain "$dir/t.png" --export-mesh "$dir/x.ply" --cameras 2 2>/dev/null && fail "export without one camera accepted"
+[ ! -e "$dir/x.ply" ] || fail "partial output left"
+"$tessera" check terrain "$dir/t.png" --tile 12 2>/dev/null && fail "tile 12 accepted"
+echo "ok bad usage"
+
+# a real terrain (Terrain-RGB tile), when the shared data is there
+if [ -n "$data" ] && [ -f "$data/terrain/bayhills-14-2625-6369-terrainrgb.png" ]; then
+  "$tessera" check terrain "$data/terrain/bayhills-14-2625-6369-terrainrgb.png" --decode terrain-rgb --dx 9.55 \
+    --cameras 30 > "$dir/bay.txt" || fail "bayhills: $(tail -1 "$dir/bay.txt")"
+  echo "ok bayhills: $(tail -1 "$dir/bay.txt")"
+else
+  echo "bayhills skipped: no shared data"
+fi
+
+# the benchmark runs and prints its table (timings are not judged here)
+"$tessera" bench terrain --size 257 --frames 20 --repeat 1 > "$dir/bench.txt" 2>/dev/null || fail "bench failed"
+grep -q "pyramid build" "$dir/bench.txt" && grep -q "selection per frame, median" "$dir/bench.txt" || fail "bench table"
+echo "ok bench table"

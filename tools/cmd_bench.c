@@ -1,0 +1,207 @@
+/* cmd_bench.c: `tessera bench terrain`: pyramid build against a memcpy of
+ * the same bytes in the same run, selection per frame over a flight, tiles
+ * and triangles per frame, tile vertex generation rate, and memory beyond
+ * the heightfield. Prints a table; figures are ratios against baselines
+ * measured in the same run where that makes sense. */
+#include "camera.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void help(FILE *f)
+{
+    fprintf(f, "usage: tessera bench terrain [options]\n\n"
+               "Benchmarks terrain level of detail on a generated heightfield (fast midpoint displacement)\n"
+               "or on a file, and prints a table.\n\n"
+               "options:\n"
+               "  --size S          generated heightfield of S x S samples (default 16385)\n"
+               "  --input FILE      benchmark this heightfield instead (heightfield options apply)\n"
+               "  --tile N          tile size (default 16)\n"
+               "  --frames F        frames of the flight (default 1000)\n"
+               "  --pixel-error T   screen-space error, pixels (default 1)\n"
+               "  --repeat R        best of R runs for the timed builds (default 3)\n" CLI_HEIGHTFIELD_HELP
+               "  -h, --help        this help\n");
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static int run(int argc, char **argv)
+{
+    if (argc < 2 || (strcmp(argv[1], "terrain") && !cli_is_help(argv[1]))) {
+        cli_error("bench", "what to benchmark? 'tessera bench terrain' (see tessera bench --help)");
+        return CLI_USAGE;
+    }
+    cli_heightfield_options o = {0};
+    uint32_t size = 16385, tile = 16, frames = 1000, repeat = 3;
+    double tau = 1;
+    const char *input = NULL;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (cli_is_help(a)) {
+            help(stdout);
+            return CLI_OK;
+        }
+        if (i == 1)
+            continue;
+        int r = cli_heightfield_option("bench", argc, argv, &i, &o);
+        if (r < 0)
+            return CLI_USAGE;
+        if (r > 0)
+            continue;
+        bool has_value = i + 1 < argc;
+        uint32_t u;
+        if (!strcmp(a, "--input") && has_value)
+            input = argv[++i];
+        else if ((!strcmp(a, "--size") || !strcmp(a, "--tile") || !strcmp(a, "--frames") || !strcmp(a, "--repeat")) &&
+                 has_value) {
+            if (!cli_parse_u32(argv[++i], !strcmp(a, "--size") ? 2 : 1, 1u << 20, &u)) {
+                cli_error("bench", "%s %s: not a valid number", a, argv[i]);
+                return CLI_USAGE;
+            }
+            *(!strcmp(a, "--size") ? &size : !strcmp(a, "--tile") ? &tile : !strcmp(a, "--frames") ? &frames : &repeat) = u;
+        } else if (!strcmp(a, "--pixel-error") && has_value) {
+            if (!cli_parse_double(argv[++i], &tau) || !(tau > 0)) {
+                cli_error("bench", "--pixel-error %s: must be positive", argv[i]);
+                return CLI_USAGE;
+            }
+        } else {
+            cli_error("bench", "%s '%s' (see tessera bench --help)", has_value ? "unknown option" : "missing value for", a);
+            return CLI_USAGE;
+        }
+    }
+    double t0 = cli_now();
+    tsr_heightfield *hf;
+    if (input) {
+        hf = cli_load_heightfield("bench", input, &o);
+        if (!hf)
+            return CLI_FAIL;
+    } else {
+        hf = tsr_heightfield_create(size, size, NULL);
+        if (!hf) {
+            cli_error("bench", "out of memory for %ux%u samples", size, size);
+            return CLI_FAIL;
+        }
+        fprintf(stderr, "tessera bench: generating %ux%u heightfield...\n", size, size);
+        tsr_terrain_generate_fast(hf, 1, 1000);
+        tsr_heightfield_set_spacing(hf, o.dx > 0 ? o.dx : 10, o.dy > 0 ? o.dy : (o.dx > 0 ? o.dx : 10), o.dz > 0 ? o.dz : 1);
+    }
+    double gen_s = cli_now() - t0;
+    uint32_t W = tsr_heightfield_width(hf), Hh = tsr_heightfield_height(hf);
+    size_t bytes = (size_t)W * Hh * sizeof(float);
+
+    /* baseline: memcpy of the same bytes into touched memory, best of R */
+    float *copy = malloc(bytes);
+    if (!copy) {
+        cli_error("bench", "out of memory for the memcpy baseline");
+        tsr_heightfield_destroy(hf);
+        return CLI_FAIL;
+    }
+    memset(copy, 0, bytes);
+    double memcpy_s = INFINITY;
+    for (uint32_t r = 0; r < repeat; r++) {
+        double a = cli_now();
+        memcpy(copy, tsr_heightfield_cdata(hf), bytes);
+        __asm__ volatile("" : : "r"(copy) : "memory"); /* keep the copy */
+        double e = cli_now() - a;
+        memcpy_s = e < memcpy_s ? e : memcpy_s;
+    }
+    free(copy);
+
+    tsr_terrain *t = NULL;
+    tsr_terrain_options to = {tile};
+    tsr_error err = {0};
+    double build_s = INFINITY;
+    for (uint32_t r = 0; r < repeat; r++) {
+        tsr_terrain_destroy(t);
+        t = NULL;
+        double a = cli_now();
+        if (tsr_terrain_create(hf, &to, NULL, &t, &err) != TSR_OK) {
+            cli_error("bench", "%s", err.message);
+            tsr_heightfield_destroy(hf);
+            return CLI_FAIL;
+        }
+        double e = cli_now() - a;
+        build_s = e < build_s ? e : build_s;
+    }
+    const tsr_surface *s = tsr_terrain_surface(t);
+    tsr_quadtree *qt = tsr_quadtree_create(s, NULL);
+    view_options v = {60, 1920, 1080, 1, tau};
+    double *sel = malloc(frames * sizeof *sel), *tiles = malloc(frames * sizeof *tiles),
+           *tris = malloc(frames * sizeof *tris);
+    tsr_tile_patterns pat;
+    tsr_tile_patterns_init(&pat, tile, NULL);
+    uint64_t verts = 0;
+    double vert_s = 0;
+    float *vbuf = malloc((size_t)(tile + 1) * (tile + 1) * 3 * sizeof(float));
+    for (uint32_t f = 0; f < frames; f++) {
+        tsr_camera cam;
+        flight_camera(t, (int)f, (int)frames, &v, &cam);
+        double a = cli_now();
+        tsr_quadtree_select(qt, tsr_refine_camera, &cam);
+        sel[f] = (cli_now() - a) * 1e3;
+        tsr_quadtree_apply_camera(qt, &cam);
+        uint32_t nl = tsr_quadtree_leaf_count(qt), drawn = 0;
+        double ntri = 0;
+        const tsr_qleaf *L = tsr_quadtree_leaves(qt);
+        for (uint32_t i = 0; i < nl; i++)
+            if (!L[i].culled) {
+                drawn++;
+                ntri += pat.count[L[i].stitch & 15];
+            }
+        tiles[f] = drawn;
+        tris[f] = ntri;
+        /* tile vertex generation: positions of every drawn tile, every 10th frame */
+        if (f % 10 == 0) {
+            double b = cli_now();
+            for (uint32_t i = 0; i < nl; i++) {
+                if (L[i].culled)
+                    continue;
+                uint64_t w = (uint64_t)tile << (s->levels - L[i].node.level), st = w / tile;
+                for (uint32_t j = 0, k = 0; j <= tile; j++)
+                    for (uint32_t ii = 0; ii <= tile; ii++, k++) {
+                        uint64_t gi = L[i].node.x * w + ii * st, gj = L[i].node.y * w + j * st;
+                        gi = gi > s->extent_x ? s->extent_x : gi;
+                        gj = gj > s->extent_y ? s->extent_y : gj;
+                        s->evaluate(s->user, (uint32_t)gi, (uint32_t)gj, vbuf + 3 * k, NULL);
+                    }
+                verts += (uint64_t)(tile + 1) * (tile + 1);
+            }
+            vert_s += cli_now() - b;
+        }
+    }
+    qsort(sel, frames, sizeof *sel, cmp_double);
+    qsort(tiles, frames, sizeof *tiles, cmp_double);
+    qsort(tris, frames, sizeof *tris, cmp_double);
+    double extra = (double)tsr_terrain_extra_bytes(t);
+    printf("tessera bench terrain: %ux%u samples (%.2f GiB float32), tile %u, levels %u, 1920x1080, 60 deg, tau %g px, "
+           "%u-frame flight\n\n",
+           W, Hh, bytes / 1073741824.0, tile, s->levels, tau, frames);
+    printf("| measure | value | ratio / target |\n|---|---|---|\n");
+    printf("| heightfield %s | %.2f s | |\n", input ? "load" : "generation", gen_s);
+    printf("| memcpy of the heightfield (baseline, best of %u) | %.3f s | 1.00 |\n", repeat, memcpy_s);
+    printf("| pyramid build (best of %u) | %.3f s | %.2fx memcpy (target <= 3x) |\n", repeat, build_s,
+           build_s / memcpy_s);
+    printf("| selection per frame, median | %.4f ms | target <= 0.1 ms |\n", sel[frames / 2]);
+    printf("| selection per frame, 95th percentile | %.4f ms | |\n", sel[(size_t)(frames * 0.95)]);
+    printf("| tiles drawn per frame, median | %.0f | |\n", tiles[frames / 2]);
+    printf("| triangles drawn per frame, median | %.0f | |\n", tris[frames / 2]);
+    printf("| tile vertex generation | %.1f M vertices/s | |\n", vert_s > 0 ? verts / vert_s / 1e6 : 0);
+    printf("| memory beyond the heightfield | %.1f MiB | %.2fx heightfield (target <= 1x) |\n", extra / 1048576.0,
+           extra / bytes);
+    free(vbuf);
+    free(sel);
+    free(tiles);
+    free(tris);
+    tsr_tile_patterns_free(&pat);
+    tsr_quadtree_destroy(qt);
+    tsr_terrain_destroy(t);
+    tsr_heightfield_destroy(hf);
+    return CLI_OK;
+}
+
+const cli_command cli_cmd_bench = {"bench", "benchmarks: 'bench terrain' (pyramid, selection, memory)", run, help};
