@@ -237,29 +237,150 @@ static double band_error(const tsr_heightfield *hf, const tile_geom *g)
     return worst;
 }
 
-/* Finest tiles: only the odd edge samples move when an edge is stitched. */
-static double finest_stitch_error(const tsr_heightfield *hf, const tile_geom *g)
+/* Streaming part of the error, run on every block row of the sample pass
+ * (rows y = 2 by, y + 1, y + 2 as a, b, c): the two deepest levels' errors
+ * need only these three rows, so they cost no extra pass over memory.
+ *  - deepest level (spacing 1): a stitched edge moves only its odd
+ *    samples, to the mean of their two neighbours along the edge;
+ *  - the level above (spacing 2): its tile's error at its children's
+ *    vertices is at the quads' edge midpoints and centres (corners are
+ *    exact); the centre lies on the quad's union-jack diagonal.
+ * Each value goes to every node whose closed region holds the sample.
+ * Clipped and no-data nodes are recomputed or overridden later. */
+static inline void upd(float *arr, size_t i, float e)
 {
-    double worst = 0;
-    uint32_t n = g->n;
-    for (uint32_t k = 1; k < n; k += 2) {
-        uint32_t lines[4][4] = {
-            {g->x0 + k, g->y0, 1, 0},     /* south: vary x */
-            {g->x0 + k, g->y0 + n, 1, 0}, /* north */
-            {g->x0, g->y0 + k, 0, 1},     /* west: vary y */
-            {g->x0 + n, g->y0 + k, 0, 1}, /* east */
-        };
-        for (int e = 0; e < 4; e++) {
-            uint32_t x = lines[e][0], y = lines[e][1], dx = lines[e][2], dy = lines[e][3];
-            if (x + dx > g->ex || y + dy > g->ey)
-                continue; /* clipped: handled by the exact scan */
-            float m = H(hf, x, y), a = H(hf, x - dx, y - dy), b = H(hf, x + dx, y + dy);
-            double err = fabs(m - 0.5 * ((double)a + b));
-            if (!isnan(err))
-                worst = err > worst ? err : worst;
+    arr[i] = e > arr[i] ? e : arr[i]; /* NaN e compares false: ignored */
+}
+
+static inline float err3(float m, float p, float q)
+{
+    /* in double: exact for floats of similar magnitude, then rounded up */
+    double e = fabs((double)m - 0.5 * ((double)p + (double)q));
+    float f = (float)e;
+    return (double)f < e ? nextafterf(f, INFINITY) : f;
+}
+
+static void edge_errors(tsr_terrain *t, uint32_t by, const float *a, const float *b, const float *c)
+{
+    const tsr_heightfield *hf = t->hf;
+    uint32_t L = t->surface.levels, N = t->surface.tile_n, ex = hf->width - 1, ey = hf->height - 1;
+    uint32_t y = 2 * by;
+    bool full = y + 2 <= ey;
+    float *fin = t->delta[L];
+    /* deepest level, vertical edges (x a multiple of N, the domain's
+     * borders included: the contract covers every stitch mask) at the odd
+     * row y + 1 */
+    if (full) {
+        size_t row = (size_t)((y + 1) / N) << L;
+        for (uint32_t x = 0; x <= ex; x += N) {
+            float e = err3(b[x], a[x], c[x]);
+            if (x < ex)
+                upd(fin, row + x / N, e);
+            if (x > 0)
+                upd(fin, row + x / N - 1, e);
         }
     }
-    return worst;
+    /* deepest level, horizontal edges: row y a multiple of N */
+    if (y % N == 0) {
+        size_t up = (size_t)(y / N) << L, down = y > 0 ? (size_t)(y / N - 1) << L : 0;
+        for (uint32_t x = 1; x + 1 <= ex; x += 2) {
+            float e = err3(a[x], a[x - 1], a[x + 1]);
+            if (y < ey)
+                upd(fin, up + x / N, e);
+            if (y > 0)
+                upd(fin, down + x / N, e);
+        }
+    }
+    if (L == 0 || !full)
+        return;
+    /* the level above: quads of 2 x 2 cells with corners at even x, y */
+    float *mid = t->delta_u[L - 1];
+    uint32_t M = 2 * N, ny = y / M;
+    size_t row = (size_t)ny << (L - 1), row_below = ny > 0 ? (size_t)(ny - 1) << (L - 1) : 0;
+    bool on_south_edge = y % M == 0 && ny > 0;
+    bool even_row = (by & 1) == 0;
+    for (uint32_t x = 0; x + 2 <= ex; x += 2) {
+        float e1 = err3(a[x + 1], a[x], a[x + 2]);
+        float e2 = err3(b[x], a[x], c[x]);
+        bool diag_ad = (((x >> 1) & 1) == 0) == even_row;
+        float e3 = diag_ad ? err3(b[x + 1], a[x], c[x + 2]) : err3(b[x + 1], a[x + 2], c[x]);
+        uint32_t nx = x / M;
+        float e = e1 > e2 ? e1 : e2;
+        e = e3 > e ? e3 : e;
+        upd(mid, row + nx, e);
+        if (on_south_edge)
+            upd(mid, row_below + nx, e1); /* the node below's top edge */
+        if (x % M == 0 && nx > 0)
+            upd(mid, row + nx - 1, e2); /* the node to the left's east edge */
+    }
+    if (ex % M == 0) /* the east edge of the last node column */
+        upd(mid, row + ex / M - 1, err3(b[ex], a[ex], c[ex]));
+}
+
+/* The last row, ey, is never the first row of a block row: its odd samples
+ * for the deepest level's north edges and the level above's top edges. */
+static void last_row_errors(tsr_terrain *t)
+{
+    const tsr_heightfield *hf = t->hf;
+    uint32_t L = t->surface.levels, N = t->surface.tile_n, M = 2 * N, ex = hf->width - 1, ey = hf->height - 1;
+    if (ey % 2 != 0)
+        return; /* odd: never a tile edge, and its nodes are clipped (scanned) */
+    const float *a = hf->data + (size_t)ey * hf->width;
+    if (ey % N == 0) {
+        size_t down = (size_t)(ey / N - 1) << L;
+        for (uint32_t x = 1; x + 1 <= ex; x += 2)
+            upd(t->delta[L], down + x / N, err3(a[x], a[x - 1], a[x + 1]));
+    }
+    if (L > 0 && ey % M == 0) {
+        size_t row = (size_t)(ey / M - 1) << (L - 1);
+        for (uint32_t x = 0; x + 2 <= ex; x += 2)
+            upd(t->delta_u[L - 1], row + x / M, err3(a[x + 1], a[x], a[x + 2]));
+    }
+}
+
+/* The sample pass's two kernels, apart so restrict tells the compiler
+ * the arrays do not alias (it then vectorises them). "x < lo ? x : lo" is
+ * the minss instruction, which keeps lo when x is NaN; starting from +inf
+ * (-inf for the max) makes NaN samples vanish without a branch. */
+static void column_pass(const float *restrict a, const float *restrict b, const float *restrict c,
+                        float *restrict cmin, float *restrict cmax, unsigned char *restrict cnan, uint32_t w)
+{
+    for (uint32_t x = 0; x < w; x++) {
+        float va = a[x], vb = b[x], vc = c[x], lo = INFINITY, hi = -INFINITY;
+        lo = va < lo ? va : lo;
+        lo = vb < lo ? vb : lo;
+        lo = vc < lo ? vc : lo;
+        hi = va > hi ? va : hi;
+        hi = vb > hi ? vb : hi;
+        hi = vc > hi ? vc : hi;
+        cmin[x] = lo;
+        cmax[x] = hi;
+        cnan[x] = (unsigned char)((va != va) | (vb != vb) | (vc != vc));
+    }
+}
+
+/* Blocks of three columns (the last one clamped to the extent); an empty
+ * block gets the empty range +inf..-inf. */
+static void block_pass(const float *restrict cmin, const float *restrict cmax, float *restrict mn, float *restrict mx,
+                       uint32_t mw, uint32_t ex)
+{
+    uint32_t full = ex / 2; /* blocks whose third column exists */
+    full = full < mw ? full : mw;
+    for (uint32_t bx = 0; bx < full; bx++) {
+        uint32_t c0 = 2 * bx;
+        float lo = cmin[c0], hi = cmax[c0];
+        lo = cmin[c0 + 1] < lo ? cmin[c0 + 1] : lo;
+        lo = cmin[c0 + 2] < lo ? cmin[c0 + 2] : lo;
+        hi = cmax[c0 + 1] > hi ? cmax[c0 + 1] : hi;
+        hi = cmax[c0 + 2] > hi ? cmax[c0 + 2] : hi;
+        mn[bx] = lo;
+        mx[bx] = hi;
+    }
+    for (uint32_t bx = full; bx < mw; bx++) { /* a last block of two columns */
+        uint32_t c0 = 2 * bx, c1 = c0 + 1 > ex ? ex : c0 + 1;
+        mn[bx] = cmin[c1] < cmin[c0] ? cmin[c1] : cmin[c0];
+        mx[bx] = cmax[c1] > cmax[c0] ? cmax[c1] : cmax[c0];
+    }
 }
 
 /* ---- surface callbacks ------------------------------------------------ */
@@ -369,6 +490,19 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
     t->surface = (tsr_surface){t, n, levels, ex, ey, surf_evaluate, surf_bounds, surf_error};
     t->mip_levels = t->tile_log2 + levels;
 
+    /* per-node errors; the two deepest levels are filled during the
+     * sample pass below, the rest bottom-up afterwards */
+    for (uint32_t l = 0; l <= levels; l++) {
+        size_t cnt = (size_t)1 << (2 * l);
+        t->delta[l] = talloc(t, cnt * sizeof(float));
+        t->delta_u[l] = talloc(t, cnt * sizeof(float));
+        if (!t->delta[l] || !t->delta_u[l]) {
+            tsr_terrain_destroy(t);
+            return tsr_error_set(err, TSR_ERR_NOMEM, "out of memory for the terrain pyramid");
+        }
+        for (size_t i = 0; i < cnt; i++)
+            t->delta[l][i] = t->delta_u[l][i] = 0;
+    }
     /* mip level 1 from the samples: closed 3x3-sample blocks */
     for (uint32_t k = 1; k <= t->mip_levels; k++) {
         uint64_t cells = (uint64_t)1 << k;
@@ -389,9 +523,12 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
          * sample rows for every column (a straight, vectorisable loop),
          * then across each block's three columns */
         uint32_t mw = t->mw[1], mh = t->mh[1];
-        float *cmin = tsr_alloc(ta(t), 3 * (size_t)W * sizeof(float)), *cmax = cmin ? cmin + W : NULL,
-              *cnan = cmin ? cmin + 2 * (size_t)W : NULL;
-        if (!cmin) {
+        float *cmin = tsr_alloc(ta(t), 2 * (size_t)W * sizeof(float)), *cmax = cmin ? cmin + W : NULL;
+        unsigned char *cnan = tsr_alloc(ta(t), W);
+        if (!cmin || !cnan) {
+            tsr_free(ta(t), cmin);
+            tsr_free(ta(t), cnan);
+        last_row_errors(t);
             tsr_terrain_destroy(t);
             return tsr_error_set(err, TSR_ERR_NOMEM, "out of memory for the terrain pyramid");
         }
@@ -399,35 +536,20 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
             uint32_t r0 = 2 * by, r1 = r0 + 2 > ey ? ey : r0 + 2;
             const float *a = hf->data + (size_t)r0 * W, *b = hf->data + (size_t)(r0 + 1) * W,
                         *cc = hf->data + (size_t)r1 * W;
-            for (uint32_t x = 0; x < W; x++) {
-                float va = a[x], vb = b[x], vc = cc[x];
-                /* NaN-ignoring min/max: a NaN operand never wins */
-                float lo = va, hi = va;
-                lo = (vb < lo || lo != lo) ? vb : lo;
-                hi = (vb > hi || hi != hi) ? vb : hi;
-                lo = (vc < lo || lo != lo) ? vc : lo;
-                hi = (vc > hi || hi != hi) ? vc : hi;
-                cmin[x] = lo;
-                cmax[x] = hi;
-                cnan[x] = (va != va || vb != vb || vc != vc) ? 1.0f : 0.0f;
-            }
+            column_pass(a, b, cc, cmin, cmax, cnan, W);
+            edge_errors(t, by, a, b, cc);
             float *mn = t->mip_min[1] + (size_t)by * mw, *mx = t->mip_max[1] + (size_t)by * mw;
+            block_pass(cmin, cmax, mn, mx, mw, ex);
             for (uint32_t bx = 0; bx < mw; bx++) {
-                uint32_t c0 = 2 * bx, c1 = c0 + 1, c2 = c0 + 2 > ex ? ex : c0 + 2;
-                float lo = cmin[c0], hi = cmax[c0];
-                lo = (cmin[c1] < lo || lo != lo) ? cmin[c1] : lo;
-                hi = (cmax[c1] > hi || hi != hi) ? cmax[c1] : hi;
-                lo = (cmin[c2] < lo || lo != lo) ? cmin[c2] : lo;
-                hi = (cmax[c2] > hi || hi != hi) ? cmax[c2] : hi;
-                /* all three NaN: no valid sample, an empty range */
-                mn[bx] = lo == lo ? lo : INFINITY;
-                mx[bx] = hi == hi ? hi : -INFINITY;
-                if (cnan[c0] + cnan[c1] + cnan[c2] > 0) {
+                uint32_t c0 = 2 * bx, c2 = c0 + 2 > ex ? ex : c0 + 2;
+                if (cnan[c0] | cnan[c0 + 1] | cnan[c2]) {
                     size_t i = (size_t)by * mw + bx;
                     t->mip_nan[1][i >> 6] |= 1ull << (i & 63);
                 }
             }
         }
+        tsr_free(ta(t), cnan);
+        last_row_errors(t);
         tsr_free(ta(t), cmin);
     }
     for (uint32_t k = 2; k <= t->mip_levels; k++) {
@@ -455,17 +577,6 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
     }
 
     /* per-node error, deepest level first */
-    for (uint32_t l = 0; l <= levels; l++) {
-        size_t cnt = (size_t)1 << (2 * l);
-        t->delta[l] = talloc(t, cnt * sizeof(float));
-        t->delta_u[l] = talloc(t, cnt * sizeof(float));
-        if (!t->delta[l] || !t->delta_u[l]) {
-            tsr_terrain_destroy(t);
-            return tsr_error_set(err, TSR_ERR_NOMEM, "out of memory for the terrain pyramid");
-        }
-        for (size_t i = 0; i < cnt; i++)
-            t->delta[l][i] = t->delta_u[l][i] = 0;
-    }
     for (uint32_t l = levels + 1; l-- > 0;) {
         uint32_t side = 1u << l, k = t->tile_log2 + levels - l;
         uint64_t w = (uint64_t)n << (levels - l);
@@ -491,7 +602,9 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
                     }
                 if (l == levels) {
                     du = 0; /* the finest tile is the surface */
-                    d = clipped ? scan_error(hf, &g, 15, 1, true) : finest_stitch_error(hf, &g);
+                    /* its stitch error: from the sample pass, or scanned
+                     * when the node is clipped (its edges are clamped) */
+                    d = clipped ? fmax(t->delta[l][idx], scan_error(hf, &g, 15, 1, true)) : t->delta[l][idx];
                 } else if (has_nan) {
                     du = d = INFINITY;
                 } else if (clipped) {
@@ -503,7 +616,9 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
                         du = d = (double)t->mip_max[k][mi] - t->mip_min[k][mi];
                     }
                 } else {
-                    du = child_u + midpoint_error(hf, &g);
+                    double mid = l + 1 == levels ? t->delta_u[l][idx] /* from the sample pass */
+                                                 : midpoint_error(hf, &g);
+                    du = child_u + mid;
                     d = fmax(du, child_u + band_error(hf, &g));
                 }
                 du = fmax(du, child_u);
