@@ -438,6 +438,47 @@ TEST(picking_matches_every_cell_test)
     tsr_heightfield_destroy(hf);
 }
 
+TEST(geomorph_weights)
+{
+    /* each leaf's weight follows its parent's screen error e: 1 just past
+     * the split (e = tau), 0 from 2 tau on; per vertex, only odd interior
+     * vertices move, so tile edges never open */
+    tsr_heightfield *hf = terrain(257, 257, 3, 600);
+    tsr_heightfield_set_spacing(hf, 20, 20, 1);
+    tsr_terrain *t = NULL;
+    CHECK(tsr_terrain_create(hf, NULL, NULL, &t, NULL) == TSR_OK);
+    const tsr_surface *s = tsr_terrain_surface(t);
+    tsr_quadtree *qt = tsr_quadtree_create(s, NULL);
+    int partial = 0;
+    for (int k = 0; k < 10; k++) {
+        tsr_camera cam;
+        random_camera(&cam, 256 * 20, 256 * 20, 0, 600, k % 2 == 0);
+        tsr_quadtree_select(qt, tsr_refine_camera, &cam);
+        tsr_quadtree_apply_camera(qt, &cam);
+        const tsr_qleaf *L = tsr_quadtree_leaves(qt);
+        for (uint32_t i = 0; i < tsr_quadtree_leaf_count(qt); i++) {
+            if (L[i].node.level == 0)
+                continue;
+            tsr_qnode p = {L[i].node.x / 2, L[i].node.y / 2, (uint8_t)(L[i].node.level - 1)};
+            double e = tsr_camera_node_error(&cam, s, p), want = 2 - e / cam.pixel_error;
+            want = want < 0 ? 0 : want > 1 ? 1 : want;
+            CHECK_NEAR(L[i].morph, want, 1e-6);
+            partial += L[i].morph > 0 && L[i].morph < 1;
+            uint32_t n = s->tile_n;
+            for (uint32_t j = 0; j <= n; j++)
+                for (uint32_t ii = 0; ii <= n; ii++) {
+                    float w = tsr_quadtree_vertex_morph(&L[i], n, ii, j);
+                    bool edge = ii == 0 || j == 0 || ii == n || j == n, even = !(ii & 1) && !(j & 1);
+                    CHECK(edge || even ? w == 0 : w == L[i].morph);
+                }
+        }
+    }
+    CHECK(partial > 0); /* some tiles are mid-morph */
+    tsr_quadtree_destroy(qt);
+    tsr_terrain_destroy(t);
+    tsr_heightfield_destroy(hf);
+}
+
 TEST(bad_options)
 {
     tsr_heightfield *hf = terrain(20, 20, 1, 10);
@@ -452,4 +493,4 @@ TEST(bad_options)
 }
 
 TEST_MAIN(T(pyramid_ranges_match_brute_force), T(delta_bounds_every_stitch_variant), T(tolerance_cuts_hold_the_bound),
-          T(camera_cuts_hold_the_screen_bound), T(picking_matches_every_cell_test), T(bad_options))
+          T(camera_cuts_hold_the_screen_bound), T(picking_matches_every_cell_test), T(geomorph_weights), T(bad_options))
