@@ -4,7 +4,7 @@
 #include <math.h>
 #include <string.h>
 
-static void normal_at(const tsr_heightfield *hf, uint32_t c, uint32_t r, float n[3])
+void tsr_heightfield_normal_at(const tsr_heightfield *hf, uint32_t c, uint32_t r, float n[3])
 {
     const float *d = hf->data;
     uint32_t w = hf->width, h = hf->height;
@@ -72,7 +72,7 @@ tsr_status tsr_terrain_grid_mesh(const tsr_heightfield *hf, uint32_t step, bool 
             }
             float p[3] = {(float)(cols[i] * hf->dx), (float)(rows[j] * hf->dy), (float)(hv * hf->dz)}, n[3];
             if (normals)
-                normal_at(hf, cols[i], rows[j], n);
+                tsr_heightfield_normal_at(hf, cols[i], rows[j], n);
             map[(size_t)j * nc + i] = tsr_mesh_add_vertex(mesh, p, normals ? n : NULL, NULL);
         }
     /* two triangles per cell along the a-d diagonal, counter-clockwise from

@@ -395,16 +395,8 @@ static bool surf_evaluate(void *user, uint32_t i, uint32_t j, float pos[3], floa
     pos[0] = (float)(i * hf->dx);
     pos[1] = (float)(j * hf->dy);
     pos[2] = (float)(h * hf->dz);
-    if (normal) {
-        float l = i > 0 ? H(hf, i - 1, j) : NAN, r = i + 1 < hf->width ? H(hf, i + 1, j) : NAN;
-        float d = j > 0 ? H(hf, i, j - 1) : NAN, u = j + 1 < hf->height ? H(hf, i, j + 1) : NAN;
-        double gx = !isnan(l) && !isnan(r) ? (r - l) / (2 * hf->dx) : !isnan(r) ? (r - h) / hf->dx : !isnan(l) ? (h - l) / hf->dx : 0;
-        double gy = !isnan(d) && !isnan(u) ? (u - d) / (2 * hf->dy) : !isnan(u) ? (u - h) / hf->dy : !isnan(d) ? (h - d) / hf->dy : 0;
-        double nx = -gx * hf->dz, ny = -gy * hf->dz, len = sqrt(nx * nx + ny * ny + 1);
-        normal[0] = (float)(nx / len);
-        normal[1] = (float)(ny / len);
-        normal[2] = (float)(1 / len);
-    }
+    if (normal)
+        tsr_heightfield_normal_at(hf, i, j, normal);
     return true;
 }
 

@@ -39,6 +39,10 @@ tsr_status tsr_image_read(const char *path, const tsr_allocator *alloc, uint64_t
 tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
                            const float *values, bool as_u16, double scale, double offset, tsr_error *err);
 
+/* The unit normal at sample (c, r) from central differences of the
+ * heights (one-sided at borders and next to no-data), in world units. */
+void tsr_heightfield_normal_at(const tsr_heightfield *hf, uint32_t c, uint32_t r, float n[3]);
+
 /* The maximum mipmap of a terrain, as pick.c reads it (lod.c owns it). */
 typedef struct pick_view {
     const tsr_heightfield *hf;

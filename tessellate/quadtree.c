@@ -338,6 +338,30 @@ void tsr_camera_project(const tsr_camera *c, const double p[3], double *sx, doub
     *sy = c->height / 2 - c->K * u / f;
 }
 
+/* The 8 corners of a box in camera coordinates (r, u, f), and whether the
+ * box lies wholly outside one plane of the view frustum. */
+static bool box_to_camera(const tsr_camera *c, const float lo[3], const float hi[3], double rr[8], double uu[8],
+                          double ff[8])
+{
+    int out[5] = {0};
+    for (int k = 0; k < 8; k++) {
+        double d[3] = {(k & 1 ? hi[0] : lo[0]) - c->eye[0], (k & 2 ? hi[1] : lo[1]) - c->eye[1],
+                       (k & 4 ? hi[2] : lo[2]) - c->eye[2]};
+        double r = d[0] * c->right[0] + d[1] * c->right[1] + d[2] * c->right[2];
+        double u = d[0] * c->up[0] + d[1] * c->up[1] + d[2] * c->up[2];
+        double f = d[0] * c->fwd[0] + d[1] * c->fwd[1] + d[2] * c->fwd[2];
+        rr[k] = r;
+        uu[k] = u;
+        ff[k] = f;
+        out[0] += f < c->near_dist;
+        out[1] += r > c->tan_x * f;
+        out[2] += r < -c->tan_x * f;
+        out[3] += u > c->tan_y * f;
+        out[4] += u < -c->tan_y * f;
+    }
+    return out[0] == 8 || out[1] == 8 || out[2] == 8 || out[3] == 8 || out[4] == 8;
+}
+
 /* Why this bounds the error. A sample p and the mesh point q = p + d
  * above or below it differ by d = (0, 0, e), |e| <= delta = error(node),
  * and both lie in the node's bounds. In camera coordinates (r, u, f) the
@@ -362,21 +386,13 @@ double tsr_camera_node_error(const tsr_camera *c, const tsr_surface *s, tsr_qnod
     s->bounds(s->user, node, lo, hi);
     if (!(lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2]))
         return 0;
+    double rr[8], uu[8], ff[8];
+    if (box_to_camera(c, lo, hi, rr, uu, ff))
+        return 0;
     double fmin = INFINITY, xi0 = INFINITY, xi1 = -INFINITY, eta0 = INFINITY, eta1 = -INFINITY;
     bool all_front = true;
-    /* frustum planes as half-spaces; count corners outside each */
-    int out_near = 0, out_l = 0, out_r = 0, out_b = 0, out_t = 0;
     for (int k = 0; k < 8; k++) {
-        double p[3] = {k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]};
-        double d[3] = {p[0] - c->eye[0], p[1] - c->eye[1], p[2] - c->eye[2]};
-        double r = d[0] * c->right[0] + d[1] * c->right[1] + d[2] * c->right[2];
-        double u = d[0] * c->up[0] + d[1] * c->up[1] + d[2] * c->up[2];
-        double f = d[0] * c->fwd[0] + d[1] * c->fwd[1] + d[2] * c->fwd[2];
-        out_near += f < c->near_dist;
-        out_r += r > c->tan_x * f;
-        out_l += r < -c->tan_x * f;
-        out_t += u > c->tan_y * f;
-        out_b += u < -c->tan_y * f;
+        double r = rr[k], u = uu[k], f = ff[k];
         fmin = f < fmin ? f : fmin;
         if (f > 0) {
             double xi = r / f, eta = u / f;
@@ -388,8 +404,6 @@ double tsr_camera_node_error(const tsr_camera *c, const tsr_surface *s, tsr_qnod
             all_front = false;
         }
     }
-    if (out_near == 8 || out_l == 8 || out_r == 8 || out_t == 8 || out_b == 8)
-        return 0;
     if (!all_front) {
         xi0 = eta0 = -INFINITY;
         xi1 = eta1 = INFINITY;
@@ -426,20 +440,8 @@ void tsr_quadtree_apply_camera(tsr_quadtree *qt, const tsr_camera *c)
         float lo[3], hi[3];
         qt->s.bounds(qt->s.user, leaf->node, lo, hi);
         /* culled when wholly outside one frustum plane */
-        int out[5] = {0};
-        for (int k = 0; k < 8; k++) {
-            double p[3] = {k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]};
-            double d[3] = {p[0] - c->eye[0], p[1] - c->eye[1], p[2] - c->eye[2]};
-            double r = d[0] * c->right[0] + d[1] * c->right[1] + d[2] * c->right[2];
-            double u = d[0] * c->up[0] + d[1] * c->up[1] + d[2] * c->up[2];
-            double f = d[0] * c->fwd[0] + d[1] * c->fwd[1] + d[2] * c->fwd[2];
-            out[0] += f < c->near_dist;
-            out[1] += r > c->tan_x * f;
-            out[2] += r < -c->tan_x * f;
-            out[3] += u > c->tan_y * f;
-            out[4] += u < -c->tan_y * f;
-        }
-        leaf->culled = !(lo[0] <= hi[0]) || out[0] == 8 || out[1] == 8 || out[2] == 8 || out[3] == 8 || out[4] == 8;
+        double rr[8], uu[8], ff[8];
+        leaf->culled = !(lo[0] <= hi[0]) || box_to_camera(c, lo, hi, rr, uu, ff);
         /* morph: 1 when the parent's error is just above tau (the split
          * has just happened, so look like the parent), 0 from 2 tau on */
         if (leaf->node.level > 0 && c->pixel_error > 0) {
