@@ -63,3 +63,7 @@ fi
 "$tessera" bench terrain --size 257 --frames 20 --repeat 1 > "$dir/bench.txt" 2>/dev/null || fail "bench failed"
 grep -q "pyramid build" "$dir/bench.txt" && grep -q "selection per frame, median" "$dir/bench.txt" || fail "bench table"
 echo "ok bench table"
+"$tessera" bench cdt --points 2000 --grid 30 > "$dir/cdt.txt" || fail "bench cdt failed"
+grep -q "| uniform random | 2000 | " "$dir/cdt.txt" && grep -q "| integer grid | 900 | 1682 |" "$dir/cdt.txt" \
+  || fail "bench cdt table: $(cat "$dir/cdt.txt")"
+echo "ok bench cdt table"
