@@ -275,19 +275,22 @@ static bool conflict(const tsr_cdt *d, uint32_t t, const double p[2])
     return tsr_incircle(P(d, v[0]), P(d, v[1]), P(d, v[2]), p) > 0;
 }
 
-static bool push(tsr_cdt *d, uint32_t t)
+/* Appends v to a growable array (*arr, *n, *cap); false when out of memory. */
+static bool append(const tsr_cdt *d, uint32_t **arr, uint32_t *n, uint32_t *cap, uint32_t v)
 {
-    if (d->nstack == d->cap_stack) {
-        uint32_t cap = d->cap_stack ? 2 * d->cap_stack : 64;
-        uint32_t *s = tsr_realloc(da(d), d->stack, cap * sizeof *s);
-        if (!s)
+    if (*n == *cap) {
+        uint32_t c = *cap ? 2 * *cap : 64;
+        uint32_t *a = tsr_realloc(da(d), *arr, c * sizeof *a);
+        if (!a)
             return false;
-        d->stack = s;
-        d->cap_stack = cap;
+        *arr = a;
+        *cap = c;
     }
-    d->stack[d->nstack++] = t;
+    (*arr)[(*n)++] = v;
     return true;
 }
+
+static bool push(tsr_cdt *d, uint32_t t) { return append(d, &d->stack, &d->nstack, &d->cap_stack, t); }
 
 static bool legalize(tsr_cdt *d, uint32_t pv)
 {
@@ -397,15 +400,8 @@ uint32_t tsr_cdt_insert(tsr_cdt *d, double x, double y)
             d->npending = 0;
             return v - 1;
         }
-        if (d->npending == d->cap_pending) {
-            uint32_t cap = d->cap_pending ? 2 * d->cap_pending : 16;
-            uint32_t *p = tsr_realloc(da(d), d->pending, cap * sizeof *p);
-            if (!p)
-                return NONE;
-            d->pending = p;
-            d->cap_pending = cap;
-        }
-        d->pending[d->npending++] = v;
+        if (!append(d, &d->pending, &d->npending, &d->cap_pending, v))
+            return NONE;
         return v - 1;
     }
     uint32_t v = add_vertex(d, x, y);

@@ -232,8 +232,6 @@ TEST(order_independent_in_general_position)
         ka[t] = (uint64_t)x[rx] << 42 | (uint64_t)x[(rx + 1) % 3] << 21 | x[(rx + 2) % 3];
         kb[t] = (uint64_t)y[ry] << 42 | (uint64_t)y[(ry + 1) % 3] << 21 | y[(ry + 2) % 3];
     }
-    int (*cmp)(const void *, const void *) = NULL;
-    (void)cmp;
     for (uint32_t i = 1; i < nt; i++) { /* insertion sort is fine for 4000 */
         uint64_t v = ka[i];
         uint32_t j = i;
