@@ -244,5 +244,6 @@ bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x
 #include "tessellate/quadtree.h"
 #include "tessellate/predicates.h"
 #include "tessellate/cdt.h"
+#include "tessellate/triangulate.h"
 
 #endif /* TSR_TESSELLATE_H */

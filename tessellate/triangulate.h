@@ -1,0 +1,139 @@
+/* triangulate.h: (included by tessellate.h) constrained triangulation of a
+ * planar straight-line graph (PSLG): points, segments, hole seeds.
+ *
+ * Two methods return the same result type:
+ *  - TSR_TRI_DELAUNAY: constrained Delaunay triangulation (cdt.h) with
+ *    segment recovery, robust crossing splits, region removal, and
+ *    optional conforming / quality refinement (Ruppert's algorithm with
+ *    concentric-shell segment splitting, like Triangle's -D, -q, -a);
+ *  - TSR_TRI_QUADTREE: a balanced quadtree subdivided until every cell is
+ *    simple (at most one vertex, or one segment, or two boundary
+ *    crossings), each cell triangulated by fixed rules; cells that cannot
+ *    become simple within the depth limit fall back to the Delaunay path
+ *    (reported in fallback_cells).
+ *
+ * The region kept (tsr_region) is decided from the constrained edges of
+ * the final triangulation by flood fill, identically for both methods.
+ *
+ * Output vertices: every distinct input point first (exact duplicates are
+ * merged; vertex_of_input maps input index to output index), then Steiner
+ * points (segment intersections, refinement). Triangles counter-clockwise.
+ * Every output edge that lies on an input segment is listed in edge[], with
+ * the id of the input segment it came from (the lowest id where
+ * overlapping collinear segments were merged). */
+#ifndef TSR_TRIANGULATE_H
+#define TSR_TRIANGULATE_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct tsr_pslg {
+    const double *xy; /* 2 per point */
+    uint32_t nv;
+    const uint32_t *seg; /* 2 point indices per segment (< nv) */
+    uint32_t nseg;
+    const double *holes; /* 2 per hole seed point */
+    uint32_t nholes;
+} tsr_pslg;
+
+typedef enum tsr_region {
+    /* the whole convex hull of the points, minus the regions of hole
+     * seeds (a seed's region: the triangles reachable from it without
+     * crossing a segment) */
+    TSR_REGION_HULL = 0,
+    /* also remove what is reachable from outside the hull without
+     * crossing a segment (Triangle's -p without -c) */
+    TSR_REGION_ENCLOSED,
+    /* keep what lies inside an odd number of closed segment loops:
+     * counted by the segments crossed on the way in from outside (rings
+     * with holes, nested islands); hole seeds also apply */
+    TSR_REGION_EVEN_ODD,
+} tsr_region;
+
+typedef enum tsr_tri_method { TSR_TRI_DELAUNAY = 0, TSR_TRI_QUADTREE } tsr_tri_method;
+
+typedef struct tsr_tri_options {
+    tsr_tri_method method;
+    tsr_region region;
+    /* Delaunay method: split segments (Steiner points on them) until every
+     * edge, constrained or not, is Delaunay */
+    bool conforming;
+    /* quality refinement: minimum angle in degrees (0: none; above about
+     * 34 termination is not guaranteed and max_steiner applies) */
+    double min_angle;
+    /* maximum triangle area (0: none) */
+    double max_area;
+    /* refinement stops after this many Steiner points (0: 10 * nv +
+     * 1,000,000); quality_limited says so */
+    uint32_t max_steiner;
+    /* quadtree method: deepest level (0: 24) */
+    uint32_t max_depth;
+} tsr_tri_options;
+
+/* What was built. Arrays are owned; free with tsr_triangulation_free. */
+typedef struct tsr_triangulation {
+    double *xy; /* 2 per output vertex */
+    uint32_t nv;
+    uint32_t *tri; /* 3 per triangle, counter-clockwise */
+    uint32_t nt;
+    uint32_t *edge;         /* 2 output vertex ids per constrained edge */
+    uint32_t *edge_segment; /* input segment id per constrained edge */
+    uint32_t nedge;
+    uint32_t *vertex_of_input; /* pslg.nv entries */
+    uint32_t input_vertices;   /* distinct input points: output [0, this) */
+    uint32_t duplicates;       /* input points merged into an earlier equal one */
+    uint32_t intersections;    /* segment crossings split at a new vertex */
+    uint32_t steiner;          /* output vertices beyond the distinct inputs */
+    uint32_t degenerate_segments; /* segments with both ends equal (ignored) */
+    uint32_t fallback_cells;   /* quadtree: cells given to the Delaunay path */
+    bool fell_back;            /* quadtree: the whole input went to Delaunay */
+    const char *fallback_reason; /* static text, or NULL */
+    bool quality_limited;      /* refinement stopped at max_steiner */
+    uint32_t small_angle_exempt; /* triangles below min_angle left because an
+                                    input angle is smaller (terminator rule) */
+    tsr_allocator alloc;
+} tsr_triangulation;
+
+/* Triangulates in. On failure out is empty (nothing to free). Errors:
+ * TSR_ERR_ARGUMENT for a non-finite coordinate or a segment index out of
+ * range (message names it), TSR_ERR_NOMEM. Input that has no triangle
+ * (fewer than 3 distinct points, all collinear) is TSR_OK with nt = 0. */
+tsr_status tsr_triangulate(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out,
+                           const tsr_allocator *alloc, tsr_error *err);
+void tsr_triangulation_free(tsr_triangulation *t);
+
+/* ---- Independent checker ------------------------------------------------ */
+
+/* What tsr_triangulation_check found. It uses only exact predicates, the
+ * input and the output (none of the triangulator's code). */
+typedef struct tsr_tri_check {
+    uint32_t not_ccw;          /* triangles not strictly counter-clockwise */
+    uint32_t bad_topology;     /* edges with more than two triangles, or
+                                  two triangles using an edge the same way */
+    uint32_t not_delaunay;     /* interior edges failing the exact incircle
+                                  test (all edges when conforming; otherwise
+                                  edges not on an input segment) */
+    uint32_t missing_segments; /* input segments not a chain of output edges */
+    uint32_t overlapping;      /* triangles overlapping (area mismatch) */
+    double area, expected_area; /* expected_area NAN when not known */
+    bool area_ok;
+    long euler, expected_euler; /* expected LONG_MIN when not known */
+    double min_angle;          /* degrees, smallest in the output */
+    uint32_t below_min_angle;  /* triangles below opt->min_angle not
+                                  excused by a small input angle */
+    uint32_t above_max_area;   /* triangles above opt->max_area */
+    bool ok;
+    char first_problem[256];   /* a sentence on the first failure */
+} tsr_tri_check;
+
+/* Checks out against in and opt (method, region, conforming, min_angle,
+ * max_area). Returns TSR_OK when it could run (then res->ok is the
+ * verdict), TSR_ERR_NOMEM otherwise. */
+tsr_status tsr_triangulation_check(const tsr_pslg *in, const tsr_tri_options *opt, const tsr_triangulation *out,
+                                   tsr_tri_check *res);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
