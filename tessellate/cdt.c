@@ -12,38 +12,19 @@
  *
  * Triangle t has vertices tv[3t..3t+2], counter-clockwise; edge k runs
  * from tv[3t+k] to tv[3t+(k+1)%3] and tn[3t+k] is the triangle across it. */
-#include "tessellate/tessellate.h"
+#include "tessellate/cdt_internal.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define GHOST 0u
-#define NONE UINT32_MAX
+#define GHOST CDT_GHOST
+#define NONE CDT_NONE
+#define P cdt_P
+#define is_ghost cdt_is_ghost
 
-struct tsr_cdt {
-    tsr_allocator alloc;
-    double *xy; /* 2 per internal vertex; vertex 0 (infinity) unused */
-    uint32_t nv, cap_v;
-    uint32_t *tv, *tn;
-    uint32_t nt, cap_t;
-    uint32_t last;
-    uint32_t dups;
-    uint32_t walk_turn;
-    bool started;
-    uint32_t *pending; /* distinct vertices waiting for a non-collinear third */
-    uint32_t npending, cap_pending;
-    uint32_t *stack; /* triangles whose edge opposite the new vertex is to check */
-    uint32_t nstack, cap_stack;
-};
-
-static const tsr_allocator *da(const tsr_cdt *d) { return d->alloc.realloc ? &d->alloc : NULL; }
-static const double *P(const tsr_cdt *d, uint32_t v) { return d->xy + 2 * (size_t)v; }
-static bool is_ghost(const tsr_cdt *d, uint32_t t)
-{
-    const uint32_t *v = d->tv + 3 * (size_t)t;
-    return v[0] == GHOST || v[1] == GHOST || v[2] == GHOST;
-}
+const tsr_allocator *tsr__cdt_alloc(const tsr_cdt *d) { return d->alloc.realloc ? &d->alloc : NULL; }
+#define da tsr__cdt_alloc
 
 tsr_cdt *tsr_cdt_create(const tsr_allocator *alloc)
 {
@@ -69,108 +50,311 @@ void tsr_cdt_destroy(tsr_cdt *d)
     if (!d)
         return;
     const tsr_allocator *a = da(d);
-    tsr_free(a, d->xy);
-    tsr_free(a, d->tv);
-    tsr_free(a, d->tn);
-    tsr_free(a, d->pending);
-    tsr_free(a, d->stack);
+    void *blocks[] = {d->xy, d->tv, d->tn, d->tc, d->tf, d->pending, d->stack, d->changed,
+                      d->work, d->chl, d->chr, d->targets, d->nwt};
+    for (size_t i = 0; i < sizeof blocks / sizeof blocks[0]; i++)
+        tsr_free(a, blocks[i]);
     tsr_allocator copy = d->alloc;
     tsr_free(copy.realloc ? &copy : NULL, d);
 }
 
-static uint32_t add_vertex(tsr_cdt *d, double x, double y)
+static bool grow_vertices(tsr_cdt *d, uint32_t cap)
 {
-    if (d->nv == d->cap_v) {
-        uint32_t cap = d->cap_v * 2;
-        double *xy = tsr_realloc(da(d), d->xy, 2 * (size_t)cap * sizeof(double));
-        if (!xy)
-            return NONE;
-        d->xy = xy;
-        d->cap_v = cap;
-    }
+    if (cap <= d->cap_v)
+        return true;
+    double *xy = tsr_realloc(da(d), d->xy, 2 * (size_t)cap * sizeof(double));
+    if (!xy)
+        return false;
+    d->xy = xy;
+    d->cap_v = cap;
+    return true;
+}
+
+uint32_t tsr__cdt_add_vertex(tsr_cdt *d, double x, double y)
+{
+    if (d->nv == d->cap_v && (d->nv == UINT32_MAX - 1 || !grow_vertices(d, d->cap_v * 2)))
+        return NONE;
     d->xy[2 * (size_t)d->nv] = x;
     d->xy[2 * (size_t)d->nv + 1] = y;
     return d->nv++;
 }
+#define add_vertex tsr__cdt_add_vertex
+
+static bool grow_triangles(tsr_cdt *d, uint32_t cap)
+{
+    if (cap <= d->cap_t)
+        return true;
+    uint32_t *tv = tsr_realloc(da(d), d->tv, 3 * (size_t)cap * sizeof *tv);
+    if (!tv)
+        return false;
+    d->tv = tv;
+    uint32_t *tn = tsr_realloc(da(d), d->tn, 3 * (size_t)cap * sizeof *tn);
+    if (!tn)
+        return false;
+    d->tn = tn;
+    if (d->tc) {
+        uint32_t *tc = tsr_realloc(da(d), d->tc, 3 * (size_t)cap * sizeof *tc);
+        if (!tc)
+            return false;
+        memset(tc + 3 * (size_t)d->cap_t, 0, 3 * (size_t)(cap - d->cap_t) * sizeof *tc);
+        d->tc = tc;
+    }
+    if (d->tf) {
+        uint8_t *tf = tsr_realloc(da(d), d->tf, cap);
+        if (!tf)
+            return false;
+        memset(tf + d->cap_t, 0, cap - d->cap_t);
+        d->tf = tf;
+    }
+    d->cap_t = cap;
+    return true;
+}
 
 static uint32_t new_triangle(tsr_cdt *d)
 {
-    if (d->nt == d->cap_t) {
-        uint32_t cap = d->cap_t ? d->cap_t * 2 : 64;
-        uint32_t *tv = tsr_realloc(da(d), d->tv, 3 * (size_t)cap * sizeof *tv);
-        if (!tv)
-            return NONE;
-        d->tv = tv;
-        uint32_t *tn = tsr_realloc(da(d), d->tn, 3 * (size_t)cap * sizeof *tn);
-        if (!tn)
-            return NONE;
-        d->tn = tn;
-        d->cap_t = cap;
-    }
+    if (d->nt == d->cap_t && !grow_triangles(d, d->cap_t ? d->cap_t * 2 : 64))
+        return NONE;
+    if (d->tc)
+        memset(d->tc + 3 * (size_t)d->nt, 0, 3 * sizeof *d->tc);
     return d->nt++;
 }
 
+bool tsr__cdt_enable_marks(tsr_cdt *d, bool flags)
+{
+    size_t cap = d->cap_t ? d->cap_t : 1;
+    if (!d->tc) {
+        d->tc = tsr_alloc(da(d), 3 * cap * sizeof *d->tc);
+        if (!d->tc)
+            return false;
+        memset(d->tc, 0, 3 * cap * sizeof *d->tc);
+    }
+    if (flags && !d->tf) {
+        d->tf = tsr_alloc(da(d), cap);
+        if (!d->tf)
+            return false;
+        memset(d->tf, 0, cap);
+    }
+    return true;
+}
+
+/* The index in t of the edge from x to y, or -1. */
+static int edge_index(const tsr_cdt *d, uint32_t t, uint32_t x, uint32_t y)
+{
+    const uint32_t *v = d->tv + 3 * (size_t)t;
+    for (int k = 0; k < 3; k++)
+        if (v[k] == x && v[(k + 1) % 3] == y)
+            return k;
+    return -1;
+}
+
+void tsr__cdt_mark_edge(tsr_cdt *d, uint32_t t, int k, uint32_t m)
+{
+    const uint32_t *v = d->tv + 3 * (size_t)t;
+    uint32_t s = d->tn[3 * (size_t)t + k];
+    d->tc[3 * (size_t)t + k] = m;
+    int j = edge_index(d, s, v[(k + 1) % 3], v[k]);
+    if (j >= 0)
+        d->tc[3 * (size_t)s + j] = m;
+}
+
+bool tsr__cdt_append(const tsr_cdt *d, uint32_t **arr, uint32_t *n, uint32_t *cap, uint32_t v)
+{
+    if (*n == *cap) {
+        uint32_t c = *cap ? 2 * *cap : 64;
+        uint32_t *a = tsr_realloc(da(d), *arr, (size_t)c * sizeof *a);
+        if (!a)
+            return false;
+        *arr = a;
+        *cap = c;
+    }
+    (*arr)[(*n)++] = v;
+    return true;
+}
+#define append tsr__cdt_append
+
 /* ---- local retriangulation ------------------------------------------- */
 
-/* Replaces the triangles old[0..nold) (a cavity) by the triangles given as
- * vertex triples in nw[0..nnew), reusing the old slots first, and links
- * every edge: to the other new triangles, or to what was across that edge
- * of the cavity before. Out: the new triangles' indices. */
-static bool retriangulate(tsr_cdt *d, const uint32_t *old, int nold, const uint32_t (*nw)[3], int nnew, uint32_t *out)
+typedef struct link_rec {
+    uint64_t key; /* undirected edge */
+    uint32_t t;
+    int k;
+} link_rec;
+
+static int link_cmp(const void *a, const void *b)
 {
-    typedef struct {
-        uint32_t a, b, t;
-    } bedge;
-    bedge bnd[16];
-    int nb = 0;
-    for (int i = 0; i < nold; i++)
+    const link_rec *x = a, *y = b;
+    if (x->key != y->key)
+        return x->key < y->key ? -1 : 1;
+    return x->t < y->t ? -1 : x->t > y->t;
+}
+
+static int u32_cmp(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static uint64_t ekey(uint32_t a, uint32_t b) { return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a; }
+
+/* Links every edge of the triangles in slots[0..n) (already written) to
+ * its twin: another of them, or the triangle that was across that edge of
+ * the cavity before (outside[] lists the cavity's boundary as (triangle,
+ * edge) pairs). Large cavities only (segment recovery): by sorting. */
+static bool link_big(tsr_cdt *d, const uint32_t *slots, uint32_t n, const link_rec *outside, uint32_t nout)
+{
+    size_t m = 3 * (size_t)n + nout;
+    link_rec *r = tsr_alloc(da(d), m * sizeof *r);
+    if (!r)
+        return false;
+    size_t q = 0;
+    for (uint32_t i = 0; i < n; i++)
         for (int k = 0; k < 3; k++) {
-            uint32_t nbr = d->tn[3 * (size_t)old[i] + k];
-            bool inside = false;
-            for (int j = 0; j < nold; j++)
-                inside |= nbr == old[j];
-            if (!inside) {
-                bnd[nb].a = d->tv[3 * (size_t)old[i] + k];
-                bnd[nb].b = d->tv[3 * (size_t)old[i] + (k + 1) % 3];
-                bnd[nb].t = nbr;
-                nb++;
-            }
+            const uint32_t *v = d->tv + 3 * (size_t)slots[i];
+            r[q].key = ekey(v[k], v[(k + 1) % 3]);
+            r[q].t = slots[i];
+            r[q].k = k;
+            q++;
         }
-    for (int i = 0; i < nnew; i++) {
-        out[i] = i < nold ? old[i] : new_triangle(d);
-        if (out[i] == NONE)
+    for (uint32_t i = 0; i < nout; i++)
+        r[q++] = outside[i];
+    qsort(r, m, sizeof *r, link_cmp);
+    for (size_t i = 0; i + 1 < m; i++) {
+        if (r[i].key != r[i + 1].key)
+            continue;
+        link_rec *a = &r[i], *b = &r[i + 1];
+        d->tn[3 * (size_t)a->t + a->k] = b->t;
+        d->tn[3 * (size_t)b->t + b->k] = a->t;
+        i++;
+    }
+    tsr_free(da(d), r);
+    return true;
+}
+
+/* Replaces the triangles old[0..nold) (a cavity) by the triangles given as
+ * vertex triples in nw[0..nnew) (nnew >= nold), reusing the old slots
+ * first, and links every edge: to the other new triangles, or to what was
+ * across that edge of the cavity before. Marks on the cavity's boundary are
+ * kept, interior edges are unmarked; new triangles take old[0]'s flag.
+ * Out: the new triangles' slots. */
+static bool retriangulate(tsr_cdt *d, const uint32_t *old, uint32_t nold, const uint32_t (*nw)[3], uint32_t nnew,
+                          uint32_t *out)
+{
+    uint8_t flag = d->tf ? d->tf[old[0]] : 0;
+    if (nold > 5 || nnew > 8) {
+        /* the cavity's boundary, as the outside triangles' edges; cavity
+         * membership by binary search in a sorted copy of old */
+        link_rec *bnd = tsr_alloc(da(d), 3 * (size_t)nold * sizeof *bnd);
+        uint32_t *sorted = tsr_alloc(da(d), (size_t)nold * sizeof *sorted);
+        bool ok = bnd && sorted;
+        uint32_t nb = 0;
+        if (ok) {
+            memcpy(sorted, old, (size_t)nold * sizeof *sorted);
+            qsort(sorted, nold, sizeof *sorted, u32_cmp);
+            for (uint32_t i = 0; i < nold; i++)
+                for (int k = 0; k < 3; k++) {
+                    uint32_t nbr = d->tn[3 * (size_t)old[i] + k];
+                    if (bsearch(&nbr, sorted, nold, sizeof *sorted, u32_cmp))
+                        continue;
+                    const uint32_t *v = d->tv + 3 * (size_t)old[i];
+                    bnd[nb].key = ekey(v[k], v[(k + 1) % 3]);
+                    bnd[nb].t = nbr;
+                    bnd[nb].k = edge_index(d, nbr, v[(k + 1) % 3], v[k]);
+                    nb++;
+                }
+        }
+        for (uint32_t i = 0; i < nnew && ok; i++) {
+            out[i] = i < nold ? old[i] : new_triangle(d);
+            ok = out[i] != NONE;
+        }
+        if (ok) {
+            for (uint32_t i = 0; i < nnew; i++)
+                for (int k = 0; k < 3; k++) {
+                    d->tv[3 * (size_t)out[i] + k] = nw[i][k];
+                    if (d->tc)
+                        d->tc[3 * (size_t)out[i] + k] = 0;
+                }
+            ok = link_big(d, out, nnew, bnd, nb);
+        }
+        if (ok && d->tc) /* boundary marks, from the outside */
+            for (uint32_t e = 0; e < nb; e++) {
+                const uint32_t *v = d->tv + 3 * (size_t)bnd[e].t;
+                uint32_t in = d->tn[3 * (size_t)bnd[e].t + bnd[e].k];
+                int j = edge_index(d, in, v[(bnd[e].k + 1) % 3], v[bnd[e].k]);
+                if (j >= 0)
+                    d->tc[3 * (size_t)in + j] = d->tc[3 * (size_t)bnd[e].t + bnd[e].k];
+            }
+        tsr_free(da(d), bnd);
+        tsr_free(da(d), sorted);
+        if (!ok)
+            return false;
+    } else {
+        typedef struct {
+            uint32_t a, b, t, m;
+        } bedge;
+        bedge bnd[15];
+        int nb = 0;
+        for (uint32_t i = 0; i < nold; i++)
+            for (int k = 0; k < 3; k++) {
+                uint32_t nbr = d->tn[3 * (size_t)old[i] + k];
+                bool inside = false;
+                for (uint32_t j = 0; j < nold; j++)
+                    inside |= nbr == old[j];
+                if (!inside) {
+                    bnd[nb].a = d->tv[3 * (size_t)old[i] + k];
+                    bnd[nb].b = d->tv[3 * (size_t)old[i] + (k + 1) % 3];
+                    bnd[nb].t = nbr;
+                    bnd[nb].m = cdt_mark(d, old[i], k);
+                    nb++;
+                }
+            }
+        for (uint32_t i = 0; i < nnew; i++) {
+            out[i] = i < nold ? old[i] : new_triangle(d);
+            if (out[i] == NONE)
+                return false;
+        }
+        for (uint32_t i = 0; i < nnew; i++)
+            for (int k = 0; k < 3; k++)
+                d->tv[3 * (size_t)out[i] + k] = nw[i][k];
+        for (uint32_t i = 0; i < nnew; i++)
+            for (int k = 0; k < 3; k++) {
+                uint32_t x = nw[i][k], y = nw[i][(k + 1) % 3], across = NONE, m = 0;
+                for (uint32_t j = 0; j < nnew && across == NONE; j++)
+                    for (int q = 0; q < 3; q++)
+                        if (nw[j][q] == y && nw[j][(q + 1) % 3] == x) {
+                            across = out[j];
+                            break;
+                        }
+                if (across == NONE)
+                    for (int e = 0; e < nb; e++)
+                        if (bnd[e].a == x && bnd[e].b == y) {
+                            across = bnd[e].t;
+                            m = bnd[e].m;
+                            /* and the outside triangle points back here */
+                            int q = edge_index(d, across, y, x);
+                            if (q >= 0)
+                                d->tn[3 * (size_t)across + q] = out[i];
+                            break;
+                        }
+                d->tn[3 * (size_t)out[i] + k] = across;
+                if (d->tc)
+                    d->tc[3 * (size_t)out[i] + k] = m;
+            }
+    }
+    for (uint32_t i = 0; i < nnew; i++) {
+        if (d->tf)
+            d->tf[out[i]] = flag;
+        if (d->track && !append(d, &d->changed, &d->nchanged, &d->cap_changed, out[i]))
             return false;
     }
-    for (int i = 0; i < nnew; i++)
-        for (int k = 0; k < 3; k++)
-            d->tv[3 * (size_t)out[i] + k] = nw[i][k];
-    for (int i = 0; i < nnew; i++)
-        for (int k = 0; k < 3; k++) {
-            uint32_t x = nw[i][k], y = nw[i][(k + 1) % 3], across = NONE;
-            for (int j = 0; j < nnew && across == NONE; j++)
-                for (int q = 0; q < 3; q++)
-                    if (nw[j][q] == y && nw[j][(q + 1) % 3] == x) {
-                        across = out[j];
-                        break;
-                    }
-            if (across == NONE)
-                for (int e = 0; e < nb; e++)
-                    if (bnd[e].a == x && bnd[e].b == y) {
-                        across = bnd[e].t;
-                        /* and the outside triangle points back here */
-                        for (int q = 0; q < 3; q++)
-                            if (d->tv[3 * (size_t)across + q] == y && d->tv[3 * (size_t)across + (q + 1) % 3] == x)
-                                d->tn[3 * (size_t)across + q] = out[i];
-                        break;
-                    }
-            d->tn[3 * (size_t)out[i] + k] = across;
-        }
     return true;
 }
 
 /* ---- location ----------------------------------------------------------- */
 
-enum { IN_TRIANGLE, ON_EDGE, ON_VERTEX, IN_GHOST };
+#define IN_TRIANGLE CDT_IN_TRIANGLE
+#define ON_EDGE CDT_ON_EDGE
+#define ON_VERTEX CDT_ON_VERTEX
+#define IN_GHOST CDT_IN_GHOST
 
 /* The finite edge (w, u) of ghost t, in the ghost's orientation: points
  * strictly outside the hull there have orient2d(w, u, p) > 0. */
@@ -183,7 +367,7 @@ static int ghost_edge(const tsr_cdt *d, uint32_t t)
     return 0;
 }
 
-static uint32_t locate(tsr_cdt *d, const double p[2], int *kind, int *which)
+uint32_t tsr__cdt_locate(tsr_cdt *d, const double p[2], int *kind, int *which)
 {
     uint32_t t = d->last < d->nt ? d->last : 0;
     uint64_t steps = 0, limit = 4ull * d->nt + 16;
@@ -275,21 +459,6 @@ static bool conflict(const tsr_cdt *d, uint32_t t, const double p[2])
     return tsr_incircle(P(d, v[0]), P(d, v[1]), P(d, v[2]), p) > 0;
 }
 
-/* Appends v to a growable array (*arr, *n, *cap); false when out of memory. */
-static bool append(const tsr_cdt *d, uint32_t **arr, uint32_t *n, uint32_t *cap, uint32_t v)
-{
-    if (*n == *cap) {
-        uint32_t c = *cap ? 2 * *cap : 64;
-        uint32_t *a = tsr_realloc(da(d), *arr, c * sizeof *a);
-        if (!a)
-            return false;
-        *arr = a;
-        *cap = c;
-    }
-    (*arr)[(*n)++] = v;
-    return true;
-}
-
 static bool push(tsr_cdt *d, uint32_t t) { return append(d, &d->stack, &d->nstack, &d->cap_stack, t); }
 
 static bool legalize(tsr_cdt *d, uint32_t pv)
@@ -301,7 +470,7 @@ static bool legalize(tsr_cdt *d, uint32_t pv)
         int i = v[0] == pv ? 0 : v[1] == pv ? 1 : 2;
         uint32_t x = v[(i + 1) % 3], y = v[(i + 2) % 3];
         uint32_t t2 = d->tn[3 * (size_t)t1 + (i + 1) % 3];
-        if (!conflict(d, t2, p))
+        if (cdt_mark(d, t1, (i + 1) % 3) || !conflict(d, t2, p))
             continue;
         const uint32_t *w = d->tv + 3 * (size_t)t2;
         uint32_t q = w[0] != x && w[0] != y ? w[0] : w[1] != x && w[1] != y ? w[1] : w[2];
@@ -335,19 +504,77 @@ static bool start_triangulation(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t c)
     return true;
 }
 
-/* Inserts internal vertex pv (already stored) into a started
- * triangulation. Returns the vertex to report: pv, or an existing vertex
- * when pv duplicates it (then pv is dropped). */
-static uint32_t insert_vertex(tsr_cdt *d, uint32_t pv)
+/* The vertex of s that is neither x nor y. */
+static uint32_t apex(const tsr_cdt *d, uint32_t s, uint32_t x, uint32_t y)
 {
-    int kind, which;
+    const uint32_t *w = d->tv + 3 * (size_t)s;
+    return w[0] != x && w[0] != y ? w[0] : w[1] != x && w[1] != y ? w[1] : w[2];
+}
+
+/* Splits edge k of t (shared with s) at pv: four triangles, the halves of
+ * a constrained edge keep its mark, each side keeps its flag. */
+static bool split_edge_at(tsr_cdt *d, uint32_t t, int k, uint32_t pv)
+{
+    const uint32_t *v = d->tv + 3 * (size_t)t;
+    uint32_t a = v[k], b = v[(k + 1) % 3], c = v[(k + 2) % 3];
+    uint32_t s = d->tn[3 * (size_t)t + k];
+    uint32_t q = apex(d, s, a, b);
+    uint32_t m = cdt_mark(d, t, k);
+    uint8_t ft = d->tf ? d->tf[t] : 0, fs = d->tf ? d->tf[s] : 0;
+    uint32_t old[2] = {t, s}, nw[4][3] = {{a, pv, c}, {pv, b, c}, {b, pv, q}, {pv, a, q}}, out[4];
+    if (!retriangulate(d, old, 2, nw, 4, out))
+        return false;
+    if (d->tf) {
+        d->tf[out[0]] = d->tf[out[1]] = ft;
+        d->tf[out[2]] = d->tf[out[3]] = fs;
+    }
+    if (m) {
+        tsr__cdt_mark_edge(d, out[0], 0, m);
+        tsr__cdt_mark_edge(d, out[1], 0, m);
+    }
+    for (int i = 0; i < 4; i++) /* triangles outside a domain being refined are left alone */
+        if ((!d->tf || !d->tf[out[i]]) && !push(d, out[i]))
+            return false;
+    return true;
+}
+
+bool tsr__cdt_split_edge(tsr_cdt *d, uint32_t t, int k, uint32_t pv, bool *nomem)
+{
+    *nomem = false;
+    const uint32_t *v = d->tv + 3 * (size_t)t;
+    uint32_t a = v[k], b = v[(k + 1) % 3], c = v[(k + 2) % 3];
+    uint32_t s = d->tn[3 * (size_t)t + k];
+    uint32_t q = apex(d, s, a, b);
     const double *p = P(d, pv);
-    uint32_t t = locate(d, p, &kind, &which);
+    if (a == GHOST || b == GHOST || c == GHOST)
+        return false;
+    if (tsr_orient2d(P(d, a), p, P(d, c)) <= 0 || tsr_orient2d(p, P(d, b), P(d, c)) <= 0)
+        return false;
+    bool outside = d->tf && d->tf[s]; /* never looked at again: its shape does not matter */
+    if (q != GHOST && !outside &&
+        (tsr_orient2d(P(d, b), p, P(d, q)) <= 0 || tsr_orient2d(p, P(d, a), P(d, q)) <= 0))
+        return false;
+    /* on a hull edge (q the ghost), a point rounded off the edge's line
+     * leaves the hull very slightly non-convex; only refinement, which
+     * walks inside marked boundaries, splits hull edges, and it leaves the
+     * triangles outside its domain unflipped */
+    d->nstack = 0;
+    if (!split_edge_at(d, t, k, pv) || !legalize(d, pv)) {
+        *nomem = true;
+        return false;
+    }
+    d->last = t;
+    return true;
+}
+
+uint32_t tsr__cdt_insert_at(tsr_cdt *d, uint32_t pv, uint32_t t, int kind, int which)
+{
     const uint32_t *v = d->tv + 3 * (size_t)t;
     d->nstack = 0;
     if (kind == ON_VERTEX) {
         d->dups++;
-        d->nv--; /* pv was the last vertex stored */
+        if (pv == d->nv - 1)
+            d->nv--; /* pv was the last vertex stored */
         return v[which];
     }
     if (kind == IN_TRIANGLE || kind == IN_GHOST) {
@@ -358,22 +585,22 @@ static uint32_t insert_vertex(tsr_cdt *d, uint32_t pv)
         for (int i = 0; i < 3; i++)
             if (!push(d, out[i]))
                 return NONE;
-    } else { /* on edge `which` of finite t, shared with s */
-        uint32_t a = v[which], b = v[(which + 1) % 3], c = v[(which + 2) % 3];
-        uint32_t s = d->tn[3 * (size_t)t + which];
-        const uint32_t *w = d->tv + 3 * (size_t)s;
-        uint32_t q = w[0] != a && w[0] != b ? w[0] : w[1] != a && w[1] != b ? w[1] : w[2];
-        uint32_t old[2] = {t, s}, nw[4][3] = {{a, pv, c}, {pv, b, c}, {b, pv, q}, {pv, a, q}}, out[4];
-        if (!retriangulate(d, old, 2, nw, 4, out))
-            return NONE;
-        for (int i = 0; i < 4; i++)
-            if (!push(d, out[i]))
-                return NONE;
-    }
+    } else if (!split_edge_at(d, t, which, pv)) /* on edge `which` of finite t */
+        return NONE;
     if (!legalize(d, pv))
         return NONE;
     d->last = t; /* its slot now holds a triangle at pv: the next walk starts there */
     return pv;
+}
+
+/* Inserts internal vertex pv (already stored) into a started
+ * triangulation. Returns the vertex to report: pv, or an existing vertex
+ * when pv duplicates it (then pv is dropped). */
+static uint32_t insert_vertex(tsr_cdt *d, uint32_t pv)
+{
+    int kind, which;
+    uint32_t t = tsr__cdt_locate(d, P(d, pv), &kind, &which);
+    return tsr__cdt_insert_at(d, pv, t, kind, which);
 }
 
 uint32_t tsr_cdt_insert(tsr_cdt *d, double x, double y)
@@ -409,6 +636,260 @@ uint32_t tsr_cdt_insert(tsr_cdt *d, double x, double y)
         return NONE;
     uint32_t r = insert_vertex(d, v);
     return r == NONE ? NONE : r - 1;
+}
+
+/* ---- segments --------------------------------------------------------- */
+
+/* Triangulates the pseudo-polygon c[0..m) (c[0] and c[m-1] the ends of the
+ * new edge, the chain on its left when left, else on its right) by the
+ * recursive rule of Anglada (1997): the base's third vertex is the chain
+ * vertex whose circle with the base holds no other; appends triangles to
+ * d->nwt (3 per triangle). */
+static bool pseudo_polygon(tsr_cdt *d, const uint32_t *c, uint32_t m, bool left)
+{
+    if (m < 3)
+        return true;
+    /* explicit stack of (lo, hi) ranges */
+    uint32_t *st = NULL, nst = 0, cap = 0;
+    bool ok = append(d, &st, &nst, &cap, 0) && append(d, &st, &nst, &cap, m - 1);
+    while (ok && nst > 0) {
+        uint32_t hi = st[--nst], lo = st[--nst];
+        if (hi - lo < 2)
+            continue;
+        uint32_t k = lo + 1;
+        for (uint32_t j = lo + 2; j < hi; j++) {
+            const double *A = P(d, c[lo]), *B = P(d, c[hi]), *K = P(d, c[k]), *J = P(d, c[j]);
+            double in = left ? tsr_incircle(A, B, K, J) : tsr_incircle(B, A, K, J);
+            if (in > 0)
+                k = j;
+        }
+        uint32_t t0 = left ? c[lo] : c[hi], t1 = left ? c[hi] : c[lo];
+        ok = append(d, &d->nwt, &d->nnwt, &d->cap_nwt, t0) && append(d, &d->nwt, &d->nnwt, &d->cap_nwt, t1) &&
+             append(d, &d->nwt, &d->nnwt, &d->cap_nwt, c[k]) && append(d, &st, &nst, &cap, lo) &&
+             append(d, &st, &nst, &cap, k) && append(d, &st, &nst, &cap, k) && append(d, &st, &nst, &cap, hi);
+    }
+    tsr_free(da(d), st);
+    return ok;
+}
+
+/* The triangle around vertex a (index *ia in it), found by location. */
+static uint32_t triangle_at(tsr_cdt *d, uint32_t a, int *ia)
+{
+    int kind;
+    uint32_t t = tsr__cdt_locate(d, P(d, a), &kind, ia);
+    return kind == ON_VERTEX ? t : NONE;
+}
+
+typedef enum { STEP_DONE, STEP_AGAIN, STEP_NOMEM } step_result;
+
+/* Splits the constrained edge k of t, crossed by segment a-b, at (about)
+ * the crossing point; pushes the new vertex as the next target. */
+static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uint32_t b)
+{
+    const uint32_t *v = d->tv + 3 * (size_t)t;
+    uint32_t x = v[k], y = v[(k + 1) % 3];
+    const double *A = P(d, a), *B = P(d, b), *X = P(d, x), *Y = P(d, y);
+    double ux = B[0] - A[0], uy = B[1] - A[1];
+    double num = ux * (A[1] - X[1]) - uy * (A[0] - X[0]);
+    double den = ux * (Y[1] - X[1]) - uy * (Y[0] - X[0]);
+    double tries[2] = {den != 0 ? num / den : 0.5, 0.5};
+    for (int i = 0; i < 2; i++) {
+        double s = tries[i];
+        if (!(s > 0 && s < 1))
+            continue;
+        uint32_t pv = add_vertex(d, X[0] + s * (Y[0] - X[0]), X[1] + s * (Y[1] - X[1]));
+        if (pv == NONE)
+            return STEP_NOMEM;
+        X = P(d, x), Y = P(d, y); /* add_vertex may move the array */
+        bool nomem;
+        if (tsr__cdt_split_edge(d, t, k, pv, &nomem)) {
+            d->intersections++;
+            return append(d, &d->targets, &d->ntargets, &d->cap_targets, pv) ? STEP_AGAIN : STEP_NOMEM;
+        }
+        d->nv--;
+        if (nomem)
+            return STEP_NOMEM;
+        A = P(d, a), B = P(d, b);
+    }
+    /* no point of the edge could be inserted (a sliver far below the
+     * resolution of doubles): route the segment through the edge's end
+     * nearer to its line */
+    d->snapped++;
+    double ox = fabs(tsr_orient2d(A, B, X)), oy = fabs(tsr_orient2d(A, B, Y));
+    return append(d, &d->targets, &d->ntargets, &d->cap_targets, ox <= oy ? x : y) ? STEP_AGAIN : STEP_NOMEM;
+}
+
+/* Recovers the part of segment a-b that starts at a: marks the edges
+ * along it up to b or to the first vertex on it, recovering crossed edges
+ * by retriangulation. *reached is where it got to. */
+static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t mark, uint32_t *reached)
+{
+    int ia;
+    uint32_t t0 = triangle_at(d, a, &ia);
+    if (t0 == NONE)
+        return STEP_NOMEM; /* cannot happen: a is a vertex */
+    const double *A = P(d, a), *B = P(d, b);
+    /* turn around a until the segment's direction is inside a triangle's
+     * angle at a, or along one of its edges */
+    uint32_t t = t0, x = NONE, y = NONE;
+    for (uint64_t guard = 0;; guard++) {
+        const uint32_t *v = d->tv + 3 * (size_t)t;
+        x = v[(ia + 1) % 3], y = v[(ia + 2) % 3];
+        if (x != GHOST) {
+            double ox = tsr_orient2d(A, B, P(d, x));
+            const double *X = P(d, x);
+            if (ox == 0 && (X[0] - A[0]) * (B[0] - A[0]) + (X[1] - A[1]) * (B[1] - A[1]) > 0) {
+                uint32_t old = cdt_mark(d, t, ia);
+                tsr__cdt_mark_edge(d, t, ia, old && old < mark ? old : mark);
+                *reached = x;
+                return STEP_DONE;
+            }
+            if (y != GHOST && ox < 0 && tsr_orient2d(A, B, P(d, y)) > 0)
+                break;
+        }
+        t = d->tn[3 * (size_t)t + (ia + 2) % 3];
+        const uint32_t *w = d->tv + 3 * (size_t)t;
+        ia = w[0] == a ? 0 : w[1] == a ? 1 : 2;
+        if (t == t0 || guard > d->nt)
+            return STEP_NOMEM; /* cannot happen with exact predicates */
+    }
+    /* walk along the segment through the triangles it crosses */
+    d->nwork = d->nchl = d->nchr = 0;
+    if (!append(d, &d->work, &d->nwork, &d->cap_work, t) || !append(d, &d->chl, &d->nchl, &d->cap_chl, a) ||
+        !append(d, &d->chr, &d->nchr, &d->cap_chr, a) || !append(d, &d->chl, &d->nchl, &d->cap_chl, y) ||
+        !append(d, &d->chr, &d->nchr, &d->cap_chr, x))
+        return STEP_NOMEM;
+    uint32_t end;
+    for (;;) {
+        int k = edge_index(d, t, x, y);
+        if (cdt_mark(d, t, k))
+            return split_crossing(d, t, k, a, b);
+        uint32_t s = d->tn[3 * (size_t)t + k];
+        uint32_t q = apex(d, s, x, y);
+        if (!append(d, &d->work, &d->nwork, &d->cap_work, s))
+            return STEP_NOMEM;
+        double o = q == b ? 0 : tsr_orient2d(A, B, P(d, q));
+        if (o == 0) {
+            end = q;
+            break;
+        }
+        if (o < 0) {
+            if (!append(d, &d->chr, &d->nchr, &d->cap_chr, q))
+                return STEP_NOMEM;
+            x = q;
+        } else {
+            if (!append(d, &d->chl, &d->nchl, &d->cap_chl, q))
+                return STEP_NOMEM;
+            y = q;
+        }
+        t = s;
+    }
+    if (!append(d, &d->chl, &d->nchl, &d->cap_chl, end) || !append(d, &d->chr, &d->nchr, &d->cap_chr, end))
+        return STEP_NOMEM;
+    d->nnwt = 0;
+    if (!pseudo_polygon(d, d->chl, d->nchl, true) || !pseudo_polygon(d, d->chr, d->nchr, false))
+        return STEP_NOMEM;
+    uint32_t n = d->nwork, *out = tsr_alloc(da(d), (size_t)n * sizeof *out);
+    if (!out)
+        return STEP_NOMEM;
+    bool ok = d->nnwt == 3 * n && retriangulate(d, d->work, n, (const uint32_t(*)[3])d->nwt, n, out);
+    if (ok) { /* the left polygon's first triangle has the new edge a -> end as edge 0 */
+        tsr__cdt_mark_edge(d, out[0], 0, mark);
+        d->last = out[0];
+    }
+    tsr_free(da(d), out);
+    *reached = end;
+    return ok ? STEP_DONE : STEP_NOMEM;
+}
+
+tsr_status tsr_cdt_insert_segment(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t id)
+{
+    if (a >= d->nv - 1 || b >= d->nv - 1 || id >= CDT_BOUNDARY - 1)
+        return TSR_ERR_ARGUMENT;
+    if (!d->started || a == b)
+        return TSR_OK;
+    if (!tsr__cdt_enable_marks(d, false))
+        return TSR_ERR_NOMEM;
+    a++, b++;
+    d->ntargets = 0;
+    if (!append(d, &d->targets, &d->ntargets, &d->cap_targets, b))
+        return TSR_ERR_NOMEM;
+    while (d->ntargets > 0) {
+        uint32_t target = d->targets[d->ntargets - 1];
+        if (a == target) {
+            d->ntargets--;
+            continue;
+        }
+        uint32_t reached = a;
+        step_result r = recover_piece(d, a, target, id + 1, &reached);
+        if (r == STEP_NOMEM)
+            return TSR_ERR_NOMEM;
+        if (r == STEP_DONE)
+            a = reached;
+    }
+    return TSR_OK;
+}
+
+uint32_t tsr_cdt_intersection_count(const tsr_cdt *d) { return d->intersections; }
+
+bool tsr_cdt_edge_constrained(const tsr_cdt *d, uint32_t a, uint32_t b, uint32_t *id)
+{
+    int ia;
+    a++, b++;
+    uint32_t t0 = triangle_at((tsr_cdt *)d, a, &ia);
+    if (t0 == NONE)
+        return false;
+    uint32_t t = t0;
+    do {
+        const uint32_t *v = d->tv + 3 * (size_t)t;
+        if (v[(ia + 1) % 3] == b) {
+            uint32_t m = cdt_mark(d, t, ia);
+            if (m && id)
+                *id = m - 1;
+            return m != 0;
+        }
+        t = d->tn[3 * (size_t)t + (ia + 2) % 3];
+        const uint32_t *w = d->tv + 3 * (size_t)t;
+        ia = w[0] == a ? 0 : w[1] == a ? 1 : 2;
+    } while (t != t0);
+    return false;
+}
+
+/* ---- triangle handles -------------------------------------------------- */
+
+uint32_t tsr_cdt_handle_count(const tsr_cdt *d) { return d->nt; }
+
+bool tsr_cdt_triangle(const tsr_cdt *d, uint32_t h, uint32_t v[3])
+{
+    if (h >= d->nt || is_ghost(d, h))
+        return false;
+    for (int k = 0; k < 3; k++)
+        v[k] = d->tv[3 * (size_t)h + k] - 1;
+    return true;
+}
+
+void tsr_cdt_track_changes(tsr_cdt *d, bool on)
+{
+    d->track = on;
+    d->nchanged = 0;
+}
+
+const uint32_t *tsr_cdt_changes(const tsr_cdt *d, uint32_t *n)
+{
+    *n = d->nchanged;
+    return d->changed;
+}
+
+void tsr_cdt_clear_changes(tsr_cdt *d) { d->nchanged = 0; }
+
+uint32_t tsr_cdt_locate_handle(const tsr_cdt *d, double x, double y)
+{
+    if (!d->started)
+        return NONE;
+    double p[2] = {x, y};
+    int kind, which;
+    uint32_t t = tsr__cdt_locate((tsr_cdt *)d, p, &kind, &which);
+    return kind == IN_GHOST ? NONE : t;
 }
 
 uint32_t tsr_cdt_vertex_count(const tsr_cdt *d) { return d->nv - 1; }
@@ -448,7 +929,7 @@ bool tsr_cdt_locate(const tsr_cdt *d, double x, double y, uint32_t tri[3])
     double p[2] = {x, y};
     int kind, which;
     /* the walk only moves the start hint, which is not part of the result */
-    uint32_t t = locate((tsr_cdt *)d, p, &kind, &which);
+    uint32_t t = tsr__cdt_locate((tsr_cdt *)d, p, &kind, &which);
     if (kind == IN_GHOST)
         return false;
     for (int k = 0; k < 3; k++)
@@ -501,6 +982,12 @@ tsr_status tsr_cdt_insert_points(tsr_cdt *d, const double *xy, uint32_t n, uint3
             lo[k] = v < lo[k] ? v : lo[k];
             hi[k] = v > hi[k] ? v : hi[k];
         }
+    /* exact capacities: n points make at most 2n - 2 triangles with ghosts */
+    uint64_t want_v = (uint64_t)d->nv + n + 1, want_t = 2 * want_v + 8;
+    if (want_t > UINT32_MAX / 3)
+        return TSR_ERR_NOMEM;
+    if (!grow_vertices(d, (uint32_t)want_v) || !grow_triangles(d, (uint32_t)want_t))
+        return TSR_ERR_NOMEM;
     keyed *order = tsr_alloc(da(d), ((size_t)n + 1) * sizeof *order);
     if (!order)
         return TSR_ERR_NOMEM;

@@ -45,6 +45,45 @@ uint32_t tsr_cdt_triangles(const tsr_cdt *d, uint32_t *tri, uint32_t cap);
  * or false when the point is outside the convex hull (or there is none). */
 bool tsr_cdt_locate(const tsr_cdt *d, double x, double y, uint32_t tri[3]);
 
+/* ---- Constraints ----------------------------------------------------- */
+
+/* Inserts the segment between vertices a and b (ids from the insert
+ * functions) as a constrained edge labelled id (< UINT32_MAX - 1). Vertices
+ * lying exactly on it split it there; a constrained edge crossing it is
+ * split at a new vertex at the crossing point (rounded to doubles; counted
+ * by tsr_cdt_intersection_count); where an edge already constrained lies
+ * along it, the lower label is kept. Nothing happens while the points are
+ * all collinear (no triangle yet) or when a == b. Returns TSR_OK,
+ * TSR_ERR_ARGUMENT (unknown vertex), TSR_ERR_NOMEM. */
+tsr_status tsr_cdt_insert_segment(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t id);
+/* Vertices created at segment crossings so far. */
+uint32_t tsr_cdt_intersection_count(const tsr_cdt *d);
+/* True when the edge a-b exists and is constrained; *id (may be NULL)
+ * receives its label. */
+bool tsr_cdt_edge_constrained(const tsr_cdt *d, uint32_t a, uint32_t b, uint32_t *id);
+
+/* ---- Incremental use (the heightmap mesher) ---------------------------- */
+
+/* Triangles live in slots ("handles") 0 .. tsr_cdt_handle_count() - 1; a
+ * slot keeps its triangle until an insertion rewrites it, and slots are
+ * never freed. Some slots hold ghost triangles (outside the hull):
+ * tsr_cdt_triangle returns false for them. */
+uint32_t tsr_cdt_handle_count(const tsr_cdt *d);
+/* The vertex ids of the triangle in slot h (counter-clockwise); false for
+ * a ghost or an unused slot. */
+bool tsr_cdt_triangle(const tsr_cdt *d, uint32_t h, uint32_t v[3]);
+/* The slot of the triangle containing (x, y) (on its boundary counts),
+ * or UINT32_MAX outside the hull. */
+uint32_t tsr_cdt_locate_handle(const tsr_cdt *d, double x, double y);
+/* While tracking is on, every slot written by an insertion is recorded:
+ * tsr_cdt_changes lists those since the last clear (a slot may appear more
+ * than once; the triangles they held before are the destroyed ones, and
+ * what they hold now the created ones). Turning tracking on clears it. The
+ * pointer is valid until the next insertion or clear. */
+void tsr_cdt_track_changes(tsr_cdt *d, bool on);
+const uint32_t *tsr_cdt_changes(const tsr_cdt *d, uint32_t *n);
+void tsr_cdt_clear_changes(tsr_cdt *d);
+
 #ifdef __cplusplus
 }
 #endif
