@@ -692,15 +692,11 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
     double ux = B[0] - A[0], uy = B[1] - A[1];
     double num = ux * (A[1] - X[1]) - uy * (A[0] - X[0]);
     double den = ux * (Y[1] - X[1]) - uy * (Y[0] - X[0]);
-    double tries[2] = {den != 0 ? num / den : 0.5, 0.5};
-    for (int i = 0; i < 2; i++) {
-        double s = tries[i];
-        if (!(s > 0 && s < 1))
-            continue;
-        uint32_t pv = add_vertex(d, X[0] + s * (Y[0] - X[0]), X[1] + s * (Y[1] - X[1]));
+    double sp = den != 0 ? num / den : 0.5;
+    if (sp > 0 && sp < 1) {
+        uint32_t pv = add_vertex(d, X[0] + sp * (Y[0] - X[0]), X[1] + sp * (Y[1] - X[1]));
         if (pv == NONE)
             return STEP_NOMEM;
-        X = P(d, x), Y = P(d, y); /* add_vertex may move the array */
         bool nomem;
         if (tsr__cdt_split_edge(d, t, k, pv, &nomem)) {
             d->intersections++;
@@ -709,11 +705,12 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
         d->nv--;
         if (nomem)
             return STEP_NOMEM;
-        A = P(d, a), B = P(d, b);
+        A = P(d, a), B = P(d, b), X = P(d, x), Y = P(d, y); /* add_vertex may move the array */
     }
-    /* no point of the edge could be inserted (a sliver far below the
-     * resolution of doubles): route the segment through the edge's end
-     * nearer to its line */
+    /* the rounded crossing is not strictly inside the edge (the segment
+     * passes within rounding of one of its ends) or would make a triangle
+     * inverted: route the segment through the edge's end nearer to its
+     * line, which is then within rounding of it */
     d->snapped++;
     double ox = fabs(tsr_orient2d(A, B, X)), oy = fabs(tsr_orient2d(A, B, Y));
     return append(d, &d->targets, &d->ntargets, &d->cap_targets, ox <= oy ? x : y) ? STEP_AGAIN : STEP_NOMEM;
@@ -722,7 +719,34 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
 /* Recovers the part of segment a-b that starts at a: marks the edges
  * along it up to b or to the first vertex on it, recovering crossed edges
  * by retriangulation. *reached is where it got to. */
-static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t mark, uint32_t *reached)
+/* Is q exactly on the open input segment oa-ob, and strictly between a
+ * and b along it? */
+static bool on_original(const tsr_cdt *d, uint32_t oa, uint32_t ob, uint32_t a, uint32_t b, uint32_t q)
+{
+    const double *OA = P(d, oa), *OB = P(d, ob), *Q = P(d, q), *A = P(d, a), *B = P(d, b);
+    if (q == oa || q == ob || tsr_orient2d(OA, OB, Q) != 0)
+        return false;
+    double ux = B[0] - A[0], uy = B[1] - A[1];
+    double t = (Q[0] - A[0]) * ux + (Q[1] - A[1]) * uy;
+    return t > 0 && t < ux * ux + uy * uy;
+}
+
+/* May the piece end at q instead: is every chain vertex strictly on its
+ * side of a-q? */
+static bool chains_fit(const tsr_cdt *d, uint32_t a, uint32_t q)
+{
+    const double *A = P(d, a), *Q = P(d, q);
+    for (uint32_t i = 1; i < d->nchl; i++)
+        if (tsr_orient2d(A, Q, P(d, d->chl[i])) <= 0)
+            return false;
+    for (uint32_t i = 1; i < d->nchr; i++)
+        if (tsr_orient2d(A, Q, P(d, d->chr[i])) >= 0)
+            return false;
+    return true;
+}
+
+static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa, uint32_t ob, uint32_t mark,
+                                 uint32_t *reached)
 {
     int ia;
     uint32_t t0 = triangle_at(d, a, &ia);
@@ -738,7 +762,10 @@ static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t ma
         if (x != GHOST) {
             double ox = tsr_orient2d(A, B, P(d, x));
             const double *X = P(d, x);
-            if (ox == 0 && (X[0] - A[0]) * (B[0] - A[0]) + (X[1] - A[1]) * (B[1] - A[1]) > 0) {
+            /* along the piece, or (for a piece starting or ending at a
+             * rounded crossing) ending exactly on the input segment */
+            if ((ox == 0 && (X[0] - A[0]) * (B[0] - A[0]) + (X[1] - A[1]) * (B[1] - A[1]) > 0) ||
+                on_original(d, oa, ob, a, b, x)) {
                 uint32_t old = cdt_mark(d, t, ia);
                 tsr__cdt_mark_edge(d, t, ia, old && old < mark ? old : mark);
                 *reached = x;
@@ -769,7 +796,7 @@ static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t ma
         if (!append(d, &d->work, &d->nwork, &d->cap_work, s))
             return STEP_NOMEM;
         double o = q == b ? 0 : tsr_orient2d(A, B, P(d, q));
-        if (o == 0) {
+        if (o == 0 || (on_original(d, oa, ob, a, b, q) && chains_fit(d, a, q))) {
             end = q;
             break;
         }
@@ -811,6 +838,7 @@ tsr_status tsr_cdt_insert_segment(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t i
     if (!tsr__cdt_enable_marks(d, false))
         return TSR_ERR_NOMEM;
     a++, b++;
+    uint32_t oa = a, ob = b;
     d->ntargets = 0;
     if (!append(d, &d->targets, &d->ntargets, &d->cap_targets, b))
         return TSR_ERR_NOMEM;
@@ -821,7 +849,7 @@ tsr_status tsr_cdt_insert_segment(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t i
             continue;
         }
         uint32_t reached = a;
-        step_result r = recover_piece(d, a, target, id + 1, &reached);
+        step_result r = recover_piece(d, a, target, oa, ob, id + 1, &reached);
         if (r == STEP_NOMEM)
             return TSR_ERR_NOMEM;
         if (r == STEP_DONE)

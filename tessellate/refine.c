@@ -29,7 +29,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <stdio.h>
 
 #define P cdt_P
 
@@ -269,7 +268,6 @@ static uint32_t walk_to(refiner *r, uint32_t t, const double c[2], uint32_t *blo
 
 /* Handles bad triangle t: returns 1 when something changed, 0 when the
  * triangle is left as it is, -1 out of memory. */
-static unsigned dbg[8];
 static int split_triangle(refiner *r, uint32_t t)
 {
     tsr_cdt *d = r->d;
@@ -284,10 +282,7 @@ static int split_triangle(refiner *r, uint32_t t)
     int bk = 0;
     uint32_t home = walk_to(r, t, c, &bt, &bk);
     if (home == CDT_NONE) {
-        if (bt == CDT_NONE) {
-            dbg[0]++;
-            return 0;
-        }
+        if (bt == CDT_NONE) return 0;
         int s = split_segment(r, bt, bk);
         return s < 0 ? -1 : s > 0 ? (push_tri(r, t) ? 1 : -1) : 0;
     }
@@ -325,10 +320,7 @@ static int split_triangle(refiner *r, uint32_t t)
         int s = split_segment(r, enc_t[0], enc_k[0]);
         if (s < 0)
             return -1;
-        if (s == 0) {
-            dbg[1]++;
-            return 0;
-        }
+        if (s == 0) return 0;
         return push_tri(r, t) ? 1 : -1;
     }
     const uint32_t *w = d->tv + 3 * (size_t)home;
@@ -336,15 +328,9 @@ static int split_triangle(refiner *r, uint32_t t)
     for (int k = 0; k < 3; k++)
         o[k] = tsr_orient2d(P(d, w[k]), P(d, w[(k + 1) % 3]), c);
     int zeros = (o[0] == 0) + (o[1] == 0) + (o[2] == 0);
-    if (zeros > 1) {
-        dbg[2]++;
-        return 0;
-    } /* on a vertex: cannot happen for an empty circumcircle */
+    if (zeros > 1) return 0; /* on a vertex: cannot happen for an empty circumcircle */
     int kind = zeros ? CDT_ON_EDGE : CDT_IN_TRIANGLE, which = o[0] == 0 ? 0 : o[1] == 0 ? 1 : 2;
-    if (kind == CDT_ON_EDGE && cdt_mark(d, home, which)) {
-        dbg[3]++;
-        return 0;
-    } /* on a constrained edge: it would have been encroached */
+    if (kind == CDT_ON_EDGE && cdt_mark(d, home, which)) return 0; /* on a constrained edge: it would have been encroached */
     uint32_t pv = tsr__cdt_add_vertex(d, c[0], c[1]);
     if (pv == CDT_NONE || tsr__cdt_insert_at(d, pv, home, kind, which) == CDT_NONE)
         return -1;
@@ -422,8 +408,6 @@ tsr_status tsr__cdt_refine(tsr_cdt *d, const tsr_tri_options *opt, uint32_t ninp
             if (in_domain(&r, t) && !cdt_is_ghost(d, t))
                 (void)bad(&r, t, true);
     st = TSR_OK;
-    if (getenv("TSR_DEBUG"))
-        fprintf(stderr, "refine: walk-fail %u split-fail %u onvertex %u onseg %u steiner %u\n", dbg[0], dbg[1], dbg[2], dbg[3], r.steiner);
 done:
     tsr_cdt_track_changes(d, was_tracking);
     const tsr_allocator *a = tsr__cdt_alloc(d);

@@ -1,0 +1,489 @@
+/* Constrained triangulation: the degenerate catalogue, one named test each,
+ * every result judged by the independent checker (tricheck.c: exact
+ * predicates, the input and the output only) and by what the case itself
+ * implies (counts of duplicates, crossings, areas computed here). */
+#include "check.h"
+#include "tessellate/tessellate.h"
+
+#include <stdint.h>
+
+static uint64_t rs = 7;
+static double urand(void)
+{
+    rs = rs * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(rs >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* A growable PSLG for building cases. */
+typedef struct build {
+    double *xy;
+    uint32_t nv, cap_v;
+    uint32_t *seg;
+    uint32_t ns, cap_s;
+    double *holes;
+    uint32_t nh, cap_h;
+} build;
+
+static uint32_t pt(build *b, double x, double y)
+{
+    if (b->nv == b->cap_v) {
+        b->cap_v = b->cap_v ? 2 * b->cap_v : 64;
+        b->xy = realloc(b->xy, 2 * (size_t)b->cap_v * sizeof *b->xy);
+    }
+    b->xy[2 * (size_t)b->nv] = x;
+    b->xy[2 * (size_t)b->nv + 1] = y;
+    return b->nv++;
+}
+
+static void sg(build *b, uint32_t u, uint32_t w)
+{
+    if (b->ns == b->cap_s) {
+        b->cap_s = b->cap_s ? 2 * b->cap_s : 64;
+        b->seg = realloc(b->seg, 2 * (size_t)b->cap_s * sizeof *b->seg);
+    }
+    b->seg[2 * (size_t)b->ns] = u;
+    b->seg[2 * (size_t)b->ns + 1] = w;
+    b->ns++;
+}
+
+static void hole(build *b, double x, double y)
+{
+    if (b->nh == b->cap_h) {
+        b->cap_h = b->cap_h ? 2 * b->cap_h : 16;
+        b->holes = realloc(b->holes, 2 * (size_t)b->cap_h * sizeof *b->holes);
+    }
+    b->holes[2 * (size_t)b->nh] = x;
+    b->holes[2 * (size_t)b->nh + 1] = y;
+    b->nh++;
+}
+
+/* A closed ring through n points. */
+static void ring(build *b, const double *p, uint32_t n)
+{
+    uint32_t first = b->nv;
+    for (uint32_t i = 0; i < n; i++)
+        pt(b, p[2 * i], p[2 * i + 1]);
+    for (uint32_t i = 0; i < n; i++)
+        sg(b, first + i, first + (i + 1) % n);
+}
+
+static void square_ring(build *b, double x0, double y0, double x1, double y1)
+{
+    double p[8] = {x0, y0, x1, y0, x1, y1, x0, y1};
+    ring(b, p, 4);
+}
+
+static void build_free(build *b)
+{
+    free(b->xy);
+    free(b->seg);
+    free(b->holes);
+    memset(b, 0, sizeof *b);
+}
+
+static tsr_pslg pslg_of(const build *b) { return (tsr_pslg){b->xy, b->nv, b->seg, b->ns, b->holes, b->nh}; }
+
+/* Triangulates and checks; returns the triangulation (free it). */
+static tsr_triangulation run(const build *b, const tsr_tri_options *o, const char *what)
+{
+    tsr_pslg in = pslg_of(b);
+    tsr_triangulation t;
+    tsr_error err = {0};
+    tsr_status st = tsr_triangulate(&in, o, &t, NULL, &err);
+    CHECK_MSG(st == TSR_OK, "%s: %s", what, err.message);
+    if (st != TSR_OK)
+        return t;
+    tsr_tri_check c;
+    CHECK(tsr_triangulation_check(&in, o, &t, &c) == TSR_OK);
+    CHECK_MSG(c.ok, "%s: %s", what, c.first_problem);
+    return t;
+}
+
+static double tri_area(const tsr_triangulation *t)
+{
+    double a = 0;
+    for (uint32_t i = 0; i < t->nt; i++)
+        a += 0.5 * tsr_orient2d(t->xy + 2 * (size_t)t->tri[3 * i], t->xy + 2 * (size_t)t->tri[3 * i + 1],
+                                t->xy + 2 * (size_t)t->tri[3 * i + 2]);
+    return a;
+}
+
+static const tsr_tri_options method_opts[2] = {{.method = TSR_TRI_DELAUNAY}, {.method = TSR_TRI_QUADTREE}};
+
+TEST(exact_duplicates)
+{
+    build b = {0};
+    for (int i = 0; i < 200; i++) {
+        double x = floor(urand() * 10), y = floor(urand() * 10);
+        pt(&b, x, y);
+    }
+    /* count distinct here */
+    uint32_t distinct = 0;
+    for (uint32_t i = 0; i < b.nv; i++) {
+        bool seen = false;
+        for (uint32_t j = 0; j < i && !seen; j++)
+            seen = b.xy[2 * i] == b.xy[2 * j] && b.xy[2 * i + 1] == b.xy[2 * j + 1];
+        distinct += !seen;
+    }
+    sg(&b, 0, 1);
+    sg(&b, 1, 0); /* the same segment twice, reversed */
+    sg(&b, 5, 5); /* degenerate */
+    tsr_tri_options o = {0};
+    tsr_triangulation t = run(&b, &o, "duplicates");
+    CHECK(t.duplicates == b.nv - distinct);
+    CHECK(t.input_vertices == distinct);
+    CHECK(t.degenerate_segments == 1);
+    for (uint32_t i = 0; i < b.nv; i++) /* every input maps to a vertex at its position */
+        CHECK(t.xy[2 * (size_t)t.vertex_of_input[i]] == b.xy[2 * i] &&
+              t.xy[2 * (size_t)t.vertex_of_input[i] + 1] == b.xy[2 * i + 1]);
+    tsr_triangulation_free(&t);
+    build_free(&b);
+}
+
+TEST(collinear_points)
+{
+    build b = {0};
+    for (int i = 0; i < 1000; i++)
+        pt(&b, 3.0 * i, -2.0 * i + 7);
+    sg(&b, 0, 999);
+    for (int m = 0; m < 2; m++) {
+        tsr_pslg in = pslg_of(&b);
+        tsr_triangulation t;
+        tsr_error err;
+        CHECK(tsr_triangulate(&in, &method_opts[m], &t, NULL, &err) == TSR_OK);
+        CHECK(t.nt == 0);
+        CHECK(t.input_vertices == 1000);
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
+TEST(almost_collinear_chain)
+{
+    /* 2000 points along a line, each off it by a few units in the last
+     * place, joined as one polyline, with two points far off it */
+    build b = {0};
+    for (int i = 0; i < 2000; i++) {
+        double x = 1 + i * 1e-3, y = 0.5 * x;
+        y += (urand() - 0.5) * 4 * y * 1e-16;
+        pt(&b, x, y);
+        if (i)
+            sg(&b, (uint32_t)i - 1, (uint32_t)i);
+    }
+    pt(&b, 2, 5);
+    pt(&b, 2, -5);
+    for (int m = 0; m < 2; m++) {
+        tsr_tri_options o = method_opts[m];
+        tsr_triangulation t = run(&b, &o, m ? "chain quadtree" : "chain delaunay");
+        CHECK(t.nt > 0);
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
+TEST(segments_crossing_at_one_point)
+{
+    /* 100 diameters of a circle: every pair crosses at the centre */
+    build b = {0};
+    for (int i = 0; i < 100; i++) {
+        double a = 3.14159265358979 * i / 100, x = cos(a), y = sin(a);
+        uint32_t p = pt(&b, x, y), q = pt(&b, -x, -y);
+        sg(&b, p, q);
+    }
+    for (int m = 0; m < 2; m++) {
+        tsr_triangulation t = run(&b, &method_opts[m], m ? "star quadtree" : "star delaunay");
+        CHECK(t.intersections >= 1);
+        /* every new vertex is near the centre */
+        for (uint32_t v = t.input_vertices; v < t.nv; v++)
+            CHECK(fabs(t.xy[2 * v]) < 1e-6 && fabs(t.xy[2 * v + 1]) < 1e-6);
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
+TEST(overlapping_collinear_segments)
+{
+    build b = {0};
+    uint32_t p0 = pt(&b, 0, 0), p1 = pt(&b, 4, 0), p2 = pt(&b, 2, 0), p3 = pt(&b, 6, 0), p4 = pt(&b, 1, 0),
+             p5 = pt(&b, 3, 0);
+    pt(&b, 3, 2);
+    pt(&b, 3, -2);
+    sg(&b, p2, p3); /* id 0: 2..6 */
+    sg(&b, p0, p1); /* id 1: 0..4 */
+    sg(&b, p4, p5); /* id 2: 1..3 */
+    sg(&b, p1, p0); /* id 3: 4..0 again */
+    for (int m = 0; m < 2; m++) {
+        tsr_triangulation t = run(&b, &method_opts[m], "overlap");
+        /* the x axis from 0 to 6 is covered by constrained edges, each
+         * labelled with the lowest segment covering it */
+        double covered = 0;
+        for (uint32_t e = 0; e < t.nedge; e++) {
+            const double *u = t.xy + 2 * (size_t)t.edge[2 * e], *w = t.xy + 2 * (size_t)t.edge[2 * e + 1];
+            if (u[1] != 0 || w[1] != 0)
+                continue;
+            double lo = fmin(u[0], w[0]), hi = fmax(u[0], w[0]);
+            covered += hi - lo;
+            uint32_t want = lo >= 2 ? 0 : 1; /* segment 0 covers [2, 6], 1 covers [0, 4] */
+            CHECK_MSG(t.edge_segment[e] == want, "edge %g..%g labelled %u", lo, hi, t.edge_segment[e]);
+        }
+        CHECK(covered == 6);
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
+TEST(points_on_segments)
+{
+    build b = {0};
+    square_ring(&b, 0, 0, 8, 8);
+    uint32_t a = pt(&b, 1, 1), c = pt(&b, 7, 7);
+    sg(&b, a, c);
+    for (int i = 2; i <= 6; i++) /* exactly on the diagonal */
+        pt(&b, i, i);
+    pt(&b, 4, 0); /* on the outer boundary */
+    for (int m = 0; m < 2; m++) {
+        tsr_tri_options o = method_opts[m];
+        o.region = TSR_REGION_ENCLOSED;
+        tsr_triangulation t = run(&b, &o, "points on segments");
+        uint32_t diag = 0;
+        for (uint32_t e = 0; e < t.nedge; e++)
+            diag += t.edge_segment[e] == 4;
+        CHECK(diag == 6); /* split at the five points on it */
+        CHECK_NEAR(tri_area(&t), 64, 1e-12);
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
+TEST(integer_grid_1000)
+{
+    build b = {0};
+    for (int y = 0; y < 1000; y++)
+        for (int x = 0; x < 1000; x++)
+            pt(&b, x, y);
+    tsr_tri_options o = {0};
+    tsr_triangulation t = run(&b, &o, "grid");
+    CHECK(t.nt == 2 * 999 * 999);
+    CHECK_NEAR(tri_area(&t), 999.0 * 999.0, 1e-6);
+    tsr_triangulation_free(&t);
+    build_free(&b);
+}
+
+TEST(hole_touching_outer_boundary)
+{
+    build b = {0};
+    square_ring(&b, 0, 0, 10, 10);
+    /* a triangular hole with a vertex on the outer boundary's edge */
+    double h[6] = {5, 0, 7, 4, 3, 4};
+    ring(&b, h, 3);
+    for (int m = 0; m < 2; m++) {
+        tsr_tri_options o = method_opts[m];
+        o.region = TSR_REGION_EVEN_ODD;
+        tsr_triangulation t = run(&b, &o, "touching hole");
+        CHECK_NEAR(tri_area(&t), 100 - 8, 1e-12);
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
+TEST(self_touching_ring)
+{
+    /* one ring that touches itself at (5, 5): two squares corner to corner
+     * traversed as a figure of eight */
+    build b = {0};
+    double p[] = {0, 0, 5, 0, 5, 5, 10, 5, 10, 10, 5, 10, 5, 5, 0, 5};
+    ring(&b, p, 8);
+    for (int m = 0; m < 2; m++) {
+        tsr_tri_options o = method_opts[m];
+        o.region = TSR_REGION_EVEN_ODD;
+        tsr_triangulation t = run(&b, &o, "self touching");
+        CHECK(t.duplicates == 1);
+        CHECK_NEAR(tri_area(&t), 50, 1e-12);
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
+TEST(polygon_with_1024_holes)
+{
+    build b = {0};
+    square_ring(&b, 0, 0, 64, 64);
+    double holes_area = 0;
+    for (int i = 0; i < 32; i++)
+        for (int j = 0; j < 32; j++) { /* small diamonds, alternately rotated squares */
+            double cx = 1 + 2 * i, cy = 1 + 2 * j, r = 0.25 + 0.5 * urand();
+            double d[8] = {cx + r, cy, cx, cy + r, cx - r, cy, cx, cy - r};
+            ring(&b, d, 4);
+            holes_area += 2 * r * r;
+        }
+    for (int m = 0; m < 2; m++) {
+        tsr_tri_options o = method_opts[m];
+        o.region = TSR_REGION_EVEN_ODD;
+        tsr_triangulation t = run(&b, &o, "1024 holes");
+        CHECK_NEAR(tri_area(&t), 64 * 64 - holes_area, 1e-9);
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
+TEST(hole_seeds)
+{
+    /* Triangle's way: a square with a square hole given by a seed point */
+    build b = {0};
+    square_ring(&b, 0, 0, 10, 10);
+    square_ring(&b, 3, 3, 6, 6);
+    hole(&b, 4, 4);
+    for (int m = 0; m < 2; m++) {
+        tsr_tri_options o = method_opts[m];
+        o.region = TSR_REGION_ENCLOSED;
+        tsr_triangulation t = run(&b, &o, "seed");
+        CHECK_NEAR(tri_area(&t), 100 - 9, 1e-12);
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
+/* A random simple polygon: a star with random radii. */
+static void star(build *b, int n, double cx, double cy)
+{
+    double *p = malloc(2 * (size_t)n * sizeof *p);
+    for (int i = 0; i < n; i++) {
+        double a = 2 * 3.14159265358979 * i / n, r = 0.3 + urand();
+        p[2 * i] = cx + r * cos(a);
+        p[2 * i + 1] = cy + r * sin(a);
+    }
+    ring(b, p, (uint32_t)n);
+    free(p);
+}
+
+TEST(quality_refinement)
+{
+    build b = {0};
+    star(&b, 60, 0, 0);
+    double angles[] = {20, 28, 33};
+    for (int i = 0; i < 3; i++) {
+        tsr_tri_options o = {.region = TSR_REGION_ENCLOSED, .min_angle = angles[i]};
+        tsr_triangulation t = run(&b, &o, "quality");
+        CHECK(!t.quality_limited);
+        CHECK(t.steiner > 0);
+        tsr_triangulation_free(&t);
+    }
+    tsr_tri_options o = {.region = TSR_REGION_ENCLOSED, .max_area = 0.001};
+    tsr_triangulation t = run(&b, &o, "area");
+    CHECK(t.nt > 1000);
+    tsr_triangulation_free(&t);
+    build_free(&b);
+}
+
+TEST(small_input_angles_terminate)
+{
+    /* a fan of segments from one vertex at 1-degree steps: refinement must
+     * stop (terminator) and say which triangles it left */
+    build b = {0};
+    uint32_t o0 = pt(&b, 0, 0);
+    for (int i = 0; i <= 10; i++) {
+        double a = i * 3.14159265358979 / 180;
+        sg(&b, o0, pt(&b, cos(a), sin(a)));
+    }
+    tsr_tri_options o = {.min_angle = 30};
+    tsr_triangulation t = run(&b, &o, "small angles");
+    CHECK(!t.quality_limited);
+    CHECK(t.small_angle_exempt > 0);
+    tsr_triangulation_free(&t);
+    build_free(&b);
+}
+
+TEST(conforming_delaunay)
+{
+    build b = {0};
+    star(&b, 40, 0, 0);
+    for (int i = 0; i < 200; i++)
+        pt(&b, 2.6 * urand() - 1.3, 2.6 * urand() - 1.3);
+    tsr_tri_options o = {.conforming = true};
+    tsr_triangulation t = run(&b, &o, "conforming");
+    CHECK(t.steiner > 0);
+    tsr_triangulation_free(&t);
+    build_free(&b);
+}
+
+TEST(random_crossing_segments)
+{
+    for (int round = 0; round < 20; round++) {
+        build b = {0};
+        for (int i = 0; i < 60; i++)
+            pt(&b, floor(urand() * 64) / 8, floor(urand() * 64) / 8);
+        for (int i = 0; i < 30; i++)
+            sg(&b, (uint32_t)(urand() * 60), (uint32_t)(urand() * 60));
+        for (int m = 0; m < 2; m++) {
+            tsr_tri_options o = method_opts[m];
+            tsr_triangulation t = run(&b, &o, m ? "random segments quadtree" : "random segments");
+            tsr_triangulation_free(&t);
+        }
+        build_free(&b);
+    }
+}
+
+TEST(bad_input_refused)
+{
+    build b = {0};
+    pt(&b, 0, 0);
+    pt(&b, 1, 0);
+    pt(&b, 0, 1);
+    sg(&b, 0, 3); /* out of range */
+    tsr_pslg in = pslg_of(&b);
+    tsr_triangulation t;
+    tsr_error err = {0};
+    CHECK(tsr_triangulate(&in, NULL, &t, NULL, &err) == TSR_ERR_ARGUMENT);
+    CHECK(strstr(err.message, "segment 0") != NULL);
+    b.seg[1] = 2;
+    b.xy[3] = NAN;
+    CHECK(tsr_triangulate(&in, NULL, &t, NULL, &err) == TSR_ERR_ARGUMENT);
+    CHECK(strstr(err.message, "point 1") != NULL);
+    build_free(&b);
+}
+
+/* The incremental interface of the kernel: after each insertion, the
+ * triangles that differ from before are all among the slots reported. */
+TEST(incremental_changes)
+{
+    tsr_cdt *d = tsr_cdt_create(NULL);
+    double corners[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    CHECK(tsr_cdt_insert_points(d, corners, 4, NULL) == TSR_OK);
+    tsr_cdt_track_changes(d, true);
+    for (int i = 0; i < 300; i++) {
+        uint32_t nh = tsr_cdt_handle_count(d);
+        uint32_t *before = malloc(3 * ((size_t)nh + 1) * sizeof *before);
+        bool *live = malloc((size_t)nh + 1);
+        for (uint32_t h = 0; h < nh; h++)
+            live[h] = tsr_cdt_triangle(d, h, before + 3 * h);
+        double x = urand(), y = urand();
+        uint32_t h0 = tsr_cdt_locate_handle(d, x, y), v[3];
+        CHECK(h0 != UINT32_MAX && tsr_cdt_triangle(d, h0, v));
+        tsr_cdt_clear_changes(d);
+        tsr_cdt_insert(d, x, y);
+        uint32_t nc;
+        const uint32_t *ch = tsr_cdt_changes(d, &nc);
+        CHECK(nc > 0);
+        uint32_t nh2 = tsr_cdt_handle_count(d);
+        for (uint32_t h = 0; h < nh2; h++) {
+            uint32_t w[3];
+            bool now = tsr_cdt_triangle(d, h, w);
+            bool same = h < nh && now == live[h] && (!now || !memcmp(w, before + 3 * h, sizeof w));
+            if (same)
+                continue;
+            bool listed = false;
+            for (uint32_t k = 0; k < nc && !listed; k++)
+                listed = ch[k] == h;
+            CHECK_MSG(listed, "slot %u changed but was not reported", h);
+        }
+        free(before);
+        free(live);
+    }
+    tsr_cdt_destroy(d);
+}
+
+TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T(segments_crossing_at_one_point),
+          T(overlapping_collinear_segments), T(points_on_segments), T(integer_grid_1000),
+          T(hole_touching_outer_boundary), T(self_touching_ring), T(polygon_with_1024_holes), T(hole_seeds),
+          T(quality_refinement), T(small_input_angles_terminate), T(conforming_delaunay),
+          T(random_crossing_segments), T(bad_input_refused), T(incremental_changes))
