@@ -31,28 +31,115 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* An allocator that counts: current and peak bytes. */
+typedef struct counting {
+    size_t now, peak;
+} counting;
+
+static void *counting_realloc(void *user, void *ptr, size_t size)
+{
+    counting *c = user;
+    size_t old = ptr ? ((size_t *)ptr)[-2] : 0;
+    if (size == 0) {
+        if (ptr) {
+            c->now -= old;
+            free((size_t *)ptr - 2);
+        }
+        return NULL;
+    }
+    size_t *p = realloc(ptr ? (size_t *)ptr - 2 : NULL, size + 2 * sizeof(size_t));
+    if (!p)
+        return NULL;
+    p[0] = size;
+    c->now += size - old;
+    if (c->now > c->peak)
+        c->peak = c->now;
+    return p + 2;
+}
+
+static void random_points(double *xy, uint32_t m, uint64_t s)
+{
+    for (uint32_t i = 0; i < 2 * m; i++) {
+        s = s * 6364136223846793005ull + 1442695040888963407ull;
+        xy[i] = (double)(s >> 11) * (1.0 / 9007199254740992.0);
+    }
+}
+
+static int cmp_x(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* A star-shaped polygon of n vertices (a smooth wavy outline with a
+ * little noise) with `holes` small square holes
+ * (rings, even-odd), for the constrained rows. */
+static void star_polygon(uint32_t n, uint32_t holes, double **xy_out, uint32_t **seg_out, uint32_t *nv, uint32_t *ns)
+{
+    uint32_t m = n + 4 * holes;
+    double *xy = malloc(2 * (size_t)m * sizeof *xy);
+    uint32_t *seg = malloc(2 * (size_t)m * sizeof *seg);
+    uint64_t s = 99;
+    for (uint32_t i = 0; i < n; i++) {
+        s = s * 6364136223846793005ull + 1442695040888963407ull;
+        double a = 6.283185307179586 * i / n,
+               r = 0.85 + 0.1 * sin(7 * a) + 0.01 * ((double)(s >> 11) * (1.0 / 9007199254740992.0)) / n * 1000;
+        xy[2 * i] = r * cos(a);
+        xy[2 * i + 1] = r * sin(a);
+        seg[2 * i] = i;
+        seg[2 * i + 1] = (i + 1) % n;
+    }
+    uint32_t side = 1;
+    while (side * side < holes)
+        side++;
+    for (uint32_t h = 0; h < holes; h++) {
+        double cx = -0.5 + (h % side + 0.5) / side, cy = -0.5 + (h / side + 0.5) / side, r = 0.25 / side;
+        double c[8] = {cx - r, cy - r, cx + r, cy - r, cx + r, cy + r, cx - r, cy + r};
+        uint32_t base = n + 4 * h;
+        for (int k = 0; k < 4; k++) {
+            xy[2 * (base + k)] = c[2 * k];
+            xy[2 * (base + k) + 1] = c[2 * k + 1];
+            seg[2 * (base + k)] = base + k;
+            seg[2 * (base + k) + 1] = base + (k + 1) % 4;
+        }
+    }
+    *xy_out = xy;
+    *seg_out = seg;
+    *nv = *ns = m;
+}
+
 /* `tessera bench cdt`: the Delaunay kernel on uniform random points and
- * on an integer grid (the peers' figures from the issue, measured on these
- * machines: CGAL 0.8 s and Triangle 1.25 s for 1M uniform points; Triangle
- * 1.05 s for the 1000 x 1000 grid). */
+ * on an integer grid, with peak memory per point from a counting
+ * allocator, and the constrained triangulator's two methods side by side.
+ * The peers' figures from the issue, measured on these machines: CGAL
+ * 0.8 s and Triangle 1.25 s for 1M uniform points; Triangle 1.05 s for the
+ * 1000 x 1000 grid. A qsort of the same points, timed in the same run,
+ * is the baseline that makes figures from different machines comparable. */
 static int run_cdt(int argc, char **argv)
 {
-    uint32_t n = 1000000, side = 1000;
+    uint32_t n = 1000000, side = 1000, poly = 20000;
     for (int i = 2; i < argc; i++) {
         if (cli_is_help(argv[i])) {
-            printf("usage: tessera bench cdt [--points N] [--grid S]\n\n"
+            printf("usage: tessera bench cdt [--points N] [--grid S] [--polygon V]\n\n"
                    "Times Delaunay triangulation of N uniform random points (default 1000000) and of an\n"
-                   "S x S integer grid (default 1000), and prints a table.\n");
+                   "S x S integer grid (default 1000), with peak memory per point; then triangulates a\n"
+                   "polygon of V vertices (default 20000) with 100 holes by both methods (delaunay and\n"
+                   "quadtree), plain and with a maximum area, and prints the ratio. A qsort of the points\n"
+                   "is timed in the same run as a baseline.\n");
             return CLI_OK;
         }
-        uint32_t *dst = !strcmp(argv[i], "--points") ? &n : !strcmp(argv[i], "--grid") ? &side : NULL;
+        uint32_t *dst = !strcmp(argv[i], "--points")    ? &n
+                        : !strcmp(argv[i], "--grid")    ? &side
+                        : !strcmp(argv[i], "--polygon") ? &poly
+                                                        : NULL;
         if (!dst || i + 1 >= argc || !cli_parse_u32(argv[i + 1], 3, 1u << 26, dst)) {
             cli_error("bench", "cdt: bad option '%s' (see tessera bench cdt --help)", argv[i]);
             return CLI_USAGE;
         }
         i++;
     }
-    printf("tessera bench cdt\n\n| input | points | triangles | seconds |\n|---|---|---|---|\n");
+    printf("tessera bench cdt\n\n| input | points | triangles | seconds | x qsort | peak bytes/point |\n"
+           "|---|---|---|---|---|---|\n");
     for (int kind = 0; kind < 2; kind++) {
         uint32_t m = kind == 0 ? n : side * side;
         double *xy = malloc(2 * (size_t)m * sizeof *xy);
@@ -60,25 +147,30 @@ static int run_cdt(int argc, char **argv)
             cli_error("bench", "out of memory");
             return CLI_FAIL;
         }
-        uint64_t s = 1;
-        for (uint32_t i = 0; i < m; i++) {
-            if (kind == 0) {
-                for (int k = 0; k < 2; k++) {
-                    s = s * 6364136223846793005ull + 1442695040888963407ull;
-                    xy[2 * i + k] = (double)(s >> 11) * (1.0 / 9007199254740992.0);
-                }
-            } else {
+        if (kind == 0)
+            random_points(xy, m, 1);
+        else
+            for (uint32_t i = 0; i < m; i++) {
                 xy[2 * i] = i % side;
                 xy[2 * i + 1] = i / side;
             }
+        double *copy = malloc(2 * (size_t)m * sizeof *copy);
+        double q0 = cli_now();
+        if (copy) {
+            memcpy(copy, xy, 2 * (size_t)m * sizeof *copy);
+            qsort(copy, m, 2 * sizeof *copy, cmp_x);
         }
+        double qsecs = cli_now() - q0;
+        free(copy);
+        counting c = {0, 0};
+        tsr_allocator alloc = {counting_realloc, &c};
         double t0 = cli_now();
-        tsr_cdt *d = tsr_cdt_create(NULL);
+        tsr_cdt *d = tsr_cdt_create(&alloc);
         tsr_status st = d ? tsr_cdt_insert_points(d, xy, m, NULL) : TSR_ERR_NOMEM;
         double secs = cli_now() - t0;
         if (st == TSR_OK)
-            printf("| %s | %u | %u | %.3f |\n", kind == 0 ? "uniform random" : "integer grid", m,
-                   tsr_cdt_triangle_count(d), secs);
+            printf("| %s | %u | %u | %.3f | %.1f | %.0f |\n", kind == 0 ? "uniform random" : "integer grid", m,
+                   tsr_cdt_triangle_count(d), secs, secs / qsecs, (double)c.peak / m);
         tsr_cdt_destroy(d);
         free(xy);
         if (st != TSR_OK) {
@@ -86,6 +178,47 @@ static int run_cdt(int argc, char **argv)
             return CLI_FAIL;
         }
     }
+    /* the constrained triangulator, both methods */
+    double *pxy;
+    uint32_t *pseg, pnv, pns;
+    star_polygon(poly, 100, &pxy, &pseg, &pnv, &pns);
+    if (!pxy || !pseg) {
+        cli_error("bench", "out of memory");
+        return CLI_FAIL;
+    }
+    tsr_pslg in = {pxy, pnv, pseg, pns, NULL, 0};
+    printf("\n| polygon, %u vertices, 100 holes | method | triangles | seconds | fallback | delaunay / quadtree |\n"
+           "|---|---|---|---|---|---|\n",
+           pnv);
+    double areas[2] = {0, 3.0 / pnv};
+    for (int ai = 0; ai < 2; ai++) {
+        double secs[2] = {0, 0};
+        for (int m = 0; m < 2; m++) {
+            tsr_tri_options o = {.method = m ? TSR_TRI_QUADTREE : TSR_TRI_DELAUNAY, .region = TSR_REGION_EVEN_ODD,
+                                 .max_area = areas[ai]};
+            tsr_triangulation t;
+            tsr_error err;
+            double t0 = cli_now();
+            tsr_status st = tsr_triangulate(&in, &o, &t, NULL, &err);
+            secs[m] = cli_now() - t0;
+            if (st != TSR_OK) {
+                cli_error("bench", "cdt: %s", err.message);
+                free(pxy);
+                free(pseg);
+                return CLI_FAIL;
+            }
+            char ratio[32] = "";
+            if (m == 1)
+                snprintf(ratio, sizeof ratio, "%.2f", secs[0] / secs[1]);
+            char fb[48];
+            snprintf(fb, sizeof fb, "%s%u cells", t.fell_back ? "whole input; " : "", t.fallback_cells);
+            printf("| %s | %s | %u | %.3f | %s | %s |\n", ai ? "max area 3/V" : "plain", m ? "quadtree" : "delaunay",
+                   t.nt, secs[m], m ? fb : "", ratio);
+            tsr_triangulation_free(&t);
+        }
+    }
+    free(pxy);
+    free(pseg);
     return CLI_OK;
 }
 
