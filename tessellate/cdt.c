@@ -349,6 +349,78 @@ static bool retriangulate(tsr_cdt *d, const uint32_t *old, uint32_t nold, const 
     return true;
 }
 
+/* In triangle n, the edge from x to y now faces triangle t. */
+static void repoint(tsr_cdt *d, uint32_t n, uint32_t x, uint32_t y, uint32_t t)
+{
+    int k = edge_index(d, n, x, y);
+    if (k >= 0)
+        d->tn[3 * (size_t)n + k] = t;
+}
+
+static void set_tri(tsr_cdt *d, uint32_t t, uint32_t a, uint32_t b, uint32_t c, uint32_t na, uint32_t nb, uint32_t nc)
+{
+    uint32_t *v = d->tv + 3 * (size_t)t, *n = d->tn + 3 * (size_t)t;
+    v[0] = a, v[1] = b, v[2] = c;
+    n[0] = na, n[1] = nb, n[2] = nc;
+}
+
+/* Flips the edge between t1 = (p, x, y) (p at index i) and t2 = (y, x, q):
+ * t1 becomes (p, x, q) and t2 (p, q, y). The fast path of legalize. */
+static bool flip(tsr_cdt *d, uint32_t t1, int i, uint32_t t2)
+{
+    uint32_t *v = d->tv + 3 * (size_t)t1;
+    uint32_t p = v[i], x = v[(i + 1) % 3], y = v[(i + 2) % 3];
+    uint32_t n_px = d->tn[3 * (size_t)t1 + i], n_yp = d->tn[3 * (size_t)t1 + (i + 2) % 3];
+    int j = edge_index(d, t2, y, x);
+    uint32_t q = d->tv[3 * (size_t)t2 + (j + 2) % 3];
+    uint32_t n_xq = d->tn[3 * (size_t)t2 + (j + 1) % 3], n_qy = d->tn[3 * (size_t)t2 + (j + 2) % 3];
+    if (d->tc) {
+        uint32_t *c1 = d->tc + 3 * (size_t)t1, *c2 = d->tc + 3 * (size_t)t2;
+        uint32_t m_px = c1[i], m_yp = c1[(i + 2) % 3], m_xq = c2[(j + 1) % 3], m_qy = c2[(j + 2) % 3];
+        c1[0] = m_px, c1[1] = m_xq, c1[2] = 0;
+        c2[0] = 0, c2[1] = m_qy, c2[2] = m_yp;
+    }
+    set_tri(d, t1, p, x, q, n_px, n_xq, t2);
+    set_tri(d, t2, p, q, y, t1, n_qy, n_yp);
+    repoint(d, n_xq, q, x, t1);
+    repoint(d, n_yp, p, y, t2);
+    if (d->track)
+        return append(d, &d->changed, &d->nchanged, &d->cap_changed, t1) &&
+               append(d, &d->changed, &d->nchanged, &d->cap_changed, t2);
+    return true;
+}
+
+/* Splits t = (a, b, c) at pv into (a, b, pv), (b, c, pv), (c, a, pv); out
+ * receives the three slots (t first). */
+static bool split3(tsr_cdt *d, uint32_t t, uint32_t pv, uint32_t out[3])
+{
+    uint32_t t1 = new_triangle(d), t2 = t1 == NONE ? NONE : new_triangle(d);
+    if (t2 == NONE)
+        return false;
+    const uint32_t *v = d->tv + 3 * (size_t)t;
+    uint32_t a = v[0], b = v[1], c = v[2];
+    uint32_t n_ab = d->tn[3 * (size_t)t], n_bc = d->tn[3 * (size_t)t + 1], n_ca = d->tn[3 * (size_t)t + 2];
+    if (d->tc) {
+        uint32_t m_bc = d->tc[3 * (size_t)t + 1], m_ca = d->tc[3 * (size_t)t + 2];
+        d->tc[3 * (size_t)t + 1] = d->tc[3 * (size_t)t + 2] = 0;
+        d->tc[3 * (size_t)t1] = m_bc, d->tc[3 * (size_t)t1 + 1] = d->tc[3 * (size_t)t1 + 2] = 0;
+        d->tc[3 * (size_t)t2] = m_ca, d->tc[3 * (size_t)t2 + 1] = d->tc[3 * (size_t)t2 + 2] = 0;
+    }
+    if (d->tf)
+        d->tf[t1] = d->tf[t2] = d->tf[t];
+    set_tri(d, t, a, b, pv, n_ab, t1, t2);
+    set_tri(d, t1, b, c, pv, n_bc, t2, t);
+    set_tri(d, t2, c, a, pv, n_ca, t, t1);
+    repoint(d, n_bc, c, b, t1);
+    repoint(d, n_ca, a, c, t2);
+    out[0] = t, out[1] = t1, out[2] = t2;
+    if (d->track)
+        for (int k = 0; k < 3; k++)
+            if (!append(d, &d->changed, &d->nchanged, &d->cap_changed, out[k]))
+                return false;
+    return true;
+}
+
 /* ---- location ----------------------------------------------------------- */
 
 #define IN_TRIANGLE CDT_IN_TRIANGLE
@@ -468,14 +540,10 @@ static bool legalize(tsr_cdt *d, uint32_t pv)
         uint32_t t1 = d->stack[--d->nstack];
         const uint32_t *v = d->tv + 3 * (size_t)t1;
         int i = v[0] == pv ? 0 : v[1] == pv ? 1 : 2;
-        uint32_t x = v[(i + 1) % 3], y = v[(i + 2) % 3];
         uint32_t t2 = d->tn[3 * (size_t)t1 + (i + 1) % 3];
         if (cdt_mark(d, t1, (i + 1) % 3) || !conflict(d, t2, p))
             continue;
-        const uint32_t *w = d->tv + 3 * (size_t)t2;
-        uint32_t q = w[0] != x && w[0] != y ? w[0] : w[1] != x && w[1] != y ? w[1] : w[2];
-        uint32_t old[2] = {t1, t2}, nw[2][3] = {{pv, x, q}, {pv, q, y}}, out[2];
-        if (!retriangulate(d, old, 2, nw, 2, out) || !push(d, out[0]) || !push(d, out[1]))
+        if (!flip(d, t1, i, t2) || !push(d, t1) || !push(d, t2))
             return false;
     }
     return true;
@@ -578,9 +646,8 @@ uint32_t tsr__cdt_insert_at(tsr_cdt *d, uint32_t pv, uint32_t t, int kind, int w
         return v[which];
     }
     if (kind == IN_TRIANGLE || kind == IN_GHOST) {
-        uint32_t a = v[0], b = v[1], c = v[2];
-        uint32_t old[1] = {t}, nw[3][3] = {{a, b, pv}, {b, c, pv}, {c, a, pv}}, out[3];
-        if (!retriangulate(d, old, 1, nw, 3, out))
+        uint32_t out[3];
+        if (!split3(d, t, pv, out))
             return NONE;
         for (int i = 0; i < 3; i++)
             if (!push(d, out[i]))
@@ -993,10 +1060,27 @@ typedef struct keyed {
     uint32_t index;
 } keyed;
 
-static int keyed_cmp(const void *a, const void *b)
+/* Sorts by key: LSD radix sort in 11-bit digits over the bits in use
+ * (round and Hilbert position, under 48 bits); tmp holds n entries. */
+static void radix_sort(keyed *a, keyed *tmp, uint32_t n)
 {
-    const keyed *x = a, *y = b;
-    return x->key < y->key ? -1 : x->key > y->key;
+    uint64_t all = 0;
+    for (uint32_t i = 0; i < n; i++)
+        all |= a[i].key;
+    for (int shift = 0; shift < 64 && (all >> shift) != 0; shift += 11) {
+        uint32_t count[2048] = {0};
+        for (uint32_t i = 0; i < n; i++)
+            count[(a[i].key >> shift) & 2047]++;
+        uint32_t sum = 0;
+        for (int b = 0; b < 2048; b++) {
+            uint32_t c = count[b];
+            count[b] = sum;
+            sum += c;
+        }
+        for (uint32_t i = 0; i < n; i++)
+            tmp[count[(a[i].key >> shift) & 2047]++] = a[i];
+        memcpy(a, tmp, (size_t)n * sizeof *a);
+    }
 }
 
 tsr_status tsr_cdt_insert_points(tsr_cdt *d, const double *xy, uint32_t n, uint32_t *ids)
@@ -1019,32 +1103,41 @@ tsr_status tsr_cdt_insert_points(tsr_cdt *d, const double *xy, uint32_t n, uint3
     keyed *order = tsr_alloc(da(d), ((size_t)n + 1) * sizeof *order);
     if (!order)
         return TSR_ERR_NOMEM;
-    /* BRIO rounds: a random permutation cut into rounds of doubling size;
-     * the last round holds half of the points */
-    uint64_t rng = 0x9E3779B97F4A7C15ull ^ n;
-    for (uint32_t i = 0; i < n; i++)
-        order[i].index = i;
-    for (uint32_t i = n; i > 1; i--) {
-        rng = rng * 6364136223846793005ull + 1442695040888963407ull;
-        uint32_t j = (uint32_t)((rng >> 33) % i);
-        uint32_t t = order[i - 1].index;
-        order[i - 1].index = order[j].index;
-        order[j].index = t;
-    }
+    /* BRIO rounds: each point draws its round from a hash of its index,
+     * geometrically: half the points go to the last round, a quarter to
+     * the one before, and so on (the same distribution as cutting a random
+     * permutation into rounds of doubling size, computed in index order so
+     * that the points are read sequentially) */
     double sx = hi[0] > lo[0] ? 65535.0 / (hi[0] - lo[0]) : 0, sy = hi[1] > lo[1] ? 65535.0 / (hi[1] - lo[1]) : 0;
-    uint32_t round_start = n, round = 40;
-    for (uint32_t i = n; i-- > 0;) {
-        if (i < round_start / 2 && round > 0 && round_start > 64) {
-            round_start = i + 1;
-            round--;
+    for (uint32_t i = 0; i < n; i++) {
+        uint64_t h = ((uint64_t)i + 0x9E3779B97F4A7C15ull) * 0xBF58476D1CE4E5B9ull;
+        h ^= h >> 31;
+        h *= 0x94D049BB133111EBull;
+        h ^= h >> 29;
+        int zeros = 0;
+        while (zeros < 40 && (h & 1)) {
+            h >>= 1;
+            zeros++;
         }
-        const double *p = xy + 2 * (size_t)order[i].index;
+        uint32_t round = 40 - (uint32_t)zeros;
+        const double *p = xy + 2 * (size_t)i;
         uint32_t hx = (uint32_t)((p[0] - lo[0]) * sx), hy = (uint32_t)((p[1] - lo[1]) * sy);
+        order[i].index = i;
         order[i].key = (uint64_t)round << 32 | hilbert(hx > 65535 ? 65535 : hx, hy > 65535 ? 65535 : hy);
     }
-    qsort(order, n, sizeof *order, keyed_cmp);
+    keyed *tmp = tsr_alloc(da(d), ((size_t)n + 1) * sizeof *tmp);
+    if (!tmp) {
+        tsr_free(da(d), order);
+        return TSR_ERR_NOMEM;
+    }
+    radix_sort(order, tmp, n);
+    tsr_free(da(d), tmp);
     tsr_status st = TSR_OK;
     for (uint32_t i = 0; i < n; i++) {
+#if defined(__GNUC__)
+        if (i + 16 < n) /* the input is read in curve order: fetch ahead */
+            __builtin_prefetch(xy + 2 * (size_t)order[i + 16].index);
+#endif
         const double *p = xy + 2 * (size_t)order[i].index;
         uint32_t id = tsr_cdt_insert(d, p[0], p[1]);
         if (id == NONE) {

@@ -122,6 +122,12 @@ double tsr_orient2d_exact(const double a[2], const double b[2], const double c[2
     return sign_of(nl, l);
 }
 
+/* Integral doubles below 2^52 in magnitude: their differences are exact
+ * integers, and so is any sum of products of them that stays below 2^53.
+ * When the filter cannot decide (a zero or tiny determinant) on integer
+ * data, such as grids of samples, that spares the exact expansions. */
+static bool integral(double x) { return fabs(x) < 4503599627370496.0 && (double)(int64_t)x == x; }
+
 double tsr_orient2d(const double a[2], const double b[2], const double c[2])
 {
     double left = (a[0] - c[0]) * (b[1] - c[1]), right = (a[1] - c[1]) * (b[0] - c[0]);
@@ -130,6 +136,9 @@ double tsr_orient2d(const double a[2], const double b[2], const double c[2])
     const double eps = 1.1102230246251565e-16; /* 2^-53 */
     double bound = (3.0 + 16.0 * eps) * eps * (fabs(left) + fabs(right));
     if (det > bound || -det > bound)
+        return det;
+    if (fabs(left) + fabs(right) < 9007199254740992.0 && integral(a[0]) && integral(a[1]) && integral(b[0]) &&
+        integral(b[1]) && integral(c[0]) && integral(c[1]))
         return det;
     return tsr_orient2d_exact(a, b, c);
 }
@@ -179,5 +188,8 @@ double tsr_incircle(const double a[2], const double b[2], const double c[2], con
     double bound = (10.0 + 96.0 * eps) * eps * perm;
     if (det > bound || -det > bound)
         return det;
+    if (perm < 9007199254740992.0 && integral(a[0]) && integral(a[1]) && integral(b[0]) && integral(b[1]) &&
+        integral(c[0]) && integral(c[1]) && integral(d[0]) && integral(d[1]))
+        return det; /* every term an integer below 2^53: computed exactly */
     return tsr_incircle_exact(a, b, c, d);
 }
