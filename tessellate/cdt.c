@@ -749,9 +749,20 @@ static uint32_t triangle_at(tsr_cdt *d, uint32_t a, int *ia)
 
 typedef enum { STEP_DONE, STEP_AGAIN, STEP_NOMEM } step_result;
 
-/* Splits the constrained edge k of t, crossed by segment a-b, at (about)
- * the crossing point; pushes the new vertex as the next target. */
-static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uint32_t b)
+static tsr_status insert_chain(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t mark, int depth);
+
+static double dist2(const double *p, double x, double y) { return (p[0] - x) * (p[0] - x) + (p[1] - y) * (p[1] - y); }
+
+/* Segment a-b crosses the constrained edge k of t (x-y): splits that edge
+ * at (about) the crossing point, and pushes the new vertex as the next
+ * target. Where the rounded crossing cannot be used (it falls on or
+ * within rounding of a vertex, or would invert a triangle), the vertex
+ * nearest the true crossing takes its place: an end of the crossed edge
+ * (the segment is routed through it), or an end of the segment (the
+ * crossed edge is bent through it: its constraint is replaced by two
+ * constrained edges to that vertex). Either moves the geometry by no more
+ * than the rounding that made the crossing unusable. */
+static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uint32_t b, int depth)
 {
     const uint32_t *v = d->tv + 3 * (size_t)t;
     uint32_t x = v[k], y = v[(k + 1) % 3];
@@ -774,18 +785,25 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
             return STEP_NOMEM;
         A = P(d, a), B = P(d, b), X = P(d, x), Y = P(d, y); /* add_vertex may move the array */
     }
-    /* the rounded crossing is not strictly inside the edge (the segment
-     * passes within rounding of one of its ends) or would make a triangle
-     * inverted: route the segment through the edge's end nearer to its
-     * line, which is then within rounding of it */
     d->snapped++;
-    double ox = fabs(tsr_orient2d(A, B, X)), oy = fabs(tsr_orient2d(A, B, Y));
-    return append(d, &d->targets, &d->ntargets, &d->cap_targets, ox <= oy ? x : y) ? STEP_AGAIN : STEP_NOMEM;
+    double s = sp > 0 ? (sp < 1 ? sp : 1) : 0;
+    double cx = X[0] + s * (Y[0] - X[0]), cy = X[1] + s * (Y[1] - X[1]);
+    uint32_t cand[4] = {x, y, a, b}, best = 0;
+    for (uint32_t i = 1; i < 4; i++)
+        if (dist2(P(d, cand[i]), cx, cy) < dist2(P(d, cand[best]), cx, cy))
+            best = i;
+    if (best >= 2 && depth < 8) {
+        uint32_t m = cdt_mark(d, t, k), w = cand[best];
+        tsr__cdt_mark_edge(d, t, k, 0);
+        tsr_status st = insert_chain(d, x, w, m, depth + 1);
+        if (st == TSR_OK)
+            st = insert_chain(d, w, y, m, depth + 1);
+        return st == TSR_OK ? STEP_AGAIN : STEP_NOMEM;
+    }
+    uint32_t through = best < 2 ? cand[best] : fabs(tsr_orient2d(A, B, X)) <= fabs(tsr_orient2d(A, B, Y)) ? x : y;
+    return append(d, &d->targets, &d->ntargets, &d->cap_targets, through) ? STEP_AGAIN : STEP_NOMEM;
 }
 
-/* Recovers the part of segment a-b that starts at a: marks the edges
- * along it up to b or to the first vertex on it, recovering crossed edges
- * by retriangulation. *reached is where it got to. */
 /* Is q exactly on the open input segment oa-ob, and strictly between a
  * and b along it? */
 static bool on_original(const tsr_cdt *d, uint32_t oa, uint32_t ob, uint32_t a, uint32_t b, uint32_t q)
@@ -813,7 +831,7 @@ static bool chains_fit(const tsr_cdt *d, uint32_t a, uint32_t q)
 }
 
 static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa, uint32_t ob, uint32_t mark,
-                                 uint32_t *reached)
+                                 int depth, uint32_t *reached)
 {
     int ia;
     uint32_t t0 = triangle_at(d, a, &ia);
@@ -833,8 +851,11 @@ static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa
              * rounded crossing) ending exactly on the input segment */
             if ((ox == 0 && (X[0] - A[0]) * (B[0] - A[0]) + (X[1] - A[1]) * (B[1] - A[1]) > 0) ||
                 on_original(d, oa, ob, a, b, x)) {
+                /* an edge covered again: the lower label, and the parity of
+                 * the number of segments covering it */
                 uint32_t old = cdt_mark(d, t, ia);
-                tsr__cdt_mark_edge(d, t, ia, old && old < mark ? old : mark);
+                uint32_t lo = CDT_LABEL(old) < CDT_LABEL(mark) ? CDT_LABEL(old) : CDT_LABEL(mark);
+                tsr__cdt_mark_edge(d, t, ia, old ? lo | (~(old ^ mark) & CDT_EVEN) : mark);
                 *reached = x;
                 return STEP_DONE;
             }
@@ -857,7 +878,7 @@ static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa
     for (;;) {
         int k = edge_index(d, t, x, y);
         if (cdt_mark(d, t, k))
-            return split_crossing(d, t, k, a, b);
+            return split_crossing(d, t, k, a, b, depth);
         uint32_t s = d->tn[3 * (size_t)t + k];
         uint32_t q = apex(d, s, x, y);
         if (!append(d, &d->work, &d->nwork, &d->cap_work, s))
@@ -896,6 +917,29 @@ static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa
     return ok ? STEP_DONE : STEP_NOMEM;
 }
 
+/* Recovers a-b with the given mark; the targets above the current top of
+ * the stack are this call's. */
+static tsr_status insert_chain(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t mark, int depth)
+{
+    uint32_t oa = a, ob = b, base = d->ntargets;
+    if (!append(d, &d->targets, &d->ntargets, &d->cap_targets, b))
+        return TSR_ERR_NOMEM;
+    while (d->ntargets > base) {
+        uint32_t target = d->targets[d->ntargets - 1];
+        if (a == target) {
+            d->ntargets--;
+            continue;
+        }
+        uint32_t reached = a;
+        step_result r = recover_piece(d, a, target, oa, ob, mark, depth, &reached);
+        if (r == STEP_NOMEM)
+            return TSR_ERR_NOMEM;
+        if (r == STEP_DONE)
+            a = reached;
+    }
+    return TSR_OK;
+}
+
 tsr_status tsr_cdt_insert_segment(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t id)
 {
     if (a >= d->nv - 1 || b >= d->nv - 1 || id >= CDT_BOUNDARY - 1)
@@ -904,25 +948,8 @@ tsr_status tsr_cdt_insert_segment(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t i
         return TSR_OK;
     if (!tsr__cdt_enable_marks(d, false))
         return TSR_ERR_NOMEM;
-    a++, b++;
-    uint32_t oa = a, ob = b;
     d->ntargets = 0;
-    if (!append(d, &d->targets, &d->ntargets, &d->cap_targets, b))
-        return TSR_ERR_NOMEM;
-    while (d->ntargets > 0) {
-        uint32_t target = d->targets[d->ntargets - 1];
-        if (a == target) {
-            d->ntargets--;
-            continue;
-        }
-        uint32_t reached = a;
-        step_result r = recover_piece(d, a, target, oa, ob, id + 1, &reached);
-        if (r == STEP_NOMEM)
-            return TSR_ERR_NOMEM;
-        if (r == STEP_DONE)
-            a = reached;
-    }
-    return TSR_OK;
+    return insert_chain(d, a + 1, b + 1, id + 1, 0);
 }
 
 uint32_t tsr_cdt_intersection_count(const tsr_cdt *d) { return d->intersections; }
@@ -940,7 +967,7 @@ bool tsr_cdt_edge_constrained(const tsr_cdt *d, uint32_t a, uint32_t b, uint32_t
         if (v[(ia + 1) % 3] == b) {
             uint32_t m = cdt_mark(d, t, ia);
             if (m && id)
-                *id = m - 1;
+                *id = CDT_LABEL(m) - 1;
             return m != 0;
         }
         t = d->tn[3 * (size_t)t + (ia + 2) % 3];

@@ -7,8 +7,10 @@
  * vertices tv[3t..3t+2], counter-clockwise; edge k runs from tv[3t+k] to
  * tv[3t+(k+1)%3] and tn[3t+k] is the triangle across it. tc[3t+k] (when
  * allocated) marks a constrained edge on both sides: 0 for none, else the
- * input segment id + 1, or CDT_BOUNDARY for a domain boundary that is no
- * input segment. tf[t] (when allocated) is 1 for triangles outside the
+ * label CDT_LABEL(m): the input segment id + 1, or CDT_BOUNDARY for a
+ * domain boundary that is no input segment; the bit CDT_EVEN says that an
+ * even number of input segments cover the edge (overlapping segments, a
+ * ring given twice), which the even-odd rule crosses without counting. tf[t] (when allocated) is 1 for triangles outside the
  * domain being refined (ghosts included). */
 #ifndef TSR_CDT_INTERNAL_H
 #define TSR_CDT_INTERNAL_H
@@ -17,7 +19,9 @@
 
 #define CDT_GHOST 0u
 #define CDT_NONE UINT32_MAX
-#define CDT_BOUNDARY UINT32_MAX
+#define CDT_BOUNDARY 0x7FFFFFFFu
+#define CDT_EVEN 0x80000000u
+#define CDT_LABEL(m) ((m) & 0x7FFFFFFFu)
 
 struct tsr_cdt {
     tsr_allocator alloc;

@@ -11,7 +11,8 @@
  * crossed to reach it; HULL keeps every finite triangle, ENCLOSED those
  * at depth >= 1, EVEN_ODD those at odd depth (for closed loops the parity
  * does not depend on the path, so the least depth gives the even-odd
- * rule). Hole seeds then remove the triangles reachable from them without
+ * rule; an edge covered by an even number of input segments, such as a
+ * ring given twice or a spike that doubles back, is not counted). Hole seeds then remove the triangles reachable from them without
  * crossing a constrained edge, like Triangle's holes. */
 #include "tessellate/cdt_internal.h"
 #include "tessellate/triangulate_internal.h"
@@ -34,6 +35,14 @@ void tsr_triangulation_free(tsr_triangulation *t)
 }
 
 /* ---- region ---------------------------------------------------------- */
+
+/* Does crossing an edge with mark m count as crossing a segment? Under
+ * the even-odd rule an edge covered by an even number of segments does
+ * not. */
+static bool counts(uint32_t m, tsr_region region)
+{
+    return m && !(region == TSR_REGION_EVEN_ODD && (m & CDT_EVEN));
+}
 
 /* keep[t] for nt triangles with neighbours tn (NONE: none) and marks tc
  * (0: unconstrained); ghost[t] (may be NULL) marks outside triangles;
@@ -60,7 +69,7 @@ static bool region_keep(const tsr_allocator *a, uint32_t nt, const uint32_t *tn,
         }
         for (int k = 0; k < 3; k++)
             if (tn[3 * (size_t)t + k] == NONE) {
-                if (!tc[3 * (size_t)t + k]) {
+                if (!counts(tc[3 * (size_t)t + k], region)) {
                     if (depth[t] != 0)
                         cur[ncur++] = t;
                     depth[t] = 0;
@@ -78,7 +87,7 @@ static bool region_keep(const tsr_allocator *a, uint32_t nt, const uint32_t *tn,
                 uint32_t n = tn[3 * (size_t)t + k];
                 if (n == NONE || depth[n] != NONE)
                     continue;
-                if (tc[3 * (size_t)t + k]) {
+                if (counts(tc[3 * (size_t)t + k], region)) {
                     if (nnext < 3 * nt)
                         next[nnext++] = n;
                 } else {
@@ -290,7 +299,7 @@ static tsr_status extract(const tsr_cdt *d, const uint8_t *keep, tsr_triangulati
         for (int k = 0; k < 3; k++) {
             uint32_t m = cdt_mark(d, t, k), s = d->tn[3 * (size_t)t + k];
             bool s_kept = !cdt_is_ghost(d, s) && (!keep || keep[s]);
-            if (m && m != CDT_BOUNDARY && (!s_kept || t < s))
+            if (m && CDT_LABEL(m) != CDT_BOUNDARY && (!s_kept || t < s))
                 ne++;
         }
     }
@@ -311,10 +320,10 @@ static tsr_status extract(const tsr_cdt *d, const uint8_t *keep, tsr_triangulati
             out->tri[3 * (size_t)nt + k] = v[k] - 1;
             uint32_t m = cdt_mark(d, t, k), s = d->tn[3 * (size_t)t + k];
             bool s_kept = !cdt_is_ghost(d, s) && (!keep || keep[s]);
-            if (m && m != CDT_BOUNDARY && (!s_kept || t < s)) {
+            if (m && CDT_LABEL(m) != CDT_BOUNDARY && (!s_kept || t < s)) {
                 out->edge[2 * (size_t)ne] = v[k] - 1;
                 out->edge[2 * (size_t)ne + 1] = v[(k + 1) % 3] - 1;
-                out->edge_segment[ne++] = m - 1;
+                out->edge_segment[ne++] = CDT_LABEL(m) - 1;
             }
         }
         nt++;
