@@ -751,6 +751,33 @@ typedef enum { STEP_DONE, STEP_AGAIN, STEP_NOMEM } step_result;
 
 static tsr_status insert_chain(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t mark, int depth);
 
+/* Lawson's flips from edge k of t outwards, after that edge lost its
+ * constraint: every unconstrained edge reached is made locally Delaunay
+ * again. */
+static bool restore_delaunay(tsr_cdt *d, uint32_t t, int k)
+{
+    uint32_t *st = NULL, n = 0, cap = 0;
+    bool ok = append(d, &st, &n, &cap, 3 * t + (uint32_t)k);
+    for (uint64_t guard = 0; ok && n > 0 && guard < 64ull * d->nt + 64; guard++) {
+        uint32_t e = st[--n], t1 = e / 3;
+        int k1 = (int)(e % 3);
+        uint32_t t2 = d->tn[3 * (size_t)t1 + k1];
+        if (cdt_mark(d, t1, k1) || is_ghost(d, t1) || is_ghost(d, t2))
+            continue;
+        const uint32_t *v = d->tv + 3 * (size_t)t1;
+        int i = (k1 + 2) % 3; /* the apex opposite edge k1 */
+        if (tsr_incircle(P(d, v[0]), P(d, v[1]), P(d, v[2]), P(d, apex(d, t2, v[k1], v[(k1 + 1) % 3]))) <= 0)
+            continue;
+        if (!flip(d, t1, i, t2))
+            ok = false;
+        /* t1 = (p, x, q), t2 = (p, q, y): their four outer edges */
+        ok = ok && append(d, &st, &n, &cap, 3 * t1) && append(d, &st, &n, &cap, 3 * t1 + 1) &&
+             append(d, &st, &n, &cap, 3 * t2 + 1) && append(d, &st, &n, &cap, 3 * t2 + 2);
+    }
+    tsr_free(da(d), st);
+    return ok;
+}
+
 static double dist2(const double *p, double x, double y) { return (p[0] - x) * (p[0] - x) + (p[1] - y) * (p[1] - y); }
 
 /* Segment a-b crosses the constrained edge k of t (x-y): splits that edge
@@ -795,6 +822,8 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
     if (best >= 2 && depth < 8) {
         uint32_t m = cdt_mark(d, t, k), w = cand[best];
         tsr__cdt_mark_edge(d, t, k, 0);
+        if (!restore_delaunay(d, t, k))
+            return STEP_NOMEM;
         tsr_status st = insert_chain(d, x, w, m, depth + 1);
         if (st == TSR_OK)
             st = insert_chain(d, w, y, m, depth + 1);
