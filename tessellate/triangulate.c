@@ -453,7 +453,14 @@ tsr_status tsr_triangulate(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
     tsr_status st;
     if (opt->method == TSR_TRI_QUADTREE) {
         const char *why = NULL;
-        st = tsr__tri_quadtree(in, opt, out, alloc, &why, err);
+        if (opt->region == TSR_REGION_EVEN_ODD) {
+            /* the flat region pass knows which edges are constrained but
+             * not how many segments cover each, which the even-odd rule
+             * needs (a ring given twice, a spike doubling back) */
+            why = "the quadtree method does not count overlapping segments for the even-odd rule yet";
+            st = TSR_ERR_UNSUPPORTED;
+        } else
+            st = tsr__tri_quadtree(in, opt, out, alloc, &why, err);
         if (st == TSR_OK)
             st = tsr__tri_apply_region(out, in, opt);
         if (st != TSR_ERR_UNSUPPORTED) {

@@ -8,7 +8,8 @@
  *
  *  - Triangles: vertex ids in range, coordinates finite, exact orient2d > 0.
  *    Input points map (vertex_of_input) to output vertices at exactly the
- *    same coordinates.
+ *    same coordinates; for region HULL without hole seeds each of them is
+ *    a corner of some triangle (counted in bad_topology).
  *  - Topology: each undirected edge is used by at most two triangles, and
  *    by two only in opposite directions. Every listed constrained edge is
  *    an edge of a triangle and lies on the input segment it names (within
@@ -17,17 +18,22 @@
  *    for every edge shared by two counter-clockwise triangles, the far
  *    vertex of one is not strictly inside the other's circumcircle (exact
  *    incircle <= 0). Listed constrained edges are exempt unless conforming.
- *  - Segments: each non-degenerate input segment a-b is walked from a to b
- *    along triangle edges, each step to a vertex within distance
- *    tol = 1e-9 |b - a| + 8 eps max|coordinate| of the line ab (vertices on
- *    it exactly always qualify) and strictly further along it; every edge
- *    of the chain must be listed as constrained. Where the kept region may
- *    be smaller than the hull (not HULL, or hole seeds), the chain may have
- *    gaps: the walk may jump from p to the next vertex q on the segment
- *    only when no kept triangle at p covers the direction to b and none at
- *    q covers the direction back to p (the piece lies outside the region).
- *    A gap whose two ends are outside the region but whose middle crosses a
- *    kept triangle through edge interiors only is not detected here.
+ *  - Segments: each non-degenerate input segment a-b must be a chain of
+ *    listed constrained edges from a to b whose vertices lie within
+ *    tol = 1e-9 |b - a| + 8 eps max|coordinate| of the line ab (vertices
+ *    exactly on it always qualify: rounding error is far below tol) and
+ *    strictly further along it: (q - p).d > 0 for a step p -> q, exact
+ *    for nearby points, so Steiner points ulps apart still progress. The
+ *    chain is found by a depth-first search (each vertex
+ *    entered once per segment) over a vertex -> neighbours adjacency, so
+ *    nearly coincident segments, whose chains are both within tolerance,
+ *    cannot mislead it. Where the kept region may be smaller than the
+ *    hull (not HULL, or hole seeds), the chain may have gaps: from p it
+ *    may jump to the next vertex q on the segment when no kept triangle at
+ *    p covers the direction to b and none at q covers the direction back
+ *    to p (the piece lies outside the region). A gap whose two ends are
+ *    outside the region but whose middle crosses a kept triangle through
+ *    edge interiors only is not detected here.
  *  - Area: the sum of triangle areas (Neumaier's compensated sum) against
  *    an expected area computed from the input alone, when it can be:
  *      HULL, no hole seeds: the convex hull of the points (monotone chain
@@ -65,7 +71,9 @@
  *    for region HULL, the convex hull's edges. This covers both a small
  *    input angle inside the triangle and Shewchuk's terminator / Miller-
  *    Pav-Walkington rule (skinny triangles whose shortest edge subtends a
- *    small input angle are left alone).
+ *    small input angle are left alone). A triangle whose three corners
+ *    all lie on two such features (it lies inside the small wedge) is
+ *    excused too.
  *  - Maximum area: triangles whose area exceeds opt->max_area by more than
  *    1e-9 relative.
  *
@@ -606,6 +614,11 @@ typedef struct ck {
     uint32_t *vt_off, *vt;    /* vertex -> corners 3t + k of ccw triangles */
     uint64_t *feat;           /* (vertex << 32 | input segment) on segment chains */
     size_t nfeat, feat_cap;
+    struct frame *stack;      /* the segment search */
+    size_t nstack, stack_cap;
+    uint32_t *seen, stamp;    /* vertex -> last search that entered it */
+    bool *boundary;           /* vertex on an edge of one triangle */
+    uint32_t *hull_memo;      /* 2 per vertex: hull edges through it */
     double maxabs;            /* largest output coordinate magnitude */
 } ck;
 
@@ -622,6 +635,10 @@ static void ck_free(ck *c)
     free(c->vt_off);
     free(c->vt);
     free(c->feat);
+    free(c->stack);
+    free(c->seen);
+    free(c->boundary);
+    free(c->hull_memo);
 }
 
 /* A segment's line, for the nearness test of chain vertices. */
@@ -638,13 +655,43 @@ static void line_init(line *l, const double *a, const double *b, double maxabs)
     l->tol = 1e-9 * l->len + 8 * DBL_EPSILON * maxabs;
 }
 
-/* True when q is within tolerance of the line; *t is its parameter along
- * a -> b and *dist its distance. */
-static bool line_near(const line *l, const double *q, double *t, double *dist)
+/* Progress along a -> b, measured from the nearer end so that it keeps
+ * full relative precision at both ends (refinement splits segments down
+ * to 1e-29 near a small angle; a parameter in [0, 1] would round to 1).
+ * ta = (q - a).d and tb = (b - q).d, d = b - a. */
+typedef struct pos {
+    int half;  /* 0: nearer a, v = ta; 1: nearer b, v = -tb */
+    double v, ta, tb;
+} pos;
+
+static bool pos_gt(pos x, pos y) { return x.half != y.half ? x.half > y.half : x.v > y.v; }
+
+/* Is q further along the segment than p? Decided on q - p, which is
+ * exact for nearby points: Steiner points a few ulps apart in the middle
+ * of a long segment have the same rounded progress from either end. */
+static bool forward(const line *l, const double *p, const double *q)
 {
-    double ex = q[0] - l->a[0], ey = q[1] - l->a[1];
-    double cr = l->dx * ey - l->dy * ex;
-    *t = (l->dx * ex + l->dy * ey) / l->len2;
+    return (q[0] - p[0]) * l->dx + (q[1] - p[1]) * l->dy > 0;
+}
+
+static pos pos_start(const line *l) { return (pos){0, 0, 0, l->len2}; }
+static pos pos_end(const line *l) { return (pos){1, 0, l->len2, 0}; }
+
+/* True when q is within tolerance of the line; *t is its progress and
+ * *dist its distance. */
+static bool line_near(const line *l, const double *q, pos *t, double *dist)
+{
+    double ex = q[0] - l->a[0], ey = q[1] - l->a[1], fx = q[0] - l->b[0], fy = q[1] - l->b[1];
+    t->ta = l->dx * ex + l->dy * ey;
+    t->tb = -(l->dx * fx + l->dy * fy);
+    double cr;
+    if (t->ta <= t->tb) {
+        t->half = 0, t->v = t->ta;
+        cr = l->dx * ey - l->dy * ex;
+    } else {
+        t->half = 1, t->v = -t->tb;
+        cr = l->dx * fy - l->dy * fx;
+    }
     *dist = fabs(cr) / l->len;
     if (*dist <= l->tol)
         return true;
@@ -684,79 +731,128 @@ static bool feat_add(ck *c, uint32_t v, uint32_t s)
     return true;
 }
 
-/* Walks input segment s from output vertex va to vb (see the header
- * comment). Returns 1 when present, 0 when missing (problem noted), -1 when
- * out of memory. */
+/* The next vertex on the line beyond p, for a gap: the used
+ * vertex of least progress, else vb. */
+static uint32_t gap_target(const ck *c, const line *l, uint32_t p, uint32_t vb, pos *tq_out)
+{
+    const double *pp = vxy(c, p);
+    uint32_t q = vb;
+    pos tq = pos_end(l);
+    double bx0 = fmin(pp[0], l->b[0]) - l->tol, bx1 = fmax(pp[0], l->b[0]) + l->tol;
+    double by0 = fmin(pp[1], l->b[1]) - l->tol, by1 = fmax(pp[1], l->b[1]) + l->tol;
+    for (uint32_t v = 0; v < c->out->nv; v++) {
+        const double *xy = vxy(c, v);
+        pos t;
+        double d;
+        if (!c->used[v] || v == p || xy[0] < bx0 || xy[0] > bx1 || xy[1] < by0 || xy[1] > by1)
+            continue;
+        if (line_near(l, xy, &t, &d) && forward(l, pp, xy) && pos_gt(tq, t))
+            q = v, tq = t;
+    }
+    *tq_out = tq;
+    return q;
+}
+
+typedef struct frame {
+    uint32_t v, next;
+    pos t;
+    bool gap_done;
+} frame;
+
+static bool push_frame(ck *c, uint32_t v, pos t)
+{
+    if (c->nstack == c->stack_cap) {
+        size_t cap = c->stack_cap ? 2 * c->stack_cap : 256;
+        frame *f = realloc(c->stack, cap * sizeof *f);
+        if (!f)
+            return false;
+        c->stack = f;
+        c->stack_cap = cap;
+    }
+    c->stack[c->nstack++] = (frame){v, c->adj_off[v], t, false};
+    c->seen[v] = c->stamp;
+    return true;
+}
+
+/* Looks for input segment s as a chain from output vertex va to vb (see
+ * the header comment): a depth-first search over listed constrained edges
+ * to vertices near the line and further along it, and, where the region
+ * allows, gap jumps. Every vertex is entered at most once, so the search
+ * costs the neighbourhoods of the vertices near the segment. Returns 1 when
+ * found (its vertices recorded as lying on s), 0 when missing (problem
+ * noted at the furthest vertex reached), -1 when out of memory. */
 static int walk_segment(ck *c, uint32_t s, uint32_t va, uint32_t vb, bool gaps)
 {
-    const tsr_triangulation *out = c->out;
     line l;
     line_init(&l, vxy(c, va), vxy(c, vb), c->maxabs);
-    uint32_t p = va;
-    double tp = 0;
-    if (!feat_add(c, va, s))
+    c->stamp++;
+    c->nstack = 0;
+    if (!push_frame(c, va, pos_start(&l)))
         return -1;
-    while (p != vb) {
-        uint32_t best = UINT32_MAX;
-        double best_t = 0, best_d = INFINITY;
-        for (uint32_t i = c->adj_off[p]; i < c->adj_off[p + 1]; i++) {
-            uint32_t q = c->adj[i];
-            double t, d;
-            if (q == vb) {
-                best = vb, best_t = 1;
-                break;
-            }
-            if (!line_near(&l, vxy(c, q), &t, &d) || !(t > tp) || t > 1)
+    uint32_t far_v = va;
+    pos far_t = pos_start(&l);
+    while (c->nstack) {
+        frame *f = &c->stack[c->nstack - 1];
+        if (f->v == vb) {
+            for (size_t i = 0; i < c->nstack; i++)
+                if (!feat_add(c, c->stack[i].v, s))
+                    return -1;
+            return 1;
+        }
+        if (pos_gt(f->t, far_t))
+            far_v = f->v, far_t = f->t;
+        bool pushed = false;
+        while (f->next < c->adj_off[f->v + 1]) {
+            uint32_t q = c->adj[f->next++];
+            pos t = pos_end(&l);
+            double d;
+            if (c->seen[q] == c->stamp || !sorted_has(c->cons, c->ncons, edge_key(f->v, q)))
                 continue;
-            if (d < best_d || (d == best_d && t < best_t))
-                best = q, best_t = t, best_d = d;
-        }
-        if (best == UINT32_MAX) {
-            const double *pp = vxy(c, p);
-            if (!gaps || covers(c, p, l.b)) {
-                problem(c->res,
-                        "input segment %u (%.17g, %.17g)-(%.17g, %.17g) is missing: no output edge continues it "
-                        "from vertex %u (%.17g, %.17g)",
-                        s, l.a[0], l.a[1], l.b[0], l.b[1], p, pp[0], pp[1]);
-                return 0;
-            }
-            /* outside the kept region at p: resume at the next vertex on it */
-            uint32_t q = vb;
-            double tq = 1;
-            double bx0 = fmin(pp[0], l.b[0]) - l.tol, bx1 = fmax(pp[0], l.b[0]) + l.tol;
-            double by0 = fmin(pp[1], l.b[1]) - l.tol, by1 = fmax(pp[1], l.b[1]) + l.tol;
-            for (uint32_t v = 0; v < out->nv; v++) {
-                const double *xy = vxy(c, v);
-                double t, d;
-                if (!c->used[v] || v == p || xy[0] < bx0 || xy[0] > bx1 || xy[1] < by0 || xy[1] > by1)
-                    continue;
-                if (line_near(&l, xy, &t, &d) && t > tp && t < tq)
-                    q = v, tq = t;
-            }
-            if (c->used[q] && covers(c, q, pp)) {
-                problem(c->res,
-                        "input segment %u (%.17g, %.17g)-(%.17g, %.17g) is missing between vertices %u (%.17g, "
-                        "%.17g) and %u (%.17g, %.17g), inside the kept region",
-                        s, l.a[0], l.a[1], l.b[0], l.b[1], p, pp[0], pp[1], q, vxy(c, q)[0], vxy(c, q)[1]);
-                return 0;
-            }
-            p = q, tp = tq;
-            if (!feat_add(c, p, s))
+            if (q != vb && (!line_near(&l, vxy(c, q), &t, &d) || !forward(&l, vxy(c, f->v), vxy(c, q)) || t.tb < 0))
+                continue;
+            if (!push_frame(c, q, t))
                 return -1;
-            continue;
+            pushed = true;
+            break;
         }
-        if (!sorted_has(c->cons, c->ncons, edge_key(p, best))) {
+        if (pushed)
+            continue;
+        if (gaps && !f->gap_done) {
+            f->gap_done = true;
+            if (!covers(c, f->v, l.b)) {
+                pos tq;
+                uint32_t q = gap_target(c, &l, f->v, vb, &tq);
+                if (c->seen[q] != c->stamp && !(c->used[q] && covers(c, q, vxy(c, f->v)))) {
+                    if (!push_frame(c, q, tq))
+                        return -1;
+                    continue;
+                }
+            }
+        }
+        c->nstack--;
+    }
+    /* missing: say why at the furthest vertex reached */
+    const double *pp = vxy(c, far_v);
+    for (uint32_t i = c->adj_off[far_v]; i < c->adj_off[far_v + 1]; i++) {
+        uint32_t q = c->adj[i];
+        pos t = pos_end(&l);
+        double d;
+        if (q != vb && (!line_near(&l, vxy(c, q), &t, &d) || !forward(&l, pp, vxy(c, q)) || t.tb < 0))
+            continue;
+        if (!sorted_has(c->cons, c->ncons, edge_key(far_v, q))) {
             problem(c->res,
                     "input segment %u (%.17g, %.17g)-(%.17g, %.17g): its output edge %u-%u is not listed as "
                     "constrained",
-                    s, l.a[0], l.a[1], l.b[0], l.b[1], p, best);
+                    s, l.a[0], l.a[1], l.b[0], l.b[1], far_v, q);
             return 0;
         }
-        p = best, tp = best_t;
-        if (!feat_add(c, p, s))
-            return -1;
     }
-    return 1;
+    problem(c->res,
+            "input segment %u (%.17g, %.17g)-(%.17g, %.17g) is missing: no output edge continues it from vertex %u "
+            "(%.17g, %.17g)%s",
+            s, l.a[0], l.a[1], l.b[0], l.b[1], far_v, pp[0], pp[1],
+            gaps ? " inside the kept region" : "");
+    return 0;
 }
 
 /* Do input features f1 and f2 (segments, or hull edges given by their
@@ -796,7 +892,7 @@ typedef struct feature {
     const double *a, *b;
 } feature;
 
-static uint32_t features_at(const ck *c, uint32_t v, const double *hull_xy, uint32_t nh, feature *f, uint32_t cap)
+static uint32_t features_at(ck *c, uint32_t v, const double *hull_xy, uint32_t nh, feature *f, uint32_t cap)
 {
     uint32_t n = 0;
     size_t lo = 0, hi = c->nfeat;
@@ -814,16 +910,31 @@ static uint32_t features_at(const ck *c, uint32_t v, const double *hull_xy, uint
         f[n].b = c->in->xy + 2 * (size_t)c->in->seg[2 * (size_t)s + 1];
         n++;
     }
-    for (uint32_t h = 0; h < nh && n < cap; h++) {
-        const double *a = hull_xy + 2 * (size_t)h, *b = hull_xy + 2 * (size_t)((h + 1) % nh);
-        line l;
-        line_init(&l, a, b, c->maxabs);
-        double t, d;
-        if (line_near(&l, vxy(c, v), &t, &d) && t >= -1e-12 && t <= 1 + 1e-12) {
-            f[n].a = a;
-            f[n].b = b;
-            n++;
+    /* hull edges: only a vertex on the output's boundary can lie on one;
+     * the (at most two) found are remembered per vertex */
+    if (nh == 0 || !c->boundary[v])
+        return n;
+    uint32_t *memo = c->hull_memo + 2 * (size_t)v;
+    if (memo[0] == UINT32_MAX - 1) {
+        memo[0] = memo[1] = UINT32_MAX;
+        const double *q = vxy(c, v);
+        for (uint32_t h = 0, k = 0; h < nh && k < 2; h++) {
+            const double *a = hull_xy + 2 * (size_t)h, *b = hull_xy + 2 * (size_t)((h + 1) % nh);
+            line l;
+            line_init(&l, a, b, c->maxabs);
+            if (q[0] < fmin(a[0], b[0]) - l.tol || q[0] > fmax(a[0], b[0]) + l.tol || q[1] < fmin(a[1], b[1]) - l.tol ||
+                q[1] > fmax(a[1], b[1]) + l.tol)
+                continue;
+            pos t;
+            double d;
+            if (line_near(&l, q, &t, &d) && t.ta >= -1e-12 * l.len2 && t.tb >= -1e-12 * l.len2)
+                memo[k++] = h;
         }
+    }
+    for (int k = 0; k < 2 && memo[k] != UINT32_MAX && n < cap; k++) {
+        f[n].a = hull_xy + 2 * (size_t)memo[k];
+        f[n].b = hull_xy + 2 * (size_t)((memo[k] + 1) % nh);
+        n++;
     }
     return n;
 }
@@ -903,6 +1014,14 @@ static tsr_status run_check(ck *c, geom *g)
     }
     qsort(he, nh, sizeof *he, cmp_hedge);
     c->edges = malloc((nh + 1) * sizeof *c->edges);
+    c->boundary = calloc((size_t)nv + 1, sizeof *c->boundary);
+    c->hull_memo = malloc((2 * (size_t)nv + 2) * sizeof *c->hull_memo);
+    if (!c->boundary || !c->hull_memo) {
+        free(he);
+        return TSR_ERR_NOMEM;
+    }
+    for (size_t i = 0; i < 2 * (size_t)nv; i++)
+        c->hull_memo[i] = UINT32_MAX - 1;
     c->ncons = 0;
     c->cons = malloc(((size_t)out->nedge + 1) * sizeof *c->cons);
     if (!c->edges || !c->cons) {
@@ -923,7 +1042,9 @@ static tsr_status run_check(ck *c, geom *g)
             j++;
         c->edges[c->nedges++] = (uint64_t)he[i].lo << 32 | he[i].hi;
         const double *pa = vxy(c, he[i].lo), *pb = vxy(c, he[i].hi);
-        if (j - i > 2) {
+        if (j - i == 1) {
+            c->boundary[he[i].lo] = c->boundary[he[i].hi] = true;
+        } else if (j - i > 2) {
             res->bad_topology++;
             problem(res, "edge (%.17g, %.17g)-(%.17g, %.17g) is used by %zu triangles", pa[0], pa[1], pb[0], pb[1],
                     j - i);
@@ -969,10 +1090,10 @@ static tsr_status run_check(ck *c, geom *g)
         line l;
         line_init(&l, in->xy + 2 * (size_t)in->seg[2 * (size_t)s], in->xy + 2 * (size_t)in->seg[2 * (size_t)s + 1],
                   c->maxabs);
-        double ta, tb, d;
+        pos ta, tb;
+        double d, slack = l.tol * l.len;
         bool ok = l.len2 > 0 && line_near(&l, vxy(c, a), &ta, &d) && line_near(&l, vxy(c, b), &tb, &d);
-        double slack = l.len2 > 0 ? l.tol / l.len : 0;
-        if (!ok || fmin(ta, tb) < -slack || fmax(ta, tb) > 1 + slack) {
+        if (!ok || fmin(ta.ta, tb.ta) < -slack || fmin(ta.tb, tb.tb) < -slack) {
             res->bad_topology++;
             problem(res, "constrained edge %u (%.17g, %.17g)-(%.17g, %.17g) does not lie on input segment %u", e,
                     vxy(c, a)[0], vxy(c, a)[1], vxy(c, b)[0], vxy(c, b)[1], s);
@@ -1018,6 +1139,9 @@ static tsr_status run_check(ck *c, geom *g)
     free(pos);
 
     /* Segments. */
+    c->seen = calloc((size_t)nv + 1, sizeof *c->seen);
+    if (!c->seen)
+        return TSR_ERR_NOMEM;
     bool gaps = opt->region != TSR_REGION_HULL || in->nholes > 0;
     for (uint32_t s = 0; s < in->nseg; s++) {
         uint32_t a = in->seg[2 * (size_t)s], b = in->seg[2 * (size_t)s + 1];
@@ -1037,7 +1161,8 @@ static tsr_status run_check(ck *c, geom *g)
         if (r == 0)
             res->missing_segments++;
     }
-    qsort(c->feat, c->nfeat, sizeof *c->feat, cmp_u64);
+    if (c->nfeat)
+        qsort(c->feat, c->nfeat, sizeof *c->feat, cmp_u64);
 
     /* Expected area and Euler characteristic from the input alone. */
     double expected = NAN;
@@ -1064,6 +1189,15 @@ static tsr_status run_check(ck *c, geom *g)
             if (in->nholes == 0) {
                 expected = ha;
                 expected_euler = ha > 0 ? 1 : 0;
+                /* the whole hull is kept, so every input point is a corner */
+                for (uint32_t i = 0; ha > 0 && out->vertex_of_input && i < in->nv; i++) {
+                    uint32_t v = out->vertex_of_input[i];
+                    if (v < nv && !c->used[v]) {
+                        res->bad_topology++;
+                        problem(res, "input point %u (%.17g, %.17g) is inside the hull but no triangle uses it", i,
+                                in->xy[2 * (size_t)i], in->xy[2 * (size_t)i + 1]);
+                    }
+                }
             }
         } else if (in->nholes == 0) {
             topo t;
@@ -1132,14 +1266,29 @@ static tsr_status run_check(ck *c, geom *g)
                 if (dx * dx + dy * dy < best)
                     best = dx * dx + dy * dy, ks = k;
             }
-            feature f1[64], f2[64];
+            feature f1[64], f2[64], f3[64];
             uint32_t n1 = features_at(c, v[ks], hull_xy, nhull, f1, 64);
             uint32_t n2 = features_at(c, v[(ks + 1) % 3], hull_xy, nhull, f2, 64);
+            uint32_t n3 = features_at(c, v[(ks + 2) % 3], hull_xy, nhull, f3, 64);
             bool ok = false;
             for (uint32_t i = 0; i < n1 && !ok; i++)
                 for (uint32_t j = 0; j < n2 && !ok; j++)
                     if ((f1[i].a != f2[j].a || f1[i].b != f2[j].b) && small_meeting(f1[i].a, f1[i].b, f2[j].a, f2[j].b))
                         ok = true;
+            /* or all three corners on two features meeting at a small
+             * angle: the triangle lies in the small wedge itself */
+            for (uint32_t i = 0; i < n3 && !ok; i++)
+                for (uint32_t j = 0; j < n1 + n2 && !ok; j++) {
+                    const feature *g = j < n1 ? &f1[j] : &f2[j - n1];
+                    if ((f3[i].a == g->a && f3[i].b == g->b) || !small_meeting(f3[i].a, f3[i].b, g->a, g->b))
+                        continue;
+                    bool on1 = false, on2 = false; /* the shortest edge's ends on f3[i] or g */
+                    for (uint32_t k = 0; k < n1; k++)
+                        on1 = on1 || (f1[k].a == f3[i].a && f1[k].b == f3[i].b) || (f1[k].a == g->a && f1[k].b == g->b);
+                    for (uint32_t k = 0; k < n2; k++)
+                        on2 = on2 || (f2[k].a == f3[i].a && f2[k].b == f3[i].b) || (f2[k].a == g->a && f2[k].b == g->b);
+                    ok = on1 && on2;
+                }
             if (ok)
                 excused++;
             else if (below++ == 0)
@@ -1175,11 +1324,11 @@ static tsr_status run_check(ck *c, geom *g)
         if (res->area > expected + tol) {
             res->overlapping++;
             res->area_ok = false;
-            problem(res, "the triangles cover %.17g, more than the expected area %.17g: they overlap", res->area,
+            problem(res, "the triangles cover %.17g, more than the expected area %.17g (overlapping triangles or a wrong region)", res->area,
                     expected);
         } else if (res->area < expected - tol) {
             res->area_ok = false;
-            problem(res, "the triangles cover %.17g, less than the expected area %.17g: some are missing", res->area,
+            problem(res, "the triangles cover %.17g, less than the expected area %.17g (missing triangles or a wrong region)", res->area,
                     expected);
         }
     }
@@ -1193,17 +1342,17 @@ static tsr_status run_check(ck *c, geom *g)
     if (below) {
         const uint32_t *v = tri + 3 * (size_t)first_below;
         problem(res,
-                "%u triangles have an angle below %g degrees (%u more are excused by small input angles); first: "
+                "%u triangle%s an angle below %g degrees (%u more excused by small input angles); first: "
                 "triangle %u (%.17g, %.17g) (%.17g, %.17g) (%.17g, %.17g)",
-                below, opt->min_angle, excused, first_below, vxy(c, v[0])[0], vxy(c, v[0])[1], vxy(c, v[1])[0],
+                below, below == 1 ? " has" : "s have", opt->min_angle, excused, first_below, vxy(c, v[0])[0], vxy(c, v[0])[1], vxy(c, v[1])[0],
                 vxy(c, v[1])[1], vxy(c, v[2])[0], vxy(c, v[2])[1]);
     }
     if (above) {
         const uint32_t *v = tri + 3 * (size_t)first_above;
         problem(res,
-                "%u triangles have an area above %g; first: triangle %u (%.17g, %.17g) (%.17g, %.17g) (%.17g, "
+                "%u triangle%s an area above %g; first: triangle %u (%.17g, %.17g) (%.17g, %.17g) (%.17g, "
                 "%.17g)",
-                above, opt->max_area, first_above, vxy(c, v[0])[0], vxy(c, v[0])[1], vxy(c, v[1])[0],
+                above, above == 1 ? " has" : "s have", opt->max_area, first_above, vxy(c, v[0])[0], vxy(c, v[0])[1], vxy(c, v[1])[0],
                 vxy(c, v[1])[1], vxy(c, v[2])[0], vxy(c, v[2])[1]);
     }
     return TSR_OK;

@@ -248,7 +248,9 @@ TEST(points_on_segments)
         uint32_t diag = 0;
         for (uint32_t e = 0; e < t.nedge; e++)
             diag += t.edge_segment[e] == 4;
-        CHECK(diag == 6); /* split at the five points on it */
+        /* split at the five points on it (the quadtree may split it more,
+         * at cell sides) */
+        CHECK_MSG(m ? diag >= 6 : diag == 6, "%u edges on the diagonal", diag);
         CHECK_NEAR(tri_area(&t), 64, 1e-12);
         tsr_triangulation_free(&t);
     }

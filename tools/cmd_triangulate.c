@@ -1,0 +1,367 @@
+/* cmd_triangulate.c: `tessera triangulate IN -o OUT`: constrained
+ * triangulation of a planar straight-line graph, with the independent
+ * checker on request. */
+#include "cli.h"
+#include "pslg_io.h"
+
+#include <cjson/cJSON.h>
+#include <limits.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void help(FILE *f)
+{
+    fprintf(f,
+            "usage: tessera triangulate IN [-o OUT] [options]\n\n"
+            "Triangulates a planar straight-line graph (points, segments, hole seeds): a constrained\n"
+            "Delaunay triangulation, or a quadtree triangulation, optionally refined for quality.\n\n"
+            "input (format from the extension, or --format):\n"
+            "  .node, .poly          Triangle's formats (a .poly listing 0 points reads the .node\n"
+            "                        file of the same name)\n"
+            "  .json                 an array of rings, each an array of [x, y]; the first ring is\n"
+            "                        the outer boundary, the others holes (earcut's test format)\n"
+            "  .txt                  'nV nE', then nV lines 'x y', then nE lines 'i j' (0-based)\n\n"
+            "output (format from OUT's extension):\n"
+            "  .node, .ele, .poly    all three of Triangle's files: OUT's base name .node (vertices),\n"
+            "                        .ele (triangles), .poly (constrained edges, marker = segment id + 1)\n"
+            "  .obj, .ply, .stl, .glb  a mesh with z = 0 (coordinates rounded to float32)\n\n"
+            "options:\n"
+            "  -o, --output OUT      file to write; optional with --check or --json\n"
+            "  --method M            delaunay (default) or quadtree\n"
+            "  --region R            what is kept: hull (the convex hull), enclosed (what segments\n"
+            "                        enclose) or evenodd (inside an odd number of loops); hole seeds\n"
+            "                        always apply. Default: evenodd for .json, enclosed for a .poly\n"
+            "                        with segments, hull otherwise\n"
+            "  -q ANGLE              refine until no angle is below ANGLE degrees (0 < ANGLE < 60;\n"
+            "                        above about 34 termination is not guaranteed)\n"
+            "  -a AREA               refine until no triangle is larger than AREA\n"
+            "  --conforming          split segments until every edge is Delaunay (delaunay method)\n"
+            "  --max-steiner N       stop refining after N Steiner points (default: the library's)\n"
+            "  --check               check the result independently (orientation, topology, Delaunay\n"
+            "                        property, segments, area, Euler characteristic, angle and area\n"
+            "                        bounds) and print what was checked; exit 1 if it fails (OUT is\n"
+            "                        still written)\n"
+            "  --json                print statistics (and the check's results) as JSON on stdout\n"
+            "  --format F            read IN as node, poly, json or txt whatever its extension\n"
+            "  --quiet               no summary line on stderr\n"
+            "  -h, --help            this help\n\n"
+            "exit status: 0 success, 1 bad input, failed output or failed check, 2 bad usage\n");
+}
+
+static const char *region_name(tsr_region r)
+{
+    return r == TSR_REGION_HULL ? "hull" : r == TSR_REGION_ENCLOSED ? "enclosed" : "evenodd";
+}
+
+/* The check's report, one line per rule. */
+static void print_check(FILE *f, const tsr_tri_options *opt, const tsr_triangulation *t, const tsr_tri_check *c)
+{
+    bool delaunay = opt->method == TSR_TRI_DELAUNAY || t->fell_back;
+    fprintf(f, "check: %u triangles strictly counter-clockwise (exact orient2d): %s\n", t->nt,
+            c->not_ccw ? "FAIL" : "ok");
+    if (c->not_ccw)
+        fprintf(f, "       %u not\n", c->not_ccw);
+    fprintf(f, "check: topology (edges in at most two triangles, opposite ways; constrained edges on their "
+               "segments): %s\n",
+            c->bad_topology ? "FAIL" : "ok");
+    if (delaunay)
+        fprintf(f, "check: Delaunay (exact incircle on every interior edge%s): %s (%u failing)\n",
+                opt->conforming ? ", constrained ones included" : " not on a segment",
+                c->not_delaunay ? "FAIL" : "ok", c->not_delaunay);
+    else
+        fprintf(f, "check: Delaunay: not applicable (quadtree method)\n");
+    fprintf(f, "check: input segments present as chains of constrained edges: %s (%u missing)\n",
+            c->missing_segments ? "FAIL" : "ok", c->missing_segments);
+    if (isnan(c->expected_area))
+        fprintf(f, "check: area %.17g: no expected value for this input and region (not checked)\n", c->area);
+    else
+        fprintf(f, "check: area %.17g, expected %.17g (from the input alone): %s\n", c->area, c->expected_area,
+                c->area_ok ? "ok" : "FAIL");
+    fprintf(f, "check: no overlap (area, angles around each vertex): %s\n", c->overlapping ? "FAIL" : "ok");
+    if (c->expected_euler == LONG_MIN)
+        fprintf(f, "check: Euler characteristic %ld: no expected value for this input and region (not checked)\n",
+                c->euler);
+    else
+        fprintf(f, "check: Euler characteristic %ld, expected %ld: %s\n", c->euler, c->expected_euler,
+                c->euler == c->expected_euler ? "ok" : "FAIL");
+    if (opt->min_angle > 0)
+        fprintf(f, "check: smallest angle %.6g degrees; %u triangles below %g not excused by a small input angle: %s\n",
+                c->min_angle, c->below_min_angle, opt->min_angle, c->below_min_angle ? "FAIL" : "ok");
+    else
+        fprintf(f, "check: smallest angle %.6g degrees (no bound asked)\n", c->min_angle);
+    if (opt->max_area > 0)
+        fprintf(f, "check: %u triangles above area %g: %s\n", c->above_max_area, opt->max_area,
+                c->above_max_area ? "FAIL" : "ok");
+    if (c->ok)
+        fprintf(f, "check: PASS\n");
+    else
+        fprintf(f, "check: FAIL: %s\n", c->first_problem);
+}
+
+static void add_count(cJSON *j, const char *k, double v) { cJSON_AddNumberToObject(j, k, v); }
+
+static void print_json(const char *in_path, const cli_pslg *g, const tsr_tri_options *opt, const tsr_triangulation *t,
+                       double seconds, const tsr_tri_check *c, double check_seconds)
+{
+    cJSON *j = cJSON_CreateObject();
+    cJSON *in = cJSON_AddObjectToObject(j, "input");
+    cJSON_AddStringToObject(in, "file", in_path);
+    cJSON_AddStringToObject(in, "format", cli_pslg_format_name(g->format));
+    add_count(in, "points", g->nv);
+    add_count(in, "segments", g->nseg);
+    add_count(in, "holes", g->nholes);
+    if (g->format == CLI_PSLG_JSON)
+        add_count(in, "rings", g->rings);
+    cJSON_AddStringToObject(j, "method", opt->method == TSR_TRI_QUADTREE ? "quadtree" : "delaunay");
+    cJSON_AddStringToObject(j, "region", region_name(opt->region));
+    cJSON_AddBoolToObject(j, "conforming", opt->conforming);
+    add_count(j, "min_angle_bound", opt->min_angle);
+    add_count(j, "max_area_bound", opt->max_area);
+    add_count(j, "vertices", t->nv);
+    add_count(j, "triangles", t->nt);
+    add_count(j, "constrained_edges", t->nedge);
+    add_count(j, "duplicates", t->duplicates);
+    add_count(j, "intersections", t->intersections);
+    add_count(j, "steiner", t->steiner);
+    add_count(j, "degenerate_segments", t->degenerate_segments);
+    add_count(j, "fallback_cells", t->fallback_cells);
+    cJSON_AddBoolToObject(j, "fell_back", t->fell_back);
+    if (t->fallback_reason)
+        cJSON_AddStringToObject(j, "fallback_reason", t->fallback_reason);
+    else
+        cJSON_AddNullToObject(j, "fallback_reason");
+    cJSON_AddBoolToObject(j, "quality_limited", t->quality_limited);
+    add_count(j, "small_angle_exempt", t->small_angle_exempt);
+    add_count(j, "seconds", seconds);
+    if (c) {
+        cJSON *k = cJSON_AddObjectToObject(j, "check");
+        cJSON_AddBoolToObject(k, "ok", c->ok);
+        add_count(k, "not_ccw", c->not_ccw);
+        add_count(k, "bad_topology", c->bad_topology);
+        add_count(k, "not_delaunay", c->not_delaunay);
+        add_count(k, "missing_segments", c->missing_segments);
+        add_count(k, "overlapping", c->overlapping);
+        add_count(k, "area", c->area);
+        if (isnan(c->expected_area))
+            cJSON_AddNullToObject(k, "expected_area");
+        else
+            add_count(k, "expected_area", c->expected_area);
+        cJSON_AddBoolToObject(k, "area_ok", c->area_ok);
+        add_count(k, "euler", (double)c->euler);
+        if (c->expected_euler == LONG_MIN)
+            cJSON_AddNullToObject(k, "expected_euler");
+        else
+            add_count(k, "expected_euler", (double)c->expected_euler);
+        add_count(k, "min_angle", c->min_angle);
+        add_count(k, "below_min_angle", c->below_min_angle);
+        add_count(k, "above_max_area", c->above_max_area);
+        cJSON_AddStringToObject(k, "first_problem", c->first_problem);
+        add_count(k, "seconds", check_seconds);
+    }
+    char *s = cJSON_Print(j);
+    if (s)
+        printf("%s\n", s);
+    free(s);
+    cJSON_Delete(j);
+}
+
+/* The smallest angle of the output, for the summary when no check ran. */
+static double smallest_angle(const tsr_triangulation *t)
+{
+    double best = 180;
+    for (uint32_t i = 0; i < t->nt; i++)
+        for (int k = 0; k < 3; k++) {
+            const double *o = t->xy + 2 * (size_t)t->tri[3 * (size_t)i + k];
+            const double *p = t->xy + 2 * (size_t)t->tri[3 * (size_t)i + (k + 1) % 3];
+            const double *q = t->xy + 2 * (size_t)t->tri[3 * (size_t)i + (k + 2) % 3];
+            double ux = p[0] - o[0], uy = p[1] - o[1], vx = q[0] - o[0], vy = q[1] - o[1];
+            best = fmin(best, atan2(fabs(ux * vy - uy * vx), ux * vx + uy * vy) * (180.0 / 3.14159265358979323846));
+        }
+    return t->nt ? best : 0;
+}
+
+static int run(int argc, char **argv)
+{
+    const char *in_path = NULL, *out_path = NULL;
+    tsr_tri_options opt = {0};
+    bool check = false, json = false, quiet = false, region_given = false;
+    cli_pslg_format fmt = CLI_PSLG_UNKNOWN;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (cli_is_help(a)) {
+            help(stdout);
+            return CLI_OK;
+        }
+        bool has_value = i + 1 < argc;
+        if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && has_value)
+            out_path = argv[++i];
+        else if (!strcmp(a, "--method") && has_value) {
+            const char *v = argv[++i];
+            if (!strcmp(v, "delaunay"))
+                opt.method = TSR_TRI_DELAUNAY;
+            else if (!strcmp(v, "quadtree"))
+                opt.method = TSR_TRI_QUADTREE;
+            else {
+                cli_error("triangulate", "--method %s: unknown method (use delaunay or quadtree)", v);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(a, "--region") && has_value) {
+            const char *v = argv[++i];
+            if (!strcmp(v, "hull"))
+                opt.region = TSR_REGION_HULL;
+            else if (!strcmp(v, "enclosed"))
+                opt.region = TSR_REGION_ENCLOSED;
+            else if (!strcmp(v, "evenodd") || !strcmp(v, "even-odd"))
+                opt.region = TSR_REGION_EVEN_ODD;
+            else {
+                cli_error("triangulate", "--region %s: unknown region (use hull, enclosed or evenodd)", v);
+                return CLI_USAGE;
+            }
+            region_given = true;
+        } else if (!strcmp(a, "-q") && has_value) {
+            const char *v = argv[++i];
+            if (!cli_parse_double(v, &opt.min_angle) || !(opt.min_angle > 0 && opt.min_angle < 60)) {
+                cli_error("triangulate", "-q %s: the minimum angle must be a number of degrees above 0 and below 60",
+                          v);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(a, "-a") && has_value) {
+            const char *v = argv[++i];
+            if (!cli_parse_double(v, &opt.max_area) || !(opt.max_area > 0)) {
+                cli_error("triangulate", "-a %s: the maximum area must be a positive number", v);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(a, "--max-steiner") && has_value) {
+            const char *v = argv[++i];
+            if (!cli_parse_u32(v, 1, UINT32_MAX, &opt.max_steiner)) {
+                cli_error("triangulate", "--max-steiner %s: must be a positive integer", v);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(a, "--format") && has_value) {
+            const char *v = argv[++i];
+            fmt = cli_pslg_format_parse(v);
+            if (fmt == CLI_PSLG_UNKNOWN) {
+                cli_error("triangulate", "--format %s: unknown input format (use node, poly, json or txt)", v);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(a, "--conforming"))
+            opt.conforming = true;
+        else if (!strcmp(a, "--check"))
+            check = true;
+        else if (!strcmp(a, "--json"))
+            json = true;
+        else if (!strcmp(a, "--quiet"))
+            quiet = true;
+        else if (a[0] == '-' && a[1] != '\0') {
+            bool known = !strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--method") ||
+                         !strcmp(a, "--region") || !strcmp(a, "-q") || !strcmp(a, "-a") || !strcmp(a, "--format") ||
+                         !strcmp(a, "--max-steiner");
+            cli_error("triangulate", "%s '%s' (see tessera triangulate --help)",
+                      known ? "missing value for" : "unknown option", a);
+            return CLI_USAGE;
+        } else if (in_path) {
+            cli_error("triangulate", "one input at a time ('%s' and '%s' given)", in_path, a);
+            return CLI_USAGE;
+        } else
+            in_path = a;
+    }
+    if (!in_path) {
+        cli_error("triangulate", "no input file (see tessera triangulate --help)");
+        return CLI_USAGE;
+    }
+    if (!out_path && !check && !json) {
+        cli_error("triangulate", "no output: give -o OUT, --check or --json (see tessera triangulate --help)");
+        return CLI_USAGE;
+    }
+    cli_tri_output out_kind = out_path ? cli_tri_output_from_path(out_path) : CLI_OUT_UNKNOWN;
+    if (out_path && out_kind == CLI_OUT_UNKNOWN) {
+        cli_error("triangulate", "%s: unknown output format (use .node, .ele, .poly, .obj, .ply, .stl or .glb)",
+                  out_path);
+        return CLI_USAGE;
+    }
+    if (fmt == CLI_PSLG_UNKNOWN && cli_pslg_format_from_path(in_path) == CLI_PSLG_UNKNOWN) {
+        cli_error("triangulate", "%s: unknown input format (use .node, .poly, .json or .txt, or --format)", in_path);
+        return CLI_USAGE;
+    }
+    if (opt.conforming && opt.method == TSR_TRI_QUADTREE) {
+        cli_error("triangulate", "--conforming applies to --method delaunay only");
+        return CLI_USAGE;
+    }
+
+    cli_pslg g;
+    tsr_error err = {0};
+    if (cli_pslg_read(in_path, fmt, &g, &err) != TSR_OK) {
+        cli_error("triangulate", "%s", err.message);
+        return CLI_FAIL;
+    }
+    if (!region_given)
+        opt.region = g.format == CLI_PSLG_JSON                   ? TSR_REGION_EVEN_ODD
+                     : g.format == CLI_PSLG_POLY && g.nseg > 0 ? TSR_REGION_ENCLOSED
+                                                               : TSR_REGION_HULL;
+    tsr_pslg in = cli_pslg_view(&g);
+    tsr_triangulation t;
+    double t0 = cli_now();
+    tsr_status s = tsr_triangulate(&in, &opt, &t, NULL, &err);
+    double seconds = cli_now() - t0;
+    if (s != TSR_OK) {
+        cli_error("triangulate", "%s: %s", in_path, err.message[0] ? err.message : tsr_status_str(s));
+        cli_pslg_free(&g);
+        return CLI_FAIL;
+    }
+
+    int rc = CLI_OK;
+    tsr_tri_check c;
+    double check_seconds = 0;
+    if (check) {
+        t0 = cli_now();
+        s = tsr_triangulation_check(&in, &opt, &t, &c);
+        check_seconds = cli_now() - t0;
+        if (s != TSR_OK) {
+            cli_error("triangulate", "%s: the check could not run: %s", in_path, tsr_status_str(s));
+            rc = CLI_FAIL;
+            check = false;
+        } else {
+            if (!json)
+                print_check(stdout, &opt, &t, &c);
+            if (!c.ok)
+                rc = CLI_FAIL;
+        }
+    }
+    if (out_path) {
+        s = out_kind == CLI_OUT_TRIANGLE ? cli_tri_write_triangle(out_path, &t, g.holes, g.nholes, &err)
+                                         : cli_tri_write_mesh(out_path, &t, &err);
+        if (s != TSR_OK) {
+            cli_error("triangulate", "%s", err.message);
+            rc = CLI_FAIL;
+            out_path = NULL;
+        }
+    }
+    if (json)
+        print_json(in_path, &g, &opt, &t, seconds, check ? &c : NULL, check_seconds);
+    if (!quiet && (rc == CLI_OK || (check && !c.ok))) {
+        char extra[256] = "";
+        size_t n = 0;
+        if (t.fell_back)
+            n += (size_t)snprintf(extra, sizeof extra, "; the quadtree fell back to Delaunay (%s)",
+                                  t.fallback_reason ? t.fallback_reason : "no reason given");
+        else if (t.fallback_cells)
+            n += (size_t)snprintf(extra, sizeof extra, "; %u quadtree cells went to Delaunay", t.fallback_cells);
+        if (t.quality_limited && n < sizeof extra)
+            n += (size_t)snprintf(extra + n, sizeof extra - n, "; refinement stopped at the Steiner limit");
+        if (check && n < sizeof extra)
+            snprintf(extra + n, sizeof extra - n, "; check %s", c.ok ? "passed" : "FAILED");
+        fprintf(stderr,
+                "tessera triangulate: %s: %u points, %u segments -> %u vertices (%u Steiner), %u triangles, %u "
+                "constrained edges, min angle %.3g deg, %.3f s (%s, %s)%s%s%s\n",
+                in_path, g.nv, g.nseg, t.nv, t.steiner, t.nt, t.nedge, check ? c.min_angle : smallest_angle(&t),
+                seconds, opt.method == TSR_TRI_QUADTREE ? "quadtree" : "delaunay", region_name(opt.region), extra,
+                out_path ? "; wrote " : "", out_path ? out_path : "");
+    }
+    tsr_triangulation_free(&t);
+    cli_pslg_free(&g);
+    return rc;
+}
+
+const cli_command cli_cmd_triangulate = {"triangulate", "triangulate points and segments (constrained Delaunay, quadtree)",
+                                         run, help};
