@@ -222,9 +222,10 @@ tsr_status tsr__tri_apply_region(tsr_triangulation *t, const tsr_pslg *in, const
     qsort(r, m + t->nedge, sizeof *r, erec_cmp);
     for (size_t i = 0; i < m + t->nedge;) {
         size_t j = i;
-        bool constrained = false;
+        uint32_t covered = 0; /* segments covering the edge: the even-odd rule needs the parity */
         while (j < m + t->nedge && r[j].key == r[i].key)
-            constrained |= r[j++].t == NONE;
+            covered += r[j++].t == NONE;
+        uint32_t constrained = covered == 0 ? 0 : covered % 2 ? 1 : 1 | CDT_EVEN;
         uint32_t tri[2], kk[2], n = 0;
         for (size_t q = i; q < j; q++)
             if (r[q].t != NONE && n < 2) {
@@ -268,6 +269,12 @@ tsr_status tsr__tri_apply_region(tsr_triangulation *t, const tsr_pslg *in, const
         for (uint32_t e = 0; e < t->nedge; e++) {
             erec key = {ukey(t->edge[2 * (size_t)e], t->edge[2 * (size_t)e + 1]), 0, 0};
             if (!bsearch(&key, kept, nk, sizeof *kept, erec_cmp))
+                continue;
+            /* an edge listed once per covering segment: keep the lowest id */
+            bool dup = false;
+            for (uint32_t q = ne; q-- > 0 && !dup && ne - q <= 8;)
+                dup = ukey(t->edge[2 * (size_t)q], t->edge[2 * (size_t)q + 1]) == key.key;
+            if (dup)
                 continue;
             t->edge[2 * (size_t)ne] = t->edge[2 * (size_t)e];
             t->edge[2 * (size_t)ne + 1] = t->edge[2 * (size_t)e + 1];
@@ -453,14 +460,7 @@ tsr_status tsr_triangulate(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
     tsr_status st;
     if (opt->method == TSR_TRI_QUADTREE) {
         const char *why = NULL;
-        if (opt->region == TSR_REGION_EVEN_ODD) {
-            /* the flat region pass knows which edges are constrained but
-             * not how many segments cover each, which the even-odd rule
-             * needs (a ring given twice, a spike doubling back) */
-            why = "the quadtree method does not count overlapping segments for the even-odd rule yet";
-            st = TSR_ERR_UNSUPPORTED;
-        } else
-            st = tsr__tri_quadtree(in, opt, out, alloc, &why, err);
+        st = tsr__tri_quadtree(in, opt, out, alloc, &why, err);
         if (st == TSR_OK)
             st = tsr__tri_apply_region(out, in, opt);
         if (st != TSR_ERR_UNSUPPORTED) {

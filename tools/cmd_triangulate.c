@@ -99,6 +99,21 @@ static void print_check(FILE *f, const tsr_tri_options *opt, const tsr_triangula
         fprintf(f, "check: FAIL: %s\n", c->first_problem);
 }
 
+/* The smallest angle of the output, for the summary when no check ran. */
+static double smallest_angle(const tsr_triangulation *t)
+{
+    double best = 180;
+    for (uint32_t i = 0; i < t->nt; i++)
+        for (int k = 0; k < 3; k++) {
+            const double *o = t->xy + 2 * (size_t)t->tri[3 * (size_t)i + k];
+            const double *p = t->xy + 2 * (size_t)t->tri[3 * (size_t)i + (k + 1) % 3];
+            const double *q = t->xy + 2 * (size_t)t->tri[3 * (size_t)i + (k + 2) % 3];
+            double ux = p[0] - o[0], uy = p[1] - o[1], vx = q[0] - o[0], vy = q[1] - o[1];
+            best = fmin(best, atan2(fabs(ux * vy - uy * vx), ux * vx + uy * vy) * (180.0 / 3.14159265358979323846));
+        }
+    return t->nt ? best : 0;
+}
+
 static void add_count(cJSON *j, const char *k, double v) { cJSON_AddNumberToObject(j, k, v); }
 
 static void print_json(const char *in_path, const cli_pslg *g, const tsr_tri_options *opt, const tsr_triangulation *t,
@@ -133,6 +148,7 @@ static void print_json(const char *in_path, const cli_pslg *g, const tsr_tri_opt
         cJSON_AddNullToObject(j, "fallback_reason");
     cJSON_AddBoolToObject(j, "quality_limited", t->quality_limited);
     add_count(j, "small_angle_exempt", t->small_angle_exempt);
+    add_count(j, "min_angle", c ? c->min_angle : smallest_angle(t));
     add_count(j, "seconds", seconds);
     if (c) {
         cJSON *k = cJSON_AddObjectToObject(j, "check");
@@ -164,21 +180,6 @@ static void print_json(const char *in_path, const cli_pslg *g, const tsr_tri_opt
         printf("%s\n", s);
     free(s);
     cJSON_Delete(j);
-}
-
-/* The smallest angle of the output, for the summary when no check ran. */
-static double smallest_angle(const tsr_triangulation *t)
-{
-    double best = 180;
-    for (uint32_t i = 0; i < t->nt; i++)
-        for (int k = 0; k < 3; k++) {
-            const double *o = t->xy + 2 * (size_t)t->tri[3 * (size_t)i + k];
-            const double *p = t->xy + 2 * (size_t)t->tri[3 * (size_t)i + (k + 1) % 3];
-            const double *q = t->xy + 2 * (size_t)t->tri[3 * (size_t)i + (k + 2) % 3];
-            double ux = p[0] - o[0], uy = p[1] - o[1], vx = q[0] - o[0], vy = q[1] - o[1];
-            best = fmin(best, atan2(fabs(ux * vy - uy * vx), ux * vx + uy * vy) * (180.0 / 3.14159265358979323846));
-        }
-    return t->nt ? best : 0;
 }
 
 static int run(int argc, char **argv)

@@ -683,6 +683,116 @@ TEST(unsupported_inputs)
     CHECK(tsr__tri_quadtree(&seg_in, &o, &t, NULL, &why, NULL) == TSR_ERR_ARGUMENT);
 }
 
+/* The even-odd area of a raw output by this test's own flood fill from the
+ * square's border: crossing an edge flips the parity once per listed entry
+ * (one per segment covering it), so doubled segments cancel. */
+static double even_odd_area(const tsr_triangulation *t)
+{
+    size_t m = 3 * (size_t)t->nt, ne = m + t->nedge;
+    /* (undirected edge << 1 | listed entry, half-edge or entry index) pairs */
+    uint64_t *pk = malloc(ne * 2 * sizeof *pk);
+    for (size_t i = 0; i < ne; i++) {
+        uint32_t a, b;
+        if (i < m)
+            a = t->tri[i], b = t->tri[i % 3 == 2 ? i - 2 : i + 1];
+        else
+            a = t->edge[2 * (i - m)], b = t->edge[2 * (i - m) + 1];
+        pk[2 * i] = ((uint64_t)(a < b ? a : b) << 32 | (a < b ? b : a)) << 1 | (i >= m);
+        pk[2 * i + 1] = i;
+    }
+    qsort(pk, ne, 2 * sizeof *pk, u64_cmp);
+    uint32_t *nb = malloc(m * sizeof *nb);
+    uint8_t *flip = calloc(m, 1);
+    for (size_t i = 0; i < m; i++)
+        nb[i] = UINT32_MAX;
+    for (size_t i = 0, j; i < ne; i = j) {
+        uint32_t half[2], n = 0, entries = 0;
+        for (j = i; j < ne && pk[2 * j] >> 1 == pk[2 * i] >> 1; j++) {
+            if (pk[2 * j] & 1)
+                entries++;
+            else if (n < 2)
+                half[n++] = (uint32_t)pk[2 * j + 1];
+        }
+        if (n == 2) {
+            nb[half[0]] = half[1] / 3;
+            nb[half[1]] = half[0] / 3;
+            flip[half[0]] = flip[half[1]] = entries & 1;
+        }
+    }
+    uint8_t *par = malloc((size_t)t->nt + 1);
+    uint32_t *queue = malloc(((size_t)t->nt + 1) * sizeof *queue);
+    size_t head = 0, tail = 0;
+    memset(par, 2, t->nt);
+    for (uint32_t i = 0; i < t->nt; i++)
+        for (int k = 0; k < 3; k++)
+            if (nb[3 * i + k] == UINT32_MAX && par[i] == 2) {
+                par[i] = 0; /* on the square's border: outside */
+                queue[tail++] = i;
+            }
+    while (head < tail) {
+        uint32_t i = queue[head++];
+        for (int k = 0; k < 3; k++) {
+            uint32_t n = nb[3 * i + k];
+            if (n != UINT32_MAX && par[n] == 2) {
+                par[n] = par[i] ^ flip[3 * i + k];
+                queue[tail++] = n;
+            }
+        }
+    }
+    double area = 0;
+    for (uint32_t i = 0; i < t->nt; i++)
+        if (par[i] == 1) {
+            const double *a = t->xy + 2 * t->tri[3 * i], *b = t->xy + 2 * t->tri[3 * i + 1];
+            const double *c = t->xy + 2 * t->tri[3 * i + 2];
+            area += 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+        }
+    free(pk);
+    free(nb);
+    free(flip);
+    free(par);
+    free(queue);
+    return area;
+}
+
+/* A ring given twice, a segment doubling back inside a ring, a hole sharing
+ * an edge with the outer ring: even-odd areas from the raw output's edge
+ * counts (the region pass of tsr_triangulate needs the same counts). */
+TEST(even_odd_parity_of_overlaps)
+{
+    static const struct {
+        const char *what;
+        uint32_t nv, nseg;
+        double xy[16];
+        uint32_t seg[16];
+        double area;
+    } cases[] = {
+        {"ring given twice", 4, 8, {0, 0, 4, 0, 4, 4, 0, 4}, {0, 1, 1, 2, 2, 3, 3, 0, 0, 1, 1, 2, 2, 3, 3, 0}, 0},
+        {"segment doubling back",
+         6,
+         7,
+         {0, 0, 4, 0, 4, 4, 0, 4, 1, 1, 3, 2},
+         {0, 1, 1, 2, 2, 3, 3, 0, 4, 5, 5, 4, 4, 5},
+         16},
+        {"hole sharing an edge",
+         8,
+         8,
+         {0, 0, 4, 0, 4, 4, 0, 4, 0, 1, 2, 1, 2, 3, 0, 3},
+         {0, 1, 1, 2, 2, 3, 3, 0, 4, 5, 5, 6, 6, 7, 7, 4},
+         12},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        tsr_pslg in = {cases[c].xy, cases[c].nv, cases[c].seg, cases[c].nseg, NULL, 0};
+        tsr_tri_options o = {.region = TSR_REGION_EVEN_ODD};
+        tsr_triangulation t;
+        if (run_raw(&in, &o, &t, cases[c].what) != TSR_OK)
+            continue;
+        double a = even_odd_area(&t);
+        CHECK_MSG(fabs(a - cases[c].area) <= 1e-12 * 16, "%s: even-odd area %.17g, expected %g", cases[c].what, a,
+                  cases[c].area);
+        tsr_triangulation_free(&t);
+    }
+}
+
 /* Points on a small lattice joined at random: duplicates, collinear
  * overlaps, points inside segments, crossings at lattice points and
  * between them; with the default depth and with a shallow one (many
@@ -777,5 +887,5 @@ TEST_MAIN(T(single_triangle), T(round_coordinates_square_with_hole), T(star_poly
           T(random_points_many_seeds), T(crossing_segments_grid), T(random_crossing_segments),
           T(vertex_on_segment_and_collinear_overlap), T(duplicates_and_degenerate_segments),
           T(vertex_near_cell_corner_and_grid_lines), T(high_degree_vertex), T(max_area),
-          T(near_coincident_features_fall_back), T(lattice_segments_degenerate), T(unsupported_inputs),
-          T(allocator_failures))
+          T(near_coincident_features_fall_back), T(even_odd_parity_of_overlaps), T(lattice_segments_degenerate),
+          T(unsupported_inputs), T(allocator_failures))

@@ -107,11 +107,10 @@ roundtrip)
 EOF
   "$tessera" triangulate "$dir/in.poly" -o "$dir/out.ele" --check --json > "$dir/s.json" || fail "triangulate: $(cat "$dir/s.json")"
   for ext in node ele poly; do [ -s "$dir/out.$ext" ] || fail "no out.$ext"; done
-  ls "$dir" | grep -q tsr-tmp && fail "temporary files left: $(ls "$dir")"
+  ls -A "$dir" | grep -q tsr-tmp && fail "temporary files left: $(ls -A "$dir")"
   nv=$(json_num "$dir/s.json" vertices) nt=$(json_num "$dir/s.json" triangles)
   ne=$(json_num "$dir/s.json" constrained_edges)
   area=$(json_num "$dir/s.json" area)
-  [ "$(json_num "$dir/s.json" ok)" = "" ] || true
   grep -q '"ok":[[:space:]]*true' "$dir/s.json" || fail "check failed: $(grep first_problem "$dir/s.json")"
   awk -v a="$area" 'BEGIN { exit !(a > 83.999999 && a < 84.000001) }' || fail "area $area, not 84"
   # the files' headers
