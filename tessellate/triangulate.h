@@ -64,8 +64,9 @@ typedef struct tsr_tri_options {
     double min_angle;
     /* maximum triangle area (0: none) */
     double max_area;
-    /* refinement stops after this many Steiner points (0: 10 * nv +
-     * 1,000,000); quality_limited says so */
+    /* refinement stops after this many Steiner points (0: 20 * nv +
+     * 100,000, plus 4 * domain area / max_area when max_area is set);
+     * quality_limited says so */
     uint32_t max_steiner;
     /* quadtree method: deepest level (0: 24) */
     uint32_t max_depth;
