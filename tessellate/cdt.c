@@ -23,7 +23,10 @@
 #define P cdt_P
 #define is_ghost cdt_is_ghost
 
-const tsr_allocator *tsr__cdt_alloc(const tsr_cdt *d) { return d->alloc.realloc ? &d->alloc : NULL; }
+const tsr_allocator *tsr__cdt_alloc(const tsr_cdt *d)
+{
+    return d->alloc.realloc ? &d->alloc : NULL;
+}
 #define da tsr__cdt_alloc
 
 tsr_cdt *tsr_cdt_create(const tsr_allocator *alloc)
@@ -50,8 +53,8 @@ void tsr_cdt_destroy(tsr_cdt *d)
     if (!d)
         return;
     const tsr_allocator *a = da(d);
-    void *blocks[] = {d->xy, d->tv, d->tn, d->tc, d->tf, d->pending, d->stack, d->changed,
-                      d->work, d->chl, d->chr, d->targets, d->nwt};
+    void *blocks[] = {d->xy,      d->tv,   d->tn,  d->tc,  d->tf,      d->pending, d->stack,
+                      d->changed, d->work, d->chl, d->chr, d->targets, d->nwt};
     for (size_t i = 0; i < sizeof blocks / sizeof blocks[0]; i++)
         tsr_free(a, blocks[i]);
     tsr_allocator copy = d->alloc;
@@ -194,8 +197,6 @@ static int u32_cmp(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-static uint64_t ekey(uint32_t a, uint32_t b) { return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a; }
-
 /* Links every edge of the triangles in slots[0..n) (already written) to
  * its twin: another of them, or the triangle that was across that edge of
  * the cavity before (outside[] lists the cavity's boundary as (triangle,
@@ -210,7 +211,7 @@ static bool link_big(tsr_cdt *d, const uint32_t *slots, uint32_t n, const link_r
     for (uint32_t i = 0; i < n; i++)
         for (int k = 0; k < 3; k++) {
             const uint32_t *v = d->tv + 3 * (size_t)slots[i];
-            r[q].key = ekey(v[k], v[(k + 1) % 3]);
+            r[q].key = cdt_edge_key(v[k], v[(k + 1) % 3]);
             r[q].t = slots[i];
             r[q].k = k;
             q++;
@@ -256,7 +257,7 @@ static bool retriangulate(tsr_cdt *d, const uint32_t *old, uint32_t nold, const 
                     if (bsearch(&nbr, sorted, nold, sizeof *sorted, u32_cmp))
                         continue;
                     const uint32_t *v = d->tv + 3 * (size_t)old[i];
-                    bnd[nb].key = ekey(v[k], v[(k + 1) % 3]);
+                    bnd[nb].key = cdt_edge_key(v[k], v[(k + 1) % 3]);
                     bnd[nb].t = nbr;
                     bnd[nb].k = edge_index(d, nbr, v[(k + 1) % 3], v[k]);
                     nb++;
@@ -531,7 +532,10 @@ static bool conflict(const tsr_cdt *d, uint32_t t, const double p[2])
     return tsr_incircle(P(d, v[0]), P(d, v[1]), P(d, v[2]), p) > 0;
 }
 
-static bool push(tsr_cdt *d, uint32_t t) { return append(d, &d->stack, &d->nstack, &d->cap_stack, t); }
+static bool push(tsr_cdt *d, uint32_t t)
+{
+    return append(d, &d->stack, &d->nstack, &d->cap_stack, t);
+}
 
 static bool legalize(tsr_cdt *d, uint32_t pv)
 {
@@ -619,8 +623,7 @@ bool tsr__cdt_split_edge(tsr_cdt *d, uint32_t t, int k, uint32_t pv, bool *nomem
     if (tsr_orient2d(P(d, a), p, P(d, c)) <= 0 || tsr_orient2d(p, P(d, b), P(d, c)) <= 0)
         return false;
     bool outside = d->tf && d->tf[s]; /* never looked at again: its shape does not matter */
-    if (q != GHOST && !outside &&
-        (tsr_orient2d(P(d, b), p, P(d, q)) <= 0 || tsr_orient2d(p, P(d, a), P(d, q)) <= 0))
+    if (q != GHOST && !outside && (tsr_orient2d(P(d, b), p, P(d, q)) <= 0 || tsr_orient2d(p, P(d, a), P(d, q)) <= 0))
         return false;
     /* on a hull edge (q the ghost), a point rounded off the edge's line
      * leaves the hull very slightly non-convex; only refinement, which
@@ -778,7 +781,10 @@ static bool restore_delaunay(tsr_cdt *d, uint32_t t, int k)
     return ok;
 }
 
-static double dist2(const double *p, double x, double y) { return (p[0] - x) * (p[0] - x) + (p[1] - y) * (p[1] - y); }
+static double dist2(const double *p, double x, double y)
+{
+    return (p[0] - x) * (p[0] - x) + (p[1] - y) * (p[1] - y);
+}
 
 /* Segment a-b crosses the constrained edge k of t (x-y): splits that edge
  * at (about) the crossing point, and pushes the new vertex as the next
@@ -859,8 +865,8 @@ static bool chains_fit(const tsr_cdt *d, uint32_t a, uint32_t q)
     return true;
 }
 
-static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa, uint32_t ob, uint32_t mark,
-                                 int depth, uint32_t *reached)
+static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa, uint32_t ob, uint32_t mark, int depth,
+                                 uint32_t *reached)
 {
     int ia;
     uint32_t t0 = triangle_at(d, a, &ia);
@@ -981,7 +987,10 @@ tsr_status tsr_cdt_insert_segment(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t i
     return insert_chain(d, a + 1, b + 1, id + 1, 0);
 }
 
-uint32_t tsr_cdt_intersection_count(const tsr_cdt *d) { return d->intersections; }
+uint32_t tsr_cdt_intersection_count(const tsr_cdt *d)
+{
+    return d->intersections;
+}
 
 bool tsr_cdt_edge_constrained(const tsr_cdt *d, uint32_t a, uint32_t b, uint32_t *id)
 {
@@ -1008,7 +1017,10 @@ bool tsr_cdt_edge_constrained(const tsr_cdt *d, uint32_t a, uint32_t b, uint32_t
 
 /* ---- triangle handles -------------------------------------------------- */
 
-uint32_t tsr_cdt_handle_count(const tsr_cdt *d) { return d->nt; }
+uint32_t tsr_cdt_handle_count(const tsr_cdt *d)
+{
+    return d->nt;
+}
 
 bool tsr_cdt_triangle(const tsr_cdt *d, uint32_t h, uint32_t v[3])
 {
@@ -1031,7 +1043,10 @@ const uint32_t *tsr_cdt_changes(const tsr_cdt *d, uint32_t *n)
     return d->changed;
 }
 
-void tsr_cdt_clear_changes(tsr_cdt *d) { d->nchanged = 0; }
+void tsr_cdt_clear_changes(tsr_cdt *d)
+{
+    d->nchanged = 0;
+}
 
 uint32_t tsr_cdt_locate_handle(const tsr_cdt *d, double x, double y)
 {
@@ -1043,8 +1058,14 @@ uint32_t tsr_cdt_locate_handle(const tsr_cdt *d, double x, double y)
     return kind == IN_GHOST ? NONE : t;
 }
 
-uint32_t tsr_cdt_vertex_count(const tsr_cdt *d) { return d->nv - 1; }
-uint32_t tsr_cdt_duplicate_count(const tsr_cdt *d) { return d->dups; }
+uint32_t tsr_cdt_vertex_count(const tsr_cdt *d)
+{
+    return d->nv - 1;
+}
+uint32_t tsr_cdt_duplicate_count(const tsr_cdt *d)
+{
+    return d->dups;
+}
 
 void tsr_cdt_vertex(const tsr_cdt *d, uint32_t v, double xy[2])
 {

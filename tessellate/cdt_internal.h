@@ -10,8 +10,8 @@
  * label CDT_LABEL(m): the input segment id + 1, or CDT_BOUNDARY for a
  * domain boundary that is no input segment; the bit CDT_EVEN says that an
  * even number of input segments cover the edge (overlapping segments, a
- * ring given twice), which the even-odd rule crosses without counting. tf[t] (when allocated) is 1 for triangles outside the
- * domain being refined (ghosts included). */
+ * ring given twice), which the even-odd rule crosses without counting. tf[t] (when allocated) is 1 for triangles
+ * outside the domain being refined (ghosts included). */
 #ifndef TSR_CDT_INTERNAL_H
 #define TSR_CDT_INTERNAL_H
 
@@ -21,7 +21,7 @@
 #define CDT_NONE UINT32_MAX
 #define CDT_BOUNDARY 0x7FFFFFFFu
 #define CDT_EVEN 0x80000000u
-#define CDT_LABEL(m) ((m) & 0x7FFFFFFFu)
+#define CDT_LABEL(m) ((m)&0x7FFFFFFFu)
 
 struct tsr_cdt {
     tsr_allocator alloc;
@@ -50,13 +50,24 @@ struct tsr_cdt {
 
 enum { CDT_IN_TRIANGLE, CDT_ON_EDGE, CDT_ON_VERTEX, CDT_IN_GHOST };
 
-static inline const double *cdt_P(const tsr_cdt *d, uint32_t v) { return d->xy + 2 * (size_t)v; }
+static inline const double *cdt_P(const tsr_cdt *d, uint32_t v)
+{
+    return d->xy + 2 * (size_t)v;
+}
 static inline bool cdt_is_ghost(const tsr_cdt *d, uint32_t t)
 {
     const uint32_t *v = d->tv + 3 * (size_t)t;
     return v[0] == CDT_GHOST || v[1] == CDT_GHOST || v[2] == CDT_GHOST;
 }
-static inline uint32_t cdt_mark(const tsr_cdt *d, uint32_t t, int k) { return d->tc ? d->tc[3 * (size_t)t + k] : 0; }
+/* The key of the undirected edge a-b, for sorting edge records. */
+static inline uint64_t cdt_edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+}
+static inline uint32_t cdt_mark(const tsr_cdt *d, uint32_t t, int k)
+{
+    return d->tc ? d->tc[3 * (size_t)t + k] : 0;
+}
 
 const tsr_allocator *tsr__cdt_alloc(const tsr_cdt *d);
 /* Appends v to a growable array; false when out of memory. */
@@ -78,7 +89,6 @@ uint32_t tsr__cdt_locate(tsr_cdt *d, const double p[2], int *kind, int *which);
  * it; false (nothing changed, pv still stored) when one of the four
  * triangles would not be strictly counter-clockwise. Marks propagate. */
 bool tsr__cdt_split_edge(tsr_cdt *d, uint32_t t, int k, uint32_t pv, bool *nomem);
-
 
 /* Conforming / quality refinement (refine.c) of the triangles with tf 0,
  * whose boundary edges must all be marked. ninput: vertices [1, ninput]

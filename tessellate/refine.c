@@ -49,7 +49,10 @@ typedef struct refiner {
     tsr_triangulation *res;
 } refiner;
 
-static bool in_domain(const refiner *r, uint32_t t) { return !r->d->tf[t]; }
+static bool in_domain(const refiner *r, uint32_t t)
+{
+    return !r->d->tf[t];
+}
 
 static double dot_at(const double *c, const double *u, const double *w)
 {
@@ -58,7 +61,10 @@ static double dot_at(const double *c, const double *u, const double *w)
 
 /* Ends of the original segment (or boundary edge) a vertex made by a
  * segment split lies on; (0, 0) for the other vertices ("apexes"). */
-static bool on_segment(const refiner *r, uint32_t v) { return v < r->cap_vend && r->vend[2 * (size_t)v]; }
+static bool on_segment(const refiner *r, uint32_t v)
+{
+    return v < r->cap_vend && r->vend[2 * (size_t)v];
+}
 
 static bool set_vend(refiner *r, uint32_t v, uint32_t e0, uint32_t e1)
 {
@@ -282,7 +288,8 @@ static int split_triangle(refiner *r, uint32_t t)
     int bk = 0;
     uint32_t home = walk_to(r, t, c, &bt, &bk);
     if (home == CDT_NONE) {
-        if (bt == CDT_NONE) return 0;
+        if (bt == CDT_NONE)
+            return 0;
         int s = split_segment(r, bt, bk);
         return s < 0 ? -1 : s > 0 ? (push_tri(r, t) ? 1 : -1) : 0;
     }
@@ -320,7 +327,8 @@ static int split_triangle(refiner *r, uint32_t t)
         int s = split_segment(r, enc_t[0], enc_k[0]);
         if (s < 0)
             return -1;
-        if (s == 0) return 0;
+        if (s == 0)
+            return 0;
         return push_tri(r, t) ? 1 : -1;
     }
     const uint32_t *w = d->tv + 3 * (size_t)home;
@@ -328,9 +336,11 @@ static int split_triangle(refiner *r, uint32_t t)
     for (int k = 0; k < 3; k++)
         o[k] = tsr_orient2d(P(d, w[k]), P(d, w[(k + 1) % 3]), c);
     int zeros = (o[0] == 0) + (o[1] == 0) + (o[2] == 0);
-    if (zeros > 1) return 0; /* on a vertex: cannot happen for an empty circumcircle */
+    if (zeros > 1)
+        return 0; /* on a vertex: cannot happen for an empty circumcircle */
     int kind = zeros ? CDT_ON_EDGE : CDT_IN_TRIANGLE, which = o[0] == 0 ? 0 : o[1] == 0 ? 1 : 2;
-    if (kind == CDT_ON_EDGE && cdt_mark(d, home, which)) return 0; /* on a constrained edge: it would have been encroached */
+    if (kind == CDT_ON_EDGE && cdt_mark(d, home, which))
+        return 0; /* on a constrained edge: it would have been encroached */
     uint32_t pv = tsr__cdt_add_vertex(d, c[0], c[1]);
     if (pv == CDT_NONE || tsr__cdt_insert_at(d, pv, home, kind, which) == CDT_NONE)
         return -1;

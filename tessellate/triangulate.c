@@ -12,8 +12,8 @@
  * at depth >= 1, EVEN_ODD those at odd depth (for closed loops the parity
  * does not depend on the path, so the least depth gives the even-odd
  * rule; an edge covered by an even number of input segments, such as a
- * ring given twice or a spike that doubles back, is not counted). Hole seeds then remove the triangles reachable from them without
- * crossing a constrained edge, like Triangle's holes. */
+ * ring given twice or a spike that doubles back, is not counted). Hole seeds then remove the triangles reachable from
+ * them without crossing a constrained edge, like Triangle's holes. */
 #include "tessellate/cdt_internal.h"
 #include "tessellate/triangulate_internal.h"
 
@@ -182,8 +182,6 @@ static int erec_cmp(const void *a, const void *b)
     return x->key < y->key ? -1 : x->key > y->key;
 }
 
-static uint64_t ukey(uint32_t a, uint32_t b) { return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a; }
-
 static bool in_triangle(const double *xy, const uint32_t *v, const double p[2])
 {
     for (int k = 0; k < 3; k++)
@@ -213,12 +211,12 @@ tsr_status tsr__tri_apply_region(tsr_triangulation *t, const tsr_pslg *in, const
     for (uint32_t i = 0; i < nt; i++)
         for (uint32_t k = 0; k < 3; k++) {
             const uint32_t *v = t->tri + 3 * (size_t)i;
-            r[3 * (size_t)i + k] = (erec){ukey(v[k], v[(k + 1) % 3]), i, k};
+            r[3 * (size_t)i + k] = (erec){cdt_edge_key(v[k], v[(k + 1) % 3]), i, k};
             tn[3 * (size_t)i + k] = NONE;
             tc[3 * (size_t)i + k] = 0;
         }
     for (uint32_t e = 0; e < t->nedge; e++)
-        r[m + e] = (erec){ukey(t->edge[2 * (size_t)e], t->edge[2 * (size_t)e + 1]), NONE, 0};
+        r[m + e] = (erec){cdt_edge_key(t->edge[2 * (size_t)e], t->edge[2 * (size_t)e + 1]), NONE, 0};
     qsort(r, m + t->nedge, sizeof *r, erec_cmp);
     for (size_t i = 0; i < m + t->nedge;) {
         size_t j = i;
@@ -262,18 +260,18 @@ tsr_status tsr__tri_apply_region(tsr_triangulation *t, const tsr_pslg *in, const
         for (uint32_t i = 0; i < n; i++)
             for (uint32_t k = 0; k < 3; k++) {
                 const uint32_t *v = t->tri + 3 * (size_t)i;
-                kept[3 * (size_t)i + k] = (erec){ukey(v[k], v[(k + 1) % 3]), i, k};
+                kept[3 * (size_t)i + k] = (erec){cdt_edge_key(v[k], v[(k + 1) % 3]), i, k};
             }
         qsort(kept, nk, sizeof *kept, erec_cmp);
         uint32_t ne = 0;
         for (uint32_t e = 0; e < t->nedge; e++) {
-            erec key = {ukey(t->edge[2 * (size_t)e], t->edge[2 * (size_t)e + 1]), 0, 0};
+            erec key = {cdt_edge_key(t->edge[2 * (size_t)e], t->edge[2 * (size_t)e + 1]), 0, 0};
             if (!bsearch(&key, kept, nk, sizeof *kept, erec_cmp))
                 continue;
             /* an edge listed once per covering segment: keep the lowest id */
             bool dup = false;
             for (uint32_t q = ne; q-- > 0 && !dup && ne - q <= 8;)
-                dup = ukey(t->edge[2 * (size_t)q], t->edge[2 * (size_t)q + 1]) == key.key;
+                dup = cdt_edge_key(t->edge[2 * (size_t)q], t->edge[2 * (size_t)q + 1]) == key.key;
             if (dup)
                 continue;
             t->edge[2 * (size_t)ne] = t->edge[2 * (size_t)e];

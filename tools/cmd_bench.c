@@ -65,12 +65,6 @@ static void random_points(double *xy, uint32_t m, uint64_t s)
     }
 }
 
-static int cmp_x(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 /* A star-shaped polygon of n vertices (a smooth wavy outline with a
  * little noise) with `holes` small square holes
  * (rings, even-odd), for the constrained rows. */
@@ -158,7 +152,7 @@ static int run_cdt(int argc, char **argv)
         double q0 = cli_now();
         if (copy) {
             memcpy(copy, xy, 2 * (size_t)m * sizeof *copy);
-            qsort(copy, m, 2 * sizeof *copy, cmp_x);
+            qsort(copy, m, 2 * sizeof *copy, cmp_double); /* by x: the first double of each point */
         }
         double qsecs = cli_now() - q0;
         free(copy);
@@ -194,7 +188,8 @@ static int run_cdt(int argc, char **argv)
     for (int ai = 0; ai < 2; ai++) {
         double secs[2] = {0, 0};
         for (int m = 0; m < 2; m++) {
-            tsr_tri_options o = {.method = m ? TSR_TRI_QUADTREE : TSR_TRI_DELAUNAY, .region = TSR_REGION_EVEN_ODD,
+            tsr_tri_options o = {.method = m ? TSR_TRI_QUADTREE : TSR_TRI_DELAUNAY,
+                                 .region = TSR_REGION_EVEN_ODD,
                                  .max_area = areas[ai]};
             tsr_triangulation t;
             tsr_error err;
@@ -227,7 +222,8 @@ static int run(int argc, char **argv)
     if (argc >= 2 && !strcmp(argv[1], "cdt"))
         return run_cdt(argc, argv);
     if (argc < 2 || (strcmp(argv[1], "terrain") && !cli_is_help(argv[1]))) {
-        cli_error("bench", "what to benchmark? 'tessera bench terrain' or 'tessera bench cdt' (see tessera bench --help)");
+        cli_error("bench",
+                  "what to benchmark? 'tessera bench terrain' or 'tessera bench cdt' (see tessera bench --help)");
         return CLI_USAGE;
     }
     cli_heightfield_options o = {0};
@@ -257,14 +253,18 @@ static int run(int argc, char **argv)
                 cli_error("bench", "%s %s: not a valid number", a, argv[i]);
                 return CLI_USAGE;
             }
-            *(!strcmp(a, "--size") ? &size : !strcmp(a, "--tile") ? &tile : !strcmp(a, "--frames") ? &frames : &repeat) = u;
+            *(!strcmp(a, "--size")     ? &size
+              : !strcmp(a, "--tile")   ? &tile
+              : !strcmp(a, "--frames") ? &frames
+                                       : &repeat) = u;
         } else if (!strcmp(a, "--pixel-error") && has_value) {
             if (!cli_parse_double(argv[++i], &tau) || !(tau > 0)) {
                 cli_error("bench", "--pixel-error %s: must be positive", argv[i]);
                 return CLI_USAGE;
             }
         } else {
-            cli_error("bench", "%s '%s' (see tessera bench --help)", has_value ? "unknown option" : "missing value for", a);
+            cli_error("bench", "%s '%s' (see tessera bench --help)", has_value ? "unknown option" : "missing value for",
+                      a);
             return CLI_USAGE;
         }
     }
@@ -282,7 +282,8 @@ static int run(int argc, char **argv)
         }
         fprintf(stderr, "tessera bench: generating %ux%u heightfield...\n", size, size);
         tsr_terrain_generate_fast(hf, 1, 1000);
-        tsr_heightfield_set_spacing(hf, o.dx > 0 ? o.dx : 10, o.dy > 0 ? o.dy : (o.dx > 0 ? o.dx : 10), o.dz > 0 ? o.dz : 1);
+        tsr_heightfield_set_spacing(hf, o.dx > 0 ? o.dx : 10, o.dy > 0 ? o.dy : (o.dx > 0 ? o.dx : 10),
+                                    o.dz > 0 ? o.dz : 1);
     }
     double gen_s = cli_now() - t0;
     uint32_t W = tsr_heightfield_width(hf), Hh = tsr_heightfield_height(hf);
@@ -415,5 +416,5 @@ static int run(int argc, char **argv)
     return CLI_OK;
 }
 
-const cli_command cli_cmd_bench = {"bench", "benchmarks: 'bench terrain' (pyramid, selection, memory), 'bench cdt'", run,
-                                   help};
+const cli_command cli_cmd_bench = {"bench", "benchmarks: 'bench terrain' (pyramid, selection, memory), 'bench cdt'",
+                                   run, help};
