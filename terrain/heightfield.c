@@ -3,6 +3,7 @@
 #include "terrain_internal.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -251,7 +252,9 @@ tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts, 
     uint64_t valid = 0;
     for (size_t i = 0; i < n; i++) {
         float v = hf->data[i];
-        if (o->has_nodata && (double)v == o->nodata)
+        /* the float extremes are what GIS tools write for no-data when the
+         * file names none; no terrain is 3.4e38 high */
+        if ((o->has_nodata && (double)v == o->nodata) || v == FLT_MAX || v == -FLT_MAX)
             hf->data[i] = v = NAN;
         if (isinf(v)) {
             uint32_t c = (uint32_t)(i % hf->width), r = (uint32_t)(i / hf->width);

@@ -191,3 +191,48 @@ extern "C" tsr_status tsr_image_write(const char *path, const char *tmp, uint32_
         return tsr_error_set(err, TSR_ERR_IO, "%s: write failed (%s)", path, e.c_str());
     return TSR_OK;
 }
+
+extern "C" tsr_status tsr_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
+                                        const uint8_t *pixels, tsr_error *err)
+{
+    if (!path || !*path || !pixels || width == 0 || height == 0 || channels == 0 || channels > 4)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: nothing to write (%ux%u, %u channels)",
+                             path ? path : "(null)", width, height, channels);
+    if (width > (uint32_t)INT32_MAX || height > (uint32_t)INT32_MAX)
+        return tsr_error_set(err, TSR_ERR_TOO_LARGE, "%s: image %ux%u too large to write", path, width, height);
+    // The writer is picked by the extension alone: an unknown one is
+    // refused before anything is created on disk.
+    const char *slash = std::strrchr(path, '/');
+    const char *dot = std::strrchr(slash ? slash + 1 : path, '.');
+    if (!dot)
+        return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "%s: no extension to choose an image format by (use .png or .tif)",
+                             path);
+    auto out = ImageOutput::create(path);
+    if (!out) {
+        std::string e = one_line(OIIO::geterror());
+        return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "%s: no image writer for extension \"%s\" (use .png or .tif)%s%s%s",
+                             path, dot, e.empty() ? "" : " (", e.c_str(), e.empty() ? "" : ")");
+    }
+    ImageSpec spec((int)width, (int)height, (int)channels, TypeDesc::UINT8);
+    char tmp[4096];
+    tsr_status s = tsr_atomic_begin(path, tmp, sizeof tmp, err);
+    if (s != TSR_OK)
+        return s;
+    if (!out->open(tmp, spec)) {
+        std::string e = one_line(out->geterror());
+        tsr_atomic_abort(tmp);
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path, e.c_str());
+    }
+    bool ok = out->write_image(TypeDesc::UINT8, pixels);
+    std::string e = ok ? std::string() : one_line(out->geterror());
+    if (!out->close() && ok) {
+        ok = false;
+        e = one_line(out->geterror());
+    }
+    out.reset();
+    if (!ok) {
+        tsr_atomic_abort(tmp);
+        return tsr_error_set(err, TSR_ERR_IO, "%s: write failed (%s)", path, e.c_str());
+    }
+    return tsr_atomic_commit(tmp, path, err);
+}

@@ -461,8 +461,8 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
 {
     *out = NULL;
     uint32_t n = opts && opts->tile_n ? opts->tile_n : 16;
-    if (n < 8 || n > 128 || (n & (n - 1)))
-        return tsr_error_set(err, TSR_ERR_ARGUMENT, "tile size %u: must be 8, 16, 32, 64 or 128", n);
+    if (n < 2 || n > 128 || (n & (n - 1)))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "tile size %u: must be 2, 4, 8, 16, 32, 64 or 128", n);
     if (!(hf->dx > 0 && hf->dy > 0 && hf->dz > 0))
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "spacing dx, dy, dz must be positive");
     uint32_t W = hf->width, Hh = hf->height, ex = W - 1, ey = Hh - 1;

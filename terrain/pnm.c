@@ -81,12 +81,27 @@ tsr_status tsr_pnm_read(const char *path, const tsr_allocator *alloc, tsr_height
         return tsr_error_set(err, TSR_ERR_TOO_LARGE, "%s: image is %lldx%lld; Tessera accepts at most %u per side and %llu samples",
                              path, w, h, TSR_HEIGHTFIELD_MAX_SIDE, (unsigned long long)TSR_HEIGHTFIELD_MAX_SAMPLES);
     }
+    size_t n = (size_t)w * (size_t)h, bytes = maxval > 255 ? 2 : 1;
+    /* The file's size bounds the samples before anything is allocated (a
+     * 20-byte header must not cost gigabytes): P5 has bytes per sample, P2
+     * at least a digit per sample and a separator between two. */
+    long here = ftell(f), size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+    if (here < 0 || size < 0 || fseek(f, here, SEEK_SET) != 0) {
+        fclose(f);
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot seek: %s", path, strerror(errno));
+    }
+    uint64_t need = plain ? 2 * (uint64_t)n - 1 : (uint64_t)n * bytes;
+    if ((uint64_t)(size - here) < need) {
+        fclose(f);
+        return tsr_error_set(err, TSR_ERR_TRUNCATED,
+                             "%s: truncated PGM: %lldx%lld samples need at least %llu bytes, %ld follow the header",
+                             path, w, h, (unsigned long long)need, size - here);
+    }
     tsr_heightfield *hf = tsr_heightfield_create((uint32_t)w, (uint32_t)h, alloc);
     if (!hf) {
         fclose(f);
         return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
     }
-    size_t n = (size_t)w * (size_t)h, bytes = maxval > 255 ? 2 : 1;
     for (size_t i = 0; i < n; i++) {
         long long v;
         if (plain) {

@@ -60,7 +60,9 @@ tsr_raw_type tsr_raw_type_parse(const char *s);
  * decode), TIFF and GeoTIFF (8/16-bit integer, float32), OpenEXR, PGM, and
  * anything else OpenImageIO reads as one channel; raw samples when
  * opts->raw_type is set. Rejects sizes outside the limits above, infinite
- * heights, and files with no valid (non-NaN) sample. On success *out owns
+ * heights, and files with no valid (non-NaN) sample. Samples equal to
+ * +-3.4028235e38 (FLT_MAX, what GIS tools write for no-data when the file
+ * names none) are no-data, as are those equal to opts->nodata. On success *out owns
  * the samples; on failure *out is NULL and err names path and problem. */
 tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts,
                                 const tsr_allocator *alloc, tsr_heightfield **out, tsr_error *err);
@@ -138,6 +140,77 @@ void tsr_terrain_generate_fast(tsr_heightfield *hf, uint32_t seed, double relief
 tsr_status tsr_terrain_grid_mesh(const tsr_heightfield *hf, uint32_t step, bool normals,
                                  tsr_mesh *mesh, tsr_error *err);
 
+/* ---- Error-bounded mesh (tessera mesh) ---------------------------------- */
+
+typedef enum tsr_tin_method {
+    TSR_TIN_DELAUNAY = 0, /* greedy insertion on the constrained-Delaunay kernel */
+    TSR_TIN_QUADTREE,     /* the restricted quadtree's cut at a view-independent tolerance */
+    TSR_TIN_GRID          /* every step-th sample */
+} tsr_tin_method;
+
+/* Zero means default for every field. Errors are vertical, in world
+ * units (z = h dz). */
+typedef struct tsr_tin_options {
+    tsr_tin_method method;
+    /* The bound: no valid sample farther from the mesh than this. 0 means
+     * 0.1% of the height range, unless a budget is given, in which case
+     * the budget alone stops refinement. Must be >= 0. */
+    double max_error;
+    /* Budgets: the mesh has at most this many triangles / vertices (0:
+     * none); refinement stops before the next step would exceed one. */
+    uint32_t max_triangles, max_vertices;
+    /* delaunay: tolerance for the simplification of the outer border and
+     * of the no-data boundaries, fixed before the greedy pass
+     * (Douglas-Peucker along each straight run, the same way whatever the
+     * interior, so adjacent windows share their border vertices); 0:
+     * max_error, or 0.1% of the range when that is 0 too and there is no
+     * budget. With a budget and neither bound, nothing is fixed: the
+     * border is refined by the greedy pass like the interior. */
+    double border_error;
+    uint32_t grid_step;           /* grid: keep every step-th column and row (default 1) */
+    uint32_t tile_n;              /* quadtree: tile size 2..128, a power of 2 (default 2) */
+    bool full_border;             /* quadtree: outer border at full resolution (for seams) */
+    bool normals;                 /* per-vertex normals from the heightfield's gradients */
+    /* A window: mesh only columns x .. x+w-1, rows y .. y+h-1 (w = h = 0:
+     * everything). Vertices keep the whole heightfield's coordinates, so
+     * meshes of adjacent windows (sharing their border row or column)
+     * fit together; their border vertices are identical for the delaunay
+     * method (the same border_error on both sides), the grid method and
+     * the quadtree method with full_border. */
+    uint32_t window_x, window_y, window_w, window_h;
+    /* Called now and then with the fraction done (0..1); may be NULL. */
+    void (*progress)(void *user, double fraction);
+    void *progress_user;
+} tsr_tin_options;
+
+typedef struct tsr_tin_report {
+    double target_error;      /* the tolerance refinement worked to (world units) */
+    double border_error;      /* the border simplification's tolerance */
+    double estimated_error;   /* the mesher's own estimate of the max error (not measured) */
+    uint32_t border_vertices; /* vertices fixed on the border and no-data boundaries */
+    uint32_t insertions;      /* delaunay: points inserted by the greedy pass */
+    bool budget_reached;      /* a budget stopped refinement */
+} tsr_tin_report;
+
+/* Meshes the heightfield by opts->method into mesh (initialised, empty;
+ * TSR_MESH_NORMALS when opts->normals). Triangles counter-clockwise seen
+ * from +z; cells with a no-data corner are holes, never zeros. The
+ * delaunay method (Garland & Heckbert 1995) inserts, greedily, the sample
+ * farthest from the current mesh until every sample is within the target
+ * (or a budget is reached); the outer border and no-data boundaries are
+ * fixed first by Douglas-Peucker so they depend only on their own
+ * samples. Does not measure the result: see tsr_terrain_measure. Fails
+ * with TSR_ERR_ARGUMENT for bad options or a budget smaller than the
+ * fixed border needs (err says how many), TSR_ERR_NOMEM, TSR_ERR_TOO_LARGE. */
+tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *opts, tsr_mesh *mesh,
+                            tsr_tin_report *report, tsr_error *err);
+
+/* A copy of the w x h window at column x, row y (same spacing and source
+ * format); NULL when out of memory or the window is not inside hf or
+ * smaller than 2 x 2. */
+tsr_heightfield *tsr_heightfield_crop(const tsr_heightfield *hf, uint32_t x, uint32_t y, uint32_t w, uint32_t h,
+                                      const tsr_allocator *alloc);
+
 /* ---- Level of detail ---------------------------------------------------- */
 
 /* A terrain for level of detail: a heightfield (borrowed: it must outlive
@@ -153,7 +226,7 @@ tsr_status tsr_terrain_grid_mesh(const tsr_heightfield *hf, uint32_t step, bool 
 typedef struct tsr_terrain tsr_terrain;
 
 typedef struct tsr_terrain_options {
-    uint32_t tile_n; /* quads per tile side: 8, 16, 32, 64 or 128 (default 16) */
+    uint32_t tile_n; /* quads per tile side: 2, 4, ..., 128 (default 16) */
 } tsr_terrain_options;
 
 /* Builds the pyramid in one bottom-up pass. Fails on a bad tile size or
@@ -193,6 +266,8 @@ bool tsr_terrain_pick(const tsr_terrain *t, const double origin[3], const double
  * of `tessera check terrain` and of the tests. */
 typedef struct tsr_error_report {
     double max_vertical;    /* max |h dz - z of the mesh above or below| */
+    double rms_vertical;    /* root mean square of the same, over the covered samples */
+    uint64_t covered;       /* valid samples with the mesh above or below */
     double max_pixels;      /* max screen error (with a camera) */
     uint64_t counted;       /* samples counted for max_pixels */
     uint64_t uncovered;     /* valid samples with no mesh above or below */
@@ -207,6 +282,11 @@ typedef struct tsr_error_report {
  * field over the (x, y) plane. */
 tsr_status tsr_terrain_measure(const tsr_heightfield *hf, const tsr_mesh *mesh, const tsr_camera *cam,
                                tsr_error_report *out);
+/* The same over the samples of the window (x0, y0, w, h) only; the mesh in
+ * the whole heightfield's coordinates. TSR_ERR_ARGUMENT for a window not
+ * inside hf. */
+tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
+                                      const tsr_mesh *mesh, const tsr_camera *cam, tsr_error_report *out);
 
 #ifdef __cplusplus
 }

@@ -75,7 +75,11 @@ static bool grow_vertices(tsr_cdt *d, uint32_t cap)
 
 uint32_t tsr__cdt_add_vertex(tsr_cdt *d, double x, double y)
 {
-    if (d->nv == d->cap_v && (d->nv == UINT32_MAX - 1 || !grow_vertices(d, d->cap_v * 2)))
+    /* growth by half: with realloc's in-place growth of large blocks the
+     * copies stay rare, and the slack (the peak memory of a mesher that
+     * cannot know its final size) is a third of doubling's */
+    if (d->nv == d->cap_v &&
+        (d->cap_v >= UINT32_MAX / 3 || !grow_vertices(d, d->cap_v + d->cap_v / 2 + 16)))
         return NONE;
     d->xy[2 * (size_t)d->nv] = x;
     d->xy[2 * (size_t)d->nv + 1] = y;
@@ -115,7 +119,7 @@ static bool grow_triangles(tsr_cdt *d, uint32_t cap)
 
 static uint32_t new_triangle(tsr_cdt *d)
 {
-    if (d->nt == d->cap_t && !grow_triangles(d, d->cap_t ? d->cap_t * 2 : 64))
+    if (d->nt == d->cap_t && (d->cap_t >= UINT32_MAX / 3 || !grow_triangles(d, d->cap_t + d->cap_t / 2 + 64)))
         return NONE;
     if (d->tc)
         memset(d->tc + 3 * (size_t)d->nt, 0, 3 * sizeof *d->tc);
@@ -706,6 +710,13 @@ uint32_t tsr_cdt_insert(tsr_cdt *d, double x, double y)
         return NONE;
     uint32_t r = insert_vertex(d, v);
     return r == NONE ? NONE : r - 1;
+}
+
+uint32_t tsr_cdt_insert_near(tsr_cdt *d, double x, double y, uint32_t near)
+{
+    if (near < d->nt)
+        d->last = near;
+    return tsr_cdt_insert(d, x, y);
 }
 
 /* ---- segments --------------------------------------------------------- */

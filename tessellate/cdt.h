@@ -28,6 +28,10 @@ tsr_status tsr_cdt_insert_points(tsr_cdt *d, const double *xy, uint32_t n, uint3
 /* Inserts one point; returns its vertex id (an existing id for an exact
  * duplicate), or UINT32_MAX when out of memory or not finite. */
 uint32_t tsr_cdt_insert(tsr_cdt *d, double x, double y);
+/* The same, starting the point location at triangle slot `near` (see the
+ * handles below; any value is safe): fast when the point lies in or near
+ * that triangle, as when a mesher inserts the sample it found in it. */
+uint32_t tsr_cdt_insert_near(tsr_cdt *d, double x, double y, uint32_t near);
 
 uint32_t tsr_cdt_vertex_count(const tsr_cdt *d);
 /* Exact duplicates merged so far. */

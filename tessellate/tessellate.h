@@ -237,6 +237,48 @@ void tsr_validation_describe(const tsr_validation *v, char *buf, size_t cap);
 bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x1, double y1,
                                double eps, uint32_t *bad_vertex);
 
+/* ---- Solid ------------------------------------------------------------- */
+
+/* Closes a height-field mesh into a solid (for 3D printing), in place.
+ *
+ * Input: every triangle counter-clockwise seen from +z, an oriented,
+ * edge-manifold surface with boundary whose projection on the xy plane
+ * does not overlap itself; any number of components and holes. Added:
+ *  - walls: for each boundary edge a->b, the quad a, b, b', a' down to
+ *    z = base_z (two triangles, facing outward, i.e. to the right of a->b
+ *    seen from +z);
+ *  - a bottom at z = base_z facing -z: the region bounded by the
+ *    boundary loops projected on z = base_z, nesting by even-odd (outer
+ *    loops, holes, islands in holes), triangulated by tsr_triangulate
+ *    (constrained Delaunay, no Steiner point).
+ * One new vertex per boundary corner at z = base_z, shared by its two
+ * walls and the bottom; the top boundary vertices are shared with the
+ * walls. So the result is closed by index (tsr_mesh_validate: no boundary
+ * edge, no misoriented or non-manifold edge), and so by position (STL),
+ * encloses a positive signed volume, and has no T-junction.
+ * A pinch, where two boundary loops meet at one vertex (diagonal no-data
+ * samples), gets one bottom vertex per loop: closed and edge-manifold by
+ * index, but the two vertical edges there coincide in space (by position,
+ * four faces share that segment, as in two cubes touching at an edge).
+ *
+ * Attributes of the new vertices, when the mesh has them: normals are the
+ * unit bisector of (0, 0, -1) and the outward horizontal normal of the
+ * corner (mean of its two walls'), a 45-degree bevel: vertices are shared
+ * for watertightness, so walls are smooth-shaded, not flat, and the top's
+ * normals are left as they are; uvs are copied from the top vertex above.
+ *
+ * base_z (world units) must be finite and, as a float, strictly below the
+ * lowest referenced vertex, else TSR_ERR_ARGUMENT. A mesh without
+ * triangles or with a non-finite position is TSR_ERR_ARGUMENT; a mesh that
+ * is not an oriented edge-manifold with a non-overlapping projection
+ * (repeated index in a triangle, an edge used by three triangles or twice
+ * the same way, boundary loops crossing or touching an edge in xy) is
+ * TSR_ERR_INVALID_MESH, with the vertex or edge named; a mesh without
+ * boundary (already closed) is left as it is (TSR_OK). On failure the
+ * mesh's content is unchanged (its capacity may have grown). Cost:
+ * O(T log T) plus the triangulation of the boundary vertices. */
+tsr_status tsr_mesh_add_base(tsr_mesh *mesh, double base_z, tsr_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -3,6 +3,7 @@
  * and triangles per frame, tile vertex generation rate, and memory beyond
  * the heightfield. Prints a table; figures are ratios against baselines
  * measured in the same run where that makes sense. */
+#include "bench.h"
 #include "camera.h"
 
 #include <math.h>
@@ -221,6 +222,8 @@ static int run(int argc, char **argv)
 {
     if (argc >= 2 && !strcmp(argv[1], "cdt"))
         return run_cdt(argc, argv);
+    if (argc >= 2 && !strcmp(argv[1], "mesh"))
+        return cli_bench_mesh(argc, argv);
     if (argc < 2 || (strcmp(argv[1], "terrain") && !cli_is_help(argv[1]))) {
         cli_error("bench",
                   "what to benchmark? 'tessera bench terrain' or 'tessera bench cdt' (see tessera bench --help)");

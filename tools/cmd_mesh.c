@@ -1,34 +1,196 @@
-/* cmd_mesh.c: `tessera mesh IN -o OUT`: heightmap to mesh. For now the
- * regular grid (every sample, or every step-th); the error-bounded methods
- * come with the heightmap-to-mesh issue. */
+/* cmd_mesh.c: `tessera mesh IN -o OUT`: a heightmap in, the fewest
+ * triangles that stay within a stated vertical error out. The mesher
+ * (terrain/tin.c) builds; the bound is then measured independently
+ * (tsr_terrain_measure_window) and the measured figures are the ones
+ * reported. */
 #include "cli.h"
+#include "terrain/shade.h"
 
 #include <cjson/cJSON.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static void help(FILE *f)
 {
-    fprintf(f, "usage: tessera mesh IN -o OUT [options]\n\n"
-               "Converts a heightfield into a triangle mesh. OUT's extension picks the format:\n"
-               ".obj, .ply (binary), .stl (binary) or .glb (glTF 2.0, +y up). Sample (c, r) becomes the\n"
-               "vertex (c*dx, r*dy, h*dz); no-data samples become holes.\n\n"
-               "options:\n"
-               "  -o, --output OUT      mesh file to write (required)\n"
-               "  --method grid         the regular grid of samples (the only method so far)\n"
-               "  --step N              keep every N-th column and row (default 1: all samples)\n"
-               "  --normals             per-vertex normals from the heightfield's gradients\n"
-               "  --stats FILE.json     write vertices, triangles, seconds and the input's size and range\n"
-               "  --quiet               print nothing on success\n" CLI_HEIGHTFIELD_HELP
-               "  -h, --help            this help\n");
+    fprintf(f,
+            "usage: tessera mesh IN -o OUT [options]\n\n"
+            "Converts a heightfield into a triangle mesh whose vertical error is bounded: after building,\n"
+            "every valid sample is measured against the mesh, and the measured max error never exceeds\n"
+            "--max-error. OUT's extension picks the format: .obj, .ply (binary), .stl (binary) or .glb\n"
+            "(glTF 2.0, +y up). Sample (c, r) becomes the vertex (c*dx, r*dy, h*dz); no-data samples\n"
+            "become holes, never zeros.\n\n"
+            "options:\n"
+            "  -o, --output OUT      mesh file to write (required)\n"
+            "  --max-error E         the bound on the vertical error, in output z units\n"
+            "                        (default: 0.1%% of the height range, unless a budget is given)\n"
+            "  --triangles N         a budget: at most N triangles (stops when reached; the error\n"
+            "                        achieved is reported)\n"
+            "  --vertices N          a budget: at most N vertices\n"
+            "  --method M            delaunay (default): greedy insertion of the worst sample\n"
+            "                        (Garland-Heckbert) on the constrained-Delaunay kernel;\n"
+            "                        quadtree: the restricted quadtree's grid tiles, fast;\n"
+            "                        grid: every --step-th sample\n"
+            "  --step N              grid: keep every N-th column and row (default 1)\n"
+            "  --tile N              quadtree: tile size 2, 4, 8, 16, 32, 64 or 128 (default 2)\n"
+            "  --border-error E      delaunay: tolerance of the border and no-data boundary\n"
+            "                        simplification (default: the --max-error; with a budget\n"
+            "                        and no bound, the border is refined like the interior)\n"
+            "  --window X,Y,W,H      mesh only W x H samples from column X, row Y; vertices keep the\n"
+            "                        whole heightfield's coordinates, and adjacent windows (sharing\n"
+            "                        a border row or column, same options, a bound rather than a\n"
+            "                        budget) have identical border vertices, so tiles meshed as\n"
+            "                        separate jobs fit exactly (quadtree: its window borders are\n"
+            "                        kept at full resolution)\n"
+            "  --base DEPTH          a closed solid for 3D printing: walls down to a flat bottom\n"
+            "                        DEPTH below the lowest point\n"
+            "  --normals             per-vertex normals from the heightfield's gradients\n"
+            "  --normal-map FILE     a normal map image at the heightfield's resolution (.png, .tif)\n"
+            "  --hillshade FILE      a hillshade image at the heightfield's resolution (.png, .tif)\n"
+            "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
+            "                        peak_bytes, method and the input's size, range and no-data count\n"
+            "  --quiet               print nothing on success (no summary, no progress bar)\n" CLI_HEIGHTFIELD_HELP
+            "  -h, --help            this help\n");
+}
+
+/* ---- progress bar: on stderr when it is a terminal, after a second ---- */
+
+typedef struct progress {
+    bool on;
+    double t0, last;
+    int shown;
+} progress;
+
+static void progress_cb(void *user, double f)
+{
+    progress *p = user;
+    double now = cli_now();
+    if (!p->on || now - p->t0 < 1.0 || now - p->last < 0.1)
+        return;
+    p->last = now;
+    int width = 40, fill = (int)(f * width + 0.5);
+    char bar[48];
+    for (int i = 0; i < width; i++)
+        bar[i] = i < fill ? '#' : '.';
+    bar[width] = '\0';
+    fprintf(stderr, "\rtessera mesh: [%s] %3d%%", bar, (int)(f * 100 + 0.5));
+    fflush(stderr);
+    p->shown = 1;
+}
+
+static void progress_end(progress *p)
+{
+    if (p->shown)
+        fprintf(stderr, "\r%60s\r", "");
+}
+
+/* Peak resident memory of this process, from /proc (0 when unknown). */
+static double peak_bytes(void)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    if (!f)
+        return 0;
+    char line[256];
+    double kb = 0;
+    while (fgets(line, sizeof line, f))
+        if (!strncmp(line, "VmHWM:", 6)) {
+            kb = strtod(line + 6, NULL);
+            break;
+        }
+    fclose(f);
+    return kb * 1024;
+}
+
+static bool parse_window(const char *s, uint32_t w[4])
+{
+    for (int k = 0; k < 4; k++) {
+        const char *end = strchr(s, ',');
+        size_t n = end ? (size_t)(end - s) : strlen(s);
+        char buf[32];
+        if ((k < 3) != (end != NULL) || n == 0 || n >= sizeof buf)
+            return false;
+        memcpy(buf, s, n);
+        buf[n] = '\0';
+        if (!cli_parse_u32(buf, 0, UINT32_MAX - 1, &w[k]))
+            return false;
+        s = end ? end + 1 : s + n;
+    }
+    return true;
+}
+
+static const char *method_name(tsr_tin_method m)
+{
+    return m == TSR_TIN_DELAUNAY ? "delaunay" : m == TSR_TIN_QUADTREE ? "quadtree" : "grid";
+}
+
+static int write_stats(const char *path, const tsr_mesh *mesh, const tsr_error_report *er, double secs,
+                       const tsr_tin_options *to, const tsr_heightfield *hf, const tsr_heightfield_stats *st,
+                       double max_error, const tsr_tin_report *rep)
+{
+    cJSON *j = cJSON_CreateObject();
+    cJSON_AddNumberToObject(j, "vertices", mesh->vertex_count);
+    cJSON_AddNumberToObject(j, "triangles", mesh->triangle_count);
+    cJSON_AddNumberToObject(j, "max_error", er->max_vertical);
+    cJSON_AddNumberToObject(j, "rms_error", er->rms_vertical);
+    cJSON_AddNumberToObject(j, "seconds", secs);
+    cJSON_AddNumberToObject(j, "peak_bytes", peak_bytes());
+    cJSON_AddStringToObject(j, "method", method_name(to->method));
+    if (max_error > 0)
+        cJSON_AddNumberToObject(j, "requested_max_error", max_error);
+    if (to->max_triangles)
+        cJSON_AddNumberToObject(j, "budget_triangles", to->max_triangles);
+    if (to->max_vertices)
+        cJSON_AddNumberToObject(j, "budget_vertices", to->max_vertices);
+    cJSON_AddBoolToObject(j, "budget_reached", rep->budget_reached);
+    if (to->method == TSR_TIN_DELAUNAY)
+        cJSON_AddNumberToObject(j, "border_error", rep->border_error);
+    cJSON_AddNumberToObject(j, "uncovered_samples", (double)er->uncovered);
+    cJSON *inp = cJSON_AddObjectToObject(j, "input");
+    cJSON_AddNumberToObject(inp, "width", tsr_heightfield_width(hf));
+    cJSON_AddNumberToObject(inp, "height", tsr_heightfield_height(hf));
+    cJSON_AddNumberToObject(inp, "min", st->min);
+    cJSON_AddNumberToObject(inp, "max", st->max);
+    cJSON_AddNumberToObject(inp, "nodata", (double)st->nodata);
+    if (to->window_w) {
+        cJSON *w = cJSON_AddObjectToObject(j, "window");
+        cJSON_AddNumberToObject(w, "x", to->window_x);
+        cJSON_AddNumberToObject(w, "y", to->window_y);
+        cJSON_AddNumberToObject(w, "width", to->window_w);
+        cJSON_AddNumberToObject(w, "height", to->window_h);
+    }
+    char *s = cJSON_Print(j);
+    cJSON_Delete(j);
+    if (!s) {
+        cli_error("mesh", "out of memory");
+        return CLI_FAIL;
+    }
+    size_t n = strlen(s);
+    char *text = malloc(n + 2);
+    tsr_error err = {0};
+    int rc = CLI_OK;
+    if (text) {
+        memcpy(text, s, n);
+        text[n] = '\n';
+        text[n + 1] = '\0';
+    }
+    if (!text || cli_write_text(path, text, &err) != TSR_OK) {
+        cli_error("mesh", "%s", text ? err.message : "out of memory");
+        rc = CLI_FAIL;
+    }
+    free(text);
+    free(s);
+    return rc;
 }
 
 static int run(int argc, char **argv)
 {
     cli_heightfield_options o = {0};
-    const char *in = NULL, *out = NULL, *stats = NULL;
-    uint32_t step = 1;
-    bool normals = false, quiet = false;
+    const char *in = NULL, *out = NULL, *stats = NULL, *normal_map = NULL, *hillshade = NULL;
+    tsr_tin_options to = {0};
+    double max_error = 0, base = 0;
+    bool quiet = false, has_base = false, has_window = false;
+    uint32_t win[4] = {0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (cli_is_help(a)) {
@@ -45,18 +207,65 @@ static int run(int argc, char **argv)
             out = argv[++i];
         else if (!strcmp(a, "--stats") && has_value)
             stats = argv[++i];
+        else if (!strcmp(a, "--normal-map") && has_value)
+            normal_map = argv[++i];
+        else if (!strcmp(a, "--hillshade") && has_value)
+            hillshade = argv[++i];
         else if (!strcmp(a, "--method") && has_value) {
-            if (strcmp(argv[++i], "grid")) {
-                cli_error("mesh", "--method %s: only 'grid' is available in this version", argv[i]);
+            const char *m = argv[++i];
+            if (!strcmp(m, "delaunay"))
+                to.method = TSR_TIN_DELAUNAY;
+            else if (!strcmp(m, "quadtree"))
+                to.method = TSR_TIN_QUADTREE;
+            else if (!strcmp(m, "grid"))
+                to.method = TSR_TIN_GRID;
+            else {
+                cli_error("mesh", "--method %s: use delaunay, quadtree or grid", m);
                 return CLI_USAGE;
             }
-        } else if (!strcmp(a, "--step") && has_value) {
-            if (!cli_parse_u32(argv[++i], 1, 1u << 20, &step)) {
-                cli_error("mesh", "--step %s: must be a positive integer", argv[i]);
+        } else if ((!strcmp(a, "--max-error") || !strcmp(a, "--border-error")) && has_value) {
+            double v;
+            if (!cli_parse_double(argv[++i], &v) || !(v > 0)) {
+                cli_error("mesh", "%s %s: must be a positive number", a, argv[i]);
                 return CLI_USAGE;
             }
+            if (!strcmp(a, "--max-error"))
+                max_error = v;
+            else
+                to.border_error = v;
+        } else if (!strcmp(a, "--base") && has_value) {
+            if (!cli_parse_double(argv[++i], &base) || !(base > 0)) {
+                cli_error("mesh", "--base %s: must be a positive depth", argv[i]);
+                return CLI_USAGE;
+            }
+            has_base = true;
+        } else if ((!strcmp(a, "--triangles") || !strcmp(a, "--vertices") || !strcmp(a, "--step") ||
+                    !strcmp(a, "--tile")) &&
+                   has_value) {
+            uint32_t v;
+            if (!cli_parse_u32(argv[++i], 1, UINT32_MAX - 1, &v)) {
+                cli_error("mesh", "%s %s: must be a positive integer", a, argv[i]);
+                return CLI_USAGE;
+            }
+            if (!strcmp(a, "--triangles"))
+                to.max_triangles = v;
+            else if (!strcmp(a, "--vertices"))
+                to.max_vertices = v;
+            else if (!strcmp(a, "--step"))
+                to.grid_step = v;
+            else if (v != 2 && v != 4 && v != 8 && v != 16 && v != 32 && v != 64 && v != 128) {
+                cli_error("mesh", "--tile %s: must be 2, 4, 8, 16, 32, 64 or 128", argv[i]);
+                return CLI_USAGE;
+            } else
+                to.tile_n = v;
+        } else if (!strcmp(a, "--window") && has_value) {
+            if (!parse_window(argv[++i], win) || win[2] < 2 || win[3] < 2) {
+                cli_error("mesh", "--window %s: give X,Y,W,H (integers, W and H at least 2)", argv[i]);
+                return CLI_USAGE;
+            }
+            has_window = true;
         } else if (!strcmp(a, "--normals"))
-            normals = true;
+            to.normals = true;
         else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = true;
         else if (a[0] == '-' && a[1] != '\0') {
@@ -77,58 +286,131 @@ static int run(int argc, char **argv)
         cli_error("mesh", "%s: unknown mesh format (use .obj, .ply, .stl or .glb)", out);
         return CLI_USAGE;
     }
+    if (to.grid_step && to.method != TSR_TIN_GRID) {
+        cli_error("mesh", "--step applies to --method grid only");
+        return CLI_USAGE;
+    }
+    if (to.tile_n && to.method != TSR_TIN_QUADTREE) {
+        cli_error("mesh", "--tile applies to --method quadtree only");
+        return CLI_USAGE;
+    }
+    if (to.method == TSR_TIN_GRID && max_error > 0) {
+        cli_error("mesh", "--max-error: the grid method keeps every --step-th sample and bounds nothing; use "
+                          "--method delaunay or quadtree");
+        return CLI_USAGE;
+    }
     double t0 = cli_now();
     tsr_heightfield *hf = cli_load_heightfield("mesh", in, &o);
     if (!hf)
         return CLI_FAIL;
+    uint32_t W = tsr_heightfield_width(hf), H = tsr_heightfield_height(hf);
+    if (has_window) {
+        if (win[0] >= W || win[1] >= H || win[2] > W - win[0] || win[3] > H - win[1]) {
+            cli_error("mesh", "--window %u,%u,%u,%u: not inside the %ux%u heightfield %s", win[0], win[1], win[2],
+                      win[3], W, H, in);
+            tsr_heightfield_destroy(hf);
+            return CLI_USAGE;
+        }
+        to.window_x = win[0];
+        to.window_y = win[1];
+        to.window_w = win[2];
+        to.window_h = win[3];
+        to.full_border = true;
+    }
+    uint32_t mx = has_window ? win[0] : 0, my = has_window ? win[1] : 0, mw = has_window ? win[2] : W,
+             mh = has_window ? win[3] : H;
+    progress pr = {!quiet && isatty(2), t0, 0, 0};
+    to.progress = progress_cb;
+    to.progress_user = &pr;
+    tsr_heightfield_stats st;
+    tsr_heightfield_stats_compute(hf, &st);
+
     tsr_mesh mesh;
-    tsr_mesh_init(&mesh, normals ? TSR_MESH_NORMALS : 0, NULL);
+    tsr_mesh_init(&mesh, to.normals ? TSR_MESH_NORMALS : 0, NULL);
     tsr_error err = {0};
+    tsr_tin_report rep = {0};
+    tsr_error_report er = {0};
     int rc = CLI_OK;
-    if (tsr_terrain_grid_mesh(hf, step, normals, &mesh, &err) != TSR_OK ||
-        tsr_mesh_write(&mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
+    /* Build, then measure. The mesher works a hair inside the bound; if
+     * the float output still lands beyond it, build again tighter. */
+    double bound = max_error;
+    to.max_error = max_error;
+    for (int attempt = 0; rc == CLI_OK; attempt++) {
+        if (tsr_terrain_mesh(hf, &to, &mesh, &rep, &err) != TSR_OK) {
+            cli_error("mesh", "%s: %s", in, err.message);
+            rc = CLI_FAIL;
+            break;
+        }
+        if (tsr_terrain_measure_window(hf, mx, my, mw, mh, &mesh, NULL, &er) != TSR_OK) {
+            cli_error("mesh", "%s: out of memory measuring the error", in);
+            rc = CLI_FAIL;
+            break;
+        }
+        if (bound == 0 && !to.max_triangles && !to.max_vertices && to.method != TSR_TIN_GRID)
+            bound = rep.target_error; /* the default bound */
+        if (bound == 0 || er.max_vertical <= bound || to.method == TSR_TIN_GRID)
+            break;
+        if (attempt == 3) {
+            cli_error("mesh", "%s: the measured error %g exceeds the bound %g (please report this)", in,
+                      er.max_vertical, bound);
+            rc = CLI_FAIL;
+            break;
+        }
+        to.max_error = rep.target_error - 2 * (er.max_vertical - bound);
+        if (!(to.max_error > 0)) {
+            cli_error("mesh", "%s: cannot meet the bound %g", in, bound);
+            rc = CLI_FAIL;
+            break;
+        }
+        tsr_mesh_free(&mesh);
+        tsr_mesh_init(&mesh, to.normals ? TSR_MESH_NORMALS : 0, NULL);
+    }
+    progress_end(&pr);
+    double base_z = 0;
+    if (rc == CLI_OK && has_base) {
+        double zmin = INFINITY;
+        for (uint32_t i = 0; i < mesh.vertex_count; i++)
+            zmin = fmin(zmin, mesh.positions[3 * (size_t)i + 2]);
+        base_z = zmin - base;
+        if (tsr_mesh_add_base(&mesh, base_z, &err) != TSR_OK) {
+            cli_error("mesh", "--base: %s", err.message);
+            rc = CLI_FAIL;
+        }
+    }
+    if (rc == CLI_OK && normal_map && tsr_heightfield_normal_map(hf, normal_map, &err) != TSR_OK) {
+        cli_error("mesh", "%s", err.message);
+        rc = CLI_FAIL;
+    }
+    if (rc == CLI_OK && hillshade && tsr_heightfield_hillshade(hf, hillshade, 315, 45, &err) != TSR_OK) {
+        cli_error("mesh", "%s", err.message);
+        rc = CLI_FAIL;
+    }
+    if (rc == CLI_OK && tsr_mesh_write(&mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
         cli_error("mesh", "%s", err.message);
         rc = CLI_FAIL;
     }
     double secs = cli_now() - t0;
-    if (rc == CLI_OK && stats) {
-        tsr_heightfield_stats st;
-        tsr_heightfield_stats_compute(hf, &st);
-        cJSON *j = cJSON_CreateObject();
-        cJSON_AddNumberToObject(j, "vertices", mesh.vertex_count);
-        cJSON_AddNumberToObject(j, "triangles", mesh.triangle_count);
-        cJSON_AddNumberToObject(j, "seconds", secs);
-        cJSON_AddStringToObject(j, "method", "grid");
-        cJSON_AddNumberToObject(j, "step", step);
-        cJSON *inp = cJSON_AddObjectToObject(j, "input");
-        cJSON_AddNumberToObject(inp, "width", tsr_heightfield_width(hf));
-        cJSON_AddNumberToObject(inp, "height", tsr_heightfield_height(hf));
-        cJSON_AddNumberToObject(inp, "min", st.min);
-        cJSON_AddNumberToObject(inp, "max", st.max);
-        cJSON_AddNumberToObject(inp, "nodata", (double)st.nodata);
-        char *s = cJSON_Print(j);
-        cJSON_Delete(j);
-        size_t n = strlen(s);
-        char *text = malloc(n + 2);
-        if (text) {
-            memcpy(text, s, n);
-            text[n] = '\n';
-            text[n + 1] = '\0';
-        }
-        if (!text || cli_write_text(stats, text, &err) != TSR_OK) {
-            cli_error("mesh", "%s", text ? err.message : "out of memory");
-            rc = CLI_FAIL;
-        }
-        free(text);
-        free(s);
+    if (rc == CLI_OK && stats)
+        rc = write_stats(stats, &mesh, &er, secs, &to, hf, &st, bound, &rep);
+    if (rc == CLI_OK && !quiet) {
+        fprintf(stderr, "tessera mesh: wrote %s (%s, %s, %u vertices, %u triangles", out,
+                tsr_mesh_format_name(tsr_mesh_format_from_path(out)), method_name(to.method), mesh.vertex_count,
+                mesh.triangle_count);
+        if (has_base)
+            fprintf(stderr, ", closed with a base at z = %g", base_z);
+        fprintf(stderr, "); measured max error %g", er.max_vertical);
+        if (bound > 0)
+            fprintf(stderr, " (bound %g)", bound);
+        fprintf(stderr, ", rms %g%s in %.2f s\n", er.rms_vertical, rep.budget_reached ? ", budget reached" : "", secs);
+        if (er.uncovered)
+            fprintf(stderr,
+                    "tessera mesh: note: %llu valid samples have no cell of four valid samples and are left out\n",
+                    (unsigned long long)er.uncovered);
     }
-    if (rc == CLI_OK && !quiet)
-        fprintf(stderr, "tessera mesh: wrote %s (%s, %u vertices, %u triangles, grid step %u) in %.2f s\n", out,
-                tsr_mesh_format_name(tsr_mesh_format_from_path(out)), mesh.vertex_count, mesh.triangle_count, step,
-                secs);
     tsr_mesh_free(&mesh);
     tsr_heightfield_destroy(hf);
     return rc;
 }
 
-const cli_command cli_cmd_mesh = {"mesh", "convert a heightfield into a mesh (OBJ, PLY, STL, glTF)", run, help};
+const cli_command cli_cmd_mesh = {"mesh", "convert a heightfield into a mesh with a bounded error (OBJ, PLY, STL, glTF)",
+                                  run, help};

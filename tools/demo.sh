@@ -1,15 +1,21 @@
 #!/usr/bin/env bash
 # demo.sh TESSERA OUTDIR: the main job on the bundled default. Generates the
 # project's sample terrain (1025x1025, seed 1, 30 m spacing) as a 16-bit
-# PNG and converts it into a mesh.
+# PNG, converts it into a mesh within the default error bound (and a
+# printable solid), and checks the view-dependent tessellation.
 set -euo pipefail
 tessera=$1 out=$2
 mkdir -p "$out"
 echo "== Tessera demo =="
 "$tessera" generate --size 1025 --seed 1 --relief 1200 -o "$out/terrain.png"
 "$tessera" info "$out/terrain.png"
-"$tessera" mesh "$out/terrain.png" --dx 30 --normals -o "$out/terrain.glb" --stats "$out/terrain-mesh.json"
-"$tessera" mesh "$out/terrain.png" --dx 30 --step 4 -o "$out/terrain-step4.obj" --stats "$out/terrain-step4.json"
+# the fewest triangles within 1.2 m (0.1% of the relief: the default bound),
+# with normals and images that light the coarse mesh with full detail
+"$tessera" mesh "$out/terrain.png" --dx 30 --normals -o "$out/terrain.glb" --stats "$out/terrain-mesh.json" \
+  --normal-map "$out/terrain-normals.png" --hillshade "$out/terrain-hillshade.png"
+# a printable solid within 5 m, 100 m thick below the lowest point
+"$tessera" mesh "$out/terrain.png" --dx 30 --max-error 5 --base 100 -o "$out/terrain-solid.stl" \
+  --stats "$out/terrain-solid.json"
 echo
 echo "checking the view-dependent tessellation (20 random cameras, 1 px at 1920x1080, 60 degrees)..."
 status=0
@@ -17,7 +23,8 @@ status=0
 echo "  $(tail -n 1 "$out/check.txt")"
 echo
 echo "wrote:"
-for f in terrain.png terrain.glb terrain-mesh.json terrain-step4.obj terrain-step4.json check.txt; do
+for f in terrain.png terrain.glb terrain-mesh.json terrain-normals.png terrain-hillshade.png terrain-solid.stl \
+         terrain-solid.json check.txt; do
   printf '  %-22s %s\n' "$f" "$(du -h "$out/$f" | cut -f1)"
 done
 echo "in $(cd "$out" && pwd)"

@@ -169,6 +169,8 @@ TEST(delta_bounds_every_stitch_variant)
     check_delta(150, 90, 16, true);  /* no-data holes */
     check_delta(2, 2, 8, false);
     check_delta(9, 300, 8, false);
+    check_delta(65, 47, 2, false);   /* the smallest tiles (tessera mesh --method quadtree) */
+    check_delta(70, 33, 4, true);
 }
 
 /* ---- cuts and their meshes ------------------------------------------- */

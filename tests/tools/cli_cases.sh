@@ -54,12 +54,20 @@ nan_height)
   # NaN is no-data: it loads, is counted, and becomes a hole in the mesh
   "$tessera" info "$dir/nan.f32" --raw 4 4 f32 --json > "$dir/info.json" || fail "info failed"
   grep -q '"nodata":[[:space:]]*1' "$dir/info.json" || fail "nodata count: $(cat "$dir/info.json")"
-  "$tessera" mesh "$dir/nan.f32" --raw 4 4 f32 -o "$dir/nan.obj" --quiet || fail "mesh failed"
-  # 9 cells, 18 triangles; each of the 4 cells around the NaN sample
+  "$tessera" mesh "$dir/nan.f32" --raw 4 4 f32 -o "$dir/nan.obj" --method grid --quiet || fail "mesh failed"
+  # grid: 9 cells, 18 triangles; each of the 4 cells around the NaN sample
   # (column 1, row 1) keeps only the triangle of its other three corners
   [ "$(grep -c '^f ' "$dir/nan.obj")" -eq 14 ] || fail "triangles: $(grep -c '^f ' "$dir/nan.obj")"
   [ "$(grep -c '^v ' "$dir/nan.obj")" -eq 15 ] || fail "vertices"
   ! grep -qi nan "$dir/nan.obj" || fail "NaN written into the mesh"
+  # delaunay and quadtree: the cells of four valid samples, none touching
+  # the NaN sample's position (1, 1)
+  for m in delaunay quadtree; do
+    "$tessera" mesh "$dir/nan.f32" --raw 4 4 f32 -o "$dir/nan.obj" --method $m --quiet || fail "mesh $m failed"
+    ! grep -qi nan "$dir/nan.obj" || fail "NaN written into the $m mesh"
+    ! grep -q '^v 1 1 ' "$dir/nan.obj" || fail "$m mesh has a vertex at the no-data sample"
+    [ "$(grep -c '^f ' "$dir/nan.obj")" -ge 2 ] || fail "$m: no triangles"
+  done
   echo "ok [$case]" ;;
 all_nan_height)
   expect_error 1 "allnan\.f32: every sample is no-data" -- "$tessera" mesh "$dir/allnan.f32" --raw 4 4 f32 -o "$out" ;;

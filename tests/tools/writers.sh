@@ -14,9 +14,10 @@ command -v assimp >/dev/null || { echo "assimp not installed (tools/install-deps
 "$tessera" generate --width 41 --height 29 --seed 3 -o "$dir/t.png" 2>/dev/null || fail generate
 # a no-data hole, so unreferenced vertices and inner boundaries are covered
 for n in "" "--normals"; do
-  for step in 1 3; do
+  for step in "grid --step 1" "grid --step 3" delaunay quadtree; do
     for fmt in obj ply stl glb; do
-      "$tessera" mesh "$dir/t.png" -o "$dir/m.$fmt" --step $step $n --dx 10 --stats "$dir/s.json" --quiet || fail "mesh $fmt"
+      # shellcheck disable=SC2086
+      "$tessera" mesh "$dir/t.png" -o "$dir/m.$fmt" --method $step $n --dx 10 --stats "$dir/s.json" --quiet || fail "mesh $fmt"
       want_v=$(grep -o '"vertices":[[:space:]]*[0-9]*' "$dir/s.json" | grep -o '[0-9]*$')
       want_f=$(grep -o '"triangles":[[:space:]]*[0-9]*' "$dir/s.json" | grep -o '[0-9]*$')
       info=$(assimp info "$dir/m.$fmt" 2>&1) || fail "assimp could not read $fmt: $info"

@@ -1,0 +1,110 @@
+/* shade.c: normal map and hillshade images of a heightfield.
+ *
+ * The hillshade is the Lambertian model of cartographic relief shading
+ * (Yoëli 1965; Horn 1981, "Hill shading and the reflectance map", Proc.
+ * IEEE 69(1)) in the form GDAL's gdaldem uses, with the normals of
+ * tsr_heightfield_normal_at (central differences) instead of Horn's 3x3
+ * gradient, so the two images and the grid mesh's normals agree. */
+#include "terrain/shade.h"
+#include "terrain_internal.h"
+
+#include <math.h>
+
+static tsr_status check_hf(const tsr_heightfield *hf, const char *path, tsr_error *err)
+{
+    if (!path || !*path)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "shade: no output path");
+    if (!hf || !hf->data)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: no heightfield", path);
+    if (!(hf->dx > 0) || !(hf->dy > 0) || !isfinite(hf->dx) || !isfinite(hf->dy) || !isfinite(hf->dz))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: spacing must be positive and finite (dx %g, dy %g, dz %g)",
+                             path, hf->dx, hf->dy, hf->dz);
+    return TSR_OK;
+}
+
+static uint8_t *alloc_pixels(const tsr_heightfield *hf, uint32_t channels)
+{
+    const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
+    return tsr_alloc(a, (size_t)hf->width * hf->height * channels);
+}
+
+static void free_pixels(const tsr_heightfield *hf, uint8_t *p)
+{
+    tsr_free(hf->alloc.realloc ? &hf->alloc : NULL, p);
+}
+
+/* [-1, 1] onto 0..255, nearest. */
+static uint8_t encode_unit(double v)
+{
+    double q = floor((v * 0.5 + 0.5) * 255.0 + 0.5);
+    return (uint8_t)(q < 0 ? 0 : q > 255 ? 255 : q);
+}
+
+tsr_status tsr_heightfield_normal_map(const tsr_heightfield *hf, const char *path, tsr_error *err)
+{
+    tsr_status s = check_hf(hf, path, err);
+    if (s != TSR_OK)
+        return s;
+    uint8_t *px = alloc_pixels(hf, 3);
+    if (!px)
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for a %ux%u normal map", path, hf->width,
+                             hf->height);
+    uint32_t w = hf->width;
+    for (uint32_t r = 0; r < hf->height; r++)
+        for (uint32_t c = 0; c < w; c++) {
+            size_t i = (size_t)r * w + c;
+            uint8_t *p = px + 3 * i;
+            if (isnan(hf->data[i])) {
+                p[0] = p[1] = p[2] = 0;
+                continue;
+            }
+            float n[3];
+            tsr_heightfield_normal_at(hf, c, r, n);
+            p[0] = encode_unit(n[0]);
+            p[1] = encode_unit(-n[1]); /* north is -y */
+            p[2] = encode_unit(n[2]);
+        }
+    s = tsr_image_save_u8(path, w, hf->height, 3, px, err);
+    free_pixels(hf, px);
+    return s;
+}
+
+tsr_status tsr_heightfield_hillshade(const tsr_heightfield *hf, const char *path, double azimuth_deg,
+                                     double altitude_deg, tsr_error *err)
+{
+    tsr_status s = check_hf(hf, path, err);
+    if (s != TSR_OK)
+        return s;
+    if (isnan(azimuth_deg))
+        azimuth_deg = TSR_HILLSHADE_AZIMUTH;
+    if (isnan(altitude_deg))
+        altitude_deg = TSR_HILLSHADE_ALTITUDE;
+    if (!isfinite(azimuth_deg))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: sun azimuth %g is not finite", path, azimuth_deg);
+    if (!(altitude_deg >= 0 && altitude_deg <= 90))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: sun altitude %g is outside 0..90 degrees", path, altitude_deg);
+    const double deg = 3.14159265358979323846 / 180.0;
+    double az = fmod(azimuth_deg, 360.0) * deg, alt = altitude_deg * deg;
+    double le = cos(alt) * sin(az), ln = cos(alt) * cos(az), lu = sin(alt); /* east, north, up */
+    uint8_t *px = alloc_pixels(hf, 1);
+    if (!px)
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for a %ux%u hillshade", path, hf->width,
+                             hf->height);
+    uint32_t w = hf->width;
+    for (uint32_t r = 0; r < hf->height; r++)
+        for (uint32_t c = 0; c < w; c++) {
+            size_t i = (size_t)r * w + c;
+            if (isnan(hf->data[i])) {
+                px[i] = 0;
+                continue;
+            }
+            float n[3];
+            tsr_heightfield_normal_at(hf, c, r, n);
+            double d = n[0] * le + (-n[1]) * ln + n[2] * lu;
+            double q = floor(255.0 * (d > 0 ? d : 0) + 0.5);
+            px[i] = (uint8_t)(q > 255 ? 255 : q);
+        }
+    s = tsr_image_save_u8(path, w, hf->height, 1, px, err);
+    free_pixels(hf, px);
+    return s;
+}

@@ -1,0 +1,488 @@
+/* test_tin.c: tsr_terrain_mesh (tessera mesh's library). Properties, each
+ * against an oracle written here, independent of the meshers and of
+ * measure.c: the measured max error never exceeds the bound (brute force
+ * over every sample and every triangle), budgets are respected, meshes are
+ * valid (oriented, manifold, conforming), no-data becomes holes (no
+ * triangle covers a no-data sample, every cell of four valid samples is
+ * covered), and adjacent windows share their border vertices exactly. */
+#include "check.h"
+#include "terrain/terrain.h"
+
+/* ---- the oracle ----------------------------------------------------------- */
+
+typedef struct oracle {
+    double max_error;
+    uint64_t covered, uncovered_cells_samples; /* valid samples covered / valid corners of valid cells uncovered */
+    uint64_t nodata_covered;                   /* no-data samples strictly inside or on a triangle */
+} oracle;
+
+/* Every sample against every triangle whose bounding box holds it: exact
+ * enough in double (barycentric with a 1e-9 tolerance); window-aware. */
+static void brute(const tsr_heightfield *hf, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h, const tsr_mesh *m,
+                  oracle *o)
+{
+    memset(o, 0, sizeof *o);
+    double dx, dy, dz;
+    tsr_heightfield_spacing(hf, &dx, &dy, &dz);
+    uint32_t W = tsr_heightfield_width(hf);
+    const float *d = tsr_heightfield_cdata(hf);
+    uint8_t *hit = calloc((size_t)w * h, 1);
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        const float *p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = m->positions + 3 * (size_t)m->indices[3 * (size_t)t + k];
+        double area = ((double)p[1][0] - p[0][0]) * ((double)p[2][1] - p[0][1]) -
+                      ((double)p[1][1] - p[0][1]) * ((double)p[2][0] - p[0][0]);
+        if (area <= 0)
+            continue; /* the validation catches these */
+        double lo_c = INFINITY, hi_c = -INFINITY, lo_r = INFINITY, hi_r = -INFINITY;
+        for (int k = 0; k < 3; k++) {
+            lo_c = fmin(lo_c, p[k][0] / dx);
+            hi_c = fmax(hi_c, p[k][0] / dx);
+            lo_r = fmin(lo_r, p[k][1] / dy);
+            hi_r = fmax(hi_r, p[k][1] / dy);
+        }
+        for (int64_t r = (int64_t)ceil(lo_r - 1e-6); r <= (int64_t)floor(hi_r + 1e-6); r++)
+            for (int64_t c = (int64_t)ceil(lo_c - 1e-6); c <= (int64_t)floor(hi_c + 1e-6); c++) {
+                if (c < x0 || r < y0 || c >= x0 + w || r >= y0 + h)
+                    continue;
+                double x = c * dx, y = r * dy, b[3];
+                for (int k = 0; k < 3; k++) {
+                    const float *a = p[(k + 1) % 3], *e = p[(k + 2) % 3];
+                    b[k] = (((double)e[0] - a[0]) * (y - a[1]) - ((double)e[1] - a[1]) * (x - a[0])) / area;
+                }
+                if (b[0] < -1e-9 || b[1] < -1e-9 || b[2] < -1e-9)
+                    continue;
+                float hv = d[(size_t)r * W + (size_t)c];
+                if (isnan(hv)) {
+                    o->nodata_covered++;
+                    continue;
+                }
+                double z = b[0] * p[0][2] + b[1] * p[1][2] + b[2] * p[2][2];
+                o->max_error = fmax(o->max_error, fabs(z - hv * dz));
+                hit[(size_t)(r - y0) * w + (size_t)(c - x0)] = 1;
+            }
+    }
+    /* every corner of a cell with four valid corners must be covered */
+    for (uint32_t r = 0; r < h; r++)
+        for (uint32_t c = 0; c < w; c++) {
+            if (isnan(d[(size_t)(y0 + r) * W + x0 + c]))
+                continue;
+            bool in_cell = false;
+            for (int dr = -1; dr <= 0 && !in_cell; dr++)
+                for (int dc = -1; dc <= 0 && !in_cell; dc++) {
+                    int64_t cc = (int64_t)c + dc, rr = (int64_t)r + dr;
+                    if (cc < 0 || rr < 0 || cc + 1 >= w || rr + 1 >= h)
+                        continue;
+                    const float *q = d + (size_t)(y0 + rr) * W + x0 + (size_t)cc;
+                    in_cell = !isnan(q[0]) && !isnan(q[1]) && !isnan(q[W]) && !isnan(q[W + 1]);
+                }
+            if (hit[(size_t)r * w + c])
+                o->covered++;
+            else if (in_cell)
+                o->uncovered_cells_samples++;
+        }
+    free(hit);
+}
+
+static bool valid_mesh(const tsr_mesh *m)
+{
+    tsr_validation v;
+    tsr_validate_options vo = {0};
+    vo.expect_up = true;
+    if (tsr_mesh_validate(m, &vo, &v) != TSR_OK)
+        return false;
+    if (!tsr_validation_ok(&v) || v.downward_triangles) {
+        char buf[256];
+        tsr_validation_describe(&v, buf, sizeof buf);
+        fprintf(stderr, "validation: %s\n", buf);
+        return false;
+    }
+    return true;
+}
+
+static tsr_heightfield *terrain(uint32_t w, uint32_t h, uint32_t seed)
+{
+    tsr_heightfield *hf = tsr_heightfield_create(w, h, NULL);
+    tsr_generate_options g = {0};
+    g.seed = seed;
+    g.relief = 500;
+    g.erosion_iterations = 5;
+    tsr_terrain_generate(hf, &g);
+    return hf;
+}
+
+static tsr_tin_method methods[] = {TSR_TIN_DELAUNAY, TSR_TIN_QUADTREE};
+static const char *mname[] = {"delaunay", "quadtree"};
+
+/* Meshes hf with the options and checks bound, validity and holes. */
+static void bound_case(const tsr_heightfield *hf, tsr_tin_options o, const char *what)
+{
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    tsr_error err = {0};
+    tsr_tin_report rep;
+    tsr_status st = tsr_terrain_mesh(hf, &o, &m, &rep, &err);
+    CHECK_MSG(st == TSR_OK, "%s: %s", what, err.message);
+    if (st != TSR_OK)
+        return;
+    oracle or;
+    uint32_t w = o.window_w ? o.window_w : tsr_heightfield_width(hf), h = o.window_h ? o.window_h : tsr_heightfield_height(hf);
+    brute(hf, o.window_x, o.window_y, w, h, &m, &or);
+    double bound = rep.target_error;
+    CHECK_MSG(or.max_error <= bound, "%s (%s): max error %.9g > bound %.9g", what, mname[o.method], or.max_error, bound);
+    CHECK_MSG(or.nodata_covered == 0, "%s (%s): %llu no-data samples covered", what, mname[o.method],
+              (unsigned long long)or.nodata_covered);
+    CHECK_MSG(or.uncovered_cells_samples == 0, "%s (%s): %llu samples of valid cells uncovered", what,
+              mname[o.method], (unsigned long long)or.uncovered_cells_samples);
+    CHECK_MSG(valid_mesh(&m), "%s (%s): invalid mesh", what, mname[o.method]);
+    /* the library's own oracle agrees */
+    tsr_error_report er;
+    CHECK(tsr_terrain_measure_window(hf, o.window_x, o.window_y, w, h, &m, NULL, &er) == TSR_OK);
+    CHECK_MSG(er.max_vertical <= bound, "%s: measure %.9g > %.9g", what, er.max_vertical, bound);
+    tsr_mesh_free(&m);
+}
+
+TEST(error_bound_generated)
+{
+    uint32_t sizes[][2] = {{65, 65}, {100, 77}, {33, 120}, {2, 2}, {3, 40}};
+    double errors[] = {0.5, 2, 20, 200};
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
+        tsr_heightfield *hf = terrain(sizes[s][0], sizes[s][1], (uint32_t)s + 1);
+        for (size_t e = 0; e < sizeof errors / sizeof errors[0]; e++)
+            for (int mth = 0; mth < 2; mth++) {
+                tsr_tin_options o = {0};
+                o.method = methods[mth];
+                o.max_error = errors[e];
+                char what[64];
+                snprintf(what, sizeof what, "%ux%u E=%g", sizes[s][0], sizes[s][1], errors[e]);
+                bound_case(hf, o, what);
+            }
+        /* the default bound: 0.1% of the range */
+        tsr_tin_options o = {0};
+        bound_case(hf, o, "default bound");
+        tsr_heightfield_destroy(hf);
+    }
+}
+
+TEST(spacing_and_scale)
+{
+    tsr_heightfield *hf = terrain(50, 60, 9);
+    tsr_heightfield_set_spacing(hf, 30, 12.5, 0.1);
+    for (int mth = 0; mth < 2; mth++) {
+        tsr_tin_options o = {0};
+        o.method = methods[mth];
+        o.max_error = 0.7;
+        bound_case(hf, o, "dx 30 dy 12.5 dz 0.1");
+    }
+    tsr_heightfield_destroy(hf);
+}
+
+TEST(flat_and_planar)
+{
+    /* a plane needs its four corners only, whatever the bound */
+    tsr_heightfield *hf = tsr_heightfield_create(40, 30, NULL);
+    float *d = tsr_heightfield_data(hf);
+    for (uint32_t r = 0; r < 30; r++)
+        for (uint32_t c = 0; c < 40; c++)
+            d[r * 40 + c] = 3.0f * c - 2.0f * r + 7;
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    tsr_tin_options o = {0};
+    o.max_error = 1e-3;
+    tsr_error err;
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_OK);
+    CHECK_MSG(m.vertex_count == 4 && m.triangle_count == 2, "%u vertices, %u triangles", m.vertex_count,
+              m.triangle_count);
+    tsr_mesh_free(&m);
+    tsr_heightfield_destroy(hf);
+}
+
+TEST(budgets)
+{
+    tsr_heightfield *hf = terrain(129, 129, 4);
+    uint32_t budgets[] = {2, 10, 101, 1000, 5000};
+    for (size_t i = 0; i < sizeof budgets / sizeof budgets[0]; i++)
+        for (int mth = 0; mth < 2; mth++)
+            for (int kind = 0; kind < 2; kind++) {
+                tsr_tin_options o = {0};
+                o.method = methods[mth];
+                if (kind == 0)
+                    o.max_triangles = budgets[i];
+                else
+                    o.max_vertices = budgets[i];
+                tsr_mesh m;
+                tsr_mesh_init(&m, 0, NULL);
+                tsr_error err = {0};
+                tsr_status st = tsr_terrain_mesh(hf, &o, &m, NULL, &err);
+                if (mth == 0 && kind == 1 && budgets[i] < 4) { /* the four corners are a must */
+                    CHECK(st == TSR_ERR_ARGUMENT);
+                    tsr_mesh_free(&m);
+                    continue;
+                }
+                if (mth == 1 && st == TSR_ERR_ARGUMENT) { /* the quadtree's coarsest mesh is bigger */
+                    tsr_mesh_free(&m);
+                    continue;
+                }
+                CHECK_MSG(st == TSR_OK, "budget %u: %s", budgets[i], err.message);
+                uint32_t got = kind == 0 ? m.triangle_count : m.vertex_count;
+                CHECK_MSG(got <= budgets[i], "%s: %u %s for a budget of %u", mname[mth], got,
+                          kind == 0 ? "triangles" : "vertices", budgets[i]);
+                /* the greedy method stops at the budget, not before (a last
+                 * insertion adds at most 2 triangles, or 1 vertex) */
+                if (mth == 0)
+                    CHECK_MSG(got + (kind == 0 ? 2 : 1) > budgets[i], "delaunay: %u for a budget of %u", got,
+                              budgets[i]);
+                /* the quadtree, within a factor (its steps are whole tiles) */
+                if (mth == 1)
+                    CHECK_MSG(got * 8 >= budgets[i] || got >= 50, "quadtree: %u for a budget of %u", got, budgets[i]);
+                CHECK(valid_mesh(&m));
+                tsr_mesh_free(&m);
+            }
+    /* a budget below the fixed border is refused with a message */
+    tsr_tin_options o = {0};
+    o.max_triangles = 4;
+    o.border_error = 1e-6;
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    tsr_error err = {0};
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_ERR_ARGUMENT);
+    CHECK(strstr(err.message, "budget") != NULL);
+    tsr_mesh_free(&m);
+    tsr_heightfield_destroy(hf);
+}
+
+TEST(nodata_holes)
+{
+    tsr_heightfield *hf = terrain(90, 70, 5);
+    float *d = tsr_heightfield_data(hf);
+    /* a disc, a single sample, a border notch, a checkerboard patch (diagonal
+     * touching cells) and an isolated valid sample inside a hole */
+    for (uint32_t r = 0; r < 70; r++)
+        for (uint32_t c = 0; c < 90; c++) {
+            double dx = c - 30.0, dy = r - 30.0;
+            if (dx * dx + dy * dy < 100 && !(c == 30 && r == 30))
+                d[r * 90 + c] = NAN;
+            if (c == 60 && r == 20)
+                d[r * 90 + c] = NAN;
+            if (c >= 80 && r >= 40 && r < 50)
+                d[r * 90 + c] = NAN;
+            if (c >= 50 && c < 58 && r >= 50 && r < 58 && (c + r) % 2 == 0)
+                d[r * 90 + c] = NAN;
+        }
+    d[0] = NAN; /* a corner */
+    double errors[] = {0.5, 5, 50};
+    for (size_t e = 0; e < 3; e++)
+        for (int mth = 0; mth < 2; mth++) {
+            tsr_tin_options o = {0};
+            o.method = methods[mth];
+            o.max_error = errors[e];
+            bound_case(hf, o, "no-data");
+        }
+    tsr_heightfield_destroy(hf);
+}
+
+/* The vertices of m on the line x = X (or y = Y), sorted. */
+static int cmp3(const void *a, const void *b)
+{
+    const float *p = a, *q = b;
+    for (int k = 0; k < 3; k++)
+        if (p[k] != q[k])
+            return p[k] < q[k] ? -1 : 1;
+    return 0;
+}
+
+static uint32_t on_line(const tsr_mesh *m, int axis, float v, float *out)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < m->vertex_count; i++)
+        if (m->positions[3 * (size_t)i + axis] == v) {
+            memcpy(out + 3 * (size_t)n, m->positions + 3 * (size_t)i, 3 * sizeof(float));
+            n++;
+        }
+    qsort(out, n, 3 * sizeof(float), cmp3);
+    return n;
+}
+
+static void seam_case(const tsr_heightfield *hf, tsr_tin_method method, double e, bool vertical)
+{
+    uint32_t W = tsr_heightfield_width(hf), H = tsr_heightfield_height(hf);
+    tsr_mesh a, b;
+    tsr_mesh_init(&a, 0, NULL);
+    tsr_mesh_init(&b, 0, NULL);
+    tsr_tin_options o = {0};
+    o.method = method;
+    o.max_error = e;
+    o.full_border = true;
+    uint32_t split = vertical ? W / 2 + 3 : H / 2 - 5;
+    tsr_tin_options oa = o, ob = o;
+    if (vertical) { /* a: columns 0..split, b: split..W-1: column split shared */
+        oa.window_w = split + 1;
+        oa.window_h = H;
+        ob.window_x = split;
+        ob.window_w = W - split;
+        ob.window_h = H;
+    } else {
+        oa.window_w = W;
+        oa.window_h = split + 1;
+        ob.window_y = split;
+        ob.window_w = W;
+        ob.window_h = H - split;
+    }
+    tsr_error err = {0};
+    CHECK_MSG(tsr_terrain_mesh(hf, &oa, &a, NULL, &err) == TSR_OK, "%s", err.message);
+    CHECK_MSG(tsr_terrain_mesh(hf, &ob, &b, NULL, &err) == TSR_OK, "%s", err.message);
+    double dx, dy, dz;
+    tsr_heightfield_spacing(hf, &dx, &dy, &dz);
+    float line = vertical ? (float)(split * dx) : (float)(split * dy);
+    float *pa = malloc(sizeof(float) * 3 * (a.vertex_count + 1)), *pb = malloc(sizeof(float) * 3 * (b.vertex_count + 1));
+    uint32_t na = on_line(&a, vertical ? 0 : 1, line, pa), nb = on_line(&b, vertical ? 0 : 1, line, pb);
+    CHECK_MSG(na == nb && na >= 2, "%s seam: %u vs %u vertices", mname[method], na, nb);
+    if (na == nb)
+        CHECK_MSG(memcmp(pa, pb, sizeof(float) * 3 * na) == 0, "%s seam: vertices differ", mname[method]);
+    /* the interiors differ (else the test proves little) */
+    CHECK(a.vertex_count != b.vertex_count || memcmp(a.positions, b.positions, 12) != 0);
+    /* each window within the bound */
+    oracle or;
+    brute(hf, oa.window_x, oa.window_y, oa.window_w, oa.window_h, &a, &or);
+    CHECK(or.max_error <= e);
+    brute(hf, ob.window_x, ob.window_y, ob.window_w, ob.window_h, &b, &or);
+    CHECK(or.max_error <= e);
+    free(pa);
+    free(pb);
+    tsr_mesh_free(&a);
+    tsr_mesh_free(&b);
+}
+
+TEST(window_seams)
+{
+    tsr_heightfield *hf = terrain(120, 97, 6);
+    /* rough left of column 40, smooth right of it: the vertical seam (column
+     * 63) has a smooth profile that leaves room for different choices, the
+     * horizontal one crosses both */
+    float *d = tsr_heightfield_data(hf);
+    for (uint32_t r = 0; r < 97; r++)
+        for (uint32_t c = 40; c < 120; c++)
+            d[r * 120 + c] = (float)(50 * sin(r / 15.0) + 0.02 * (c - 40.0) * (c - 40.0) + 20 * cos(c / 9.0));
+    double errors[] = {1.5, 15};
+    for (int mth = 0; mth < 3; mth++)
+        for (int v = 0; v < 2; v++)
+            for (int e = 0; e < 2; e++)
+                seam_case(hf, mth == 2 ? TSR_TIN_GRID : methods[mth], mth == 2 ? 1e9 : errors[e], v);
+    tsr_heightfield_destroy(hf);
+}
+
+/* tessera mesh --base: the mesher's output (with no-data holes) closed
+ * into a solid: no boundary edge left, every edge used once each way, and
+ * the signed volume equal to the prisms under the top. */
+TEST(closed_solid)
+{
+    tsr_heightfield *hf = terrain(80, 60, 8);
+    float *d = tsr_heightfield_data(hf);
+    for (uint32_t r = 20; r < 30; r++)
+        for (uint32_t c = 30; c < 45; c++)
+            d[r * 80 + c] = NAN;
+    for (int mth = 0; mth < 2; mth++) {
+        tsr_mesh m;
+        tsr_mesh_init(&m, 0, NULL);
+        tsr_tin_options o = {0};
+        o.method = methods[mth];
+        o.max_error = 4;
+        tsr_error err;
+        CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_OK);
+        double zmin = INFINITY, prisms = 0, base;
+        for (uint32_t i = 0; i < m.vertex_count; i++)
+            zmin = fmin(zmin, m.positions[3 * (size_t)i + 2]);
+        base = zmin - 10;
+        for (uint32_t t = 0; t < m.triangle_count; t++) {
+            const float *p[3];
+            for (int k = 0; k < 3; k++)
+                p[k] = m.positions + 3 * (size_t)m.indices[3 * (size_t)t + k];
+            double area = 0.5 * (((double)p[1][0] - p[0][0]) * ((double)p[2][1] - p[0][1]) -
+                                 ((double)p[1][1] - p[0][1]) * ((double)p[2][0] - p[0][0]));
+            prisms += area * (((double)p[0][2] + p[1][2] + p[2][2]) / 3 - base);
+        }
+        uint32_t top = m.triangle_count;
+        CHECK_MSG(tsr_mesh_add_base(&m, base, &err) == TSR_OK, "%s", err.message);
+        CHECK(m.triangle_count > top);
+        tsr_validation v;
+        CHECK(tsr_mesh_validate(&m, NULL, &v) == TSR_OK);
+        CHECK_MSG(tsr_validation_ok(&v) && v.boundary_edges == 0, "%s: %u boundary edges", mname[mth],
+                  v.boundary_edges);
+        double vol = 0; /* divergence theorem over the closed surface */
+        for (uint32_t t = 0; t < m.triangle_count; t++) {
+            const float *a = m.positions + 3 * (size_t)m.indices[3 * (size_t)t],
+                        *b = m.positions + 3 * (size_t)m.indices[3 * (size_t)t + 1],
+                        *c = m.positions + 3 * (size_t)m.indices[3 * (size_t)t + 2];
+            vol += ((double)a[0] * ((double)b[1] * c[2] - (double)b[2] * c[1]) -
+                    (double)a[1] * ((double)b[0] * c[2] - (double)b[2] * c[0]) +
+                    (double)a[2] * ((double)b[0] * c[1] - (double)b[1] * c[0])) / 6;
+        }
+        CHECK_MSG(fabs(vol - prisms) <= 1e-6 * fabs(prisms), "%s: volume %.9g, prisms %.9g", mname[mth], vol, prisms);
+        tsr_mesh_free(&m);
+    }
+    tsr_heightfield_destroy(hf);
+}
+
+TEST(bad_options)
+{
+    tsr_heightfield *hf = terrain(20, 20, 7);
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    tsr_error err;
+    tsr_tin_options o = {0};
+    o.max_error = -1;
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_ERR_ARGUMENT);
+    o.max_error = NAN;
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_ERR_ARGUMENT);
+    o.max_error = 1;
+    o.window_x = 15;
+    o.window_w = 10;
+    o.window_h = 5;
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_ERR_ARGUMENT);
+    CHECK(strstr(err.message, "window") != NULL);
+    o.window_x = 0;
+    o.window_w = 1;
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_ERR_ARGUMENT);
+    CHECK(m.vertex_count == 0 && m.triangle_count == 0);
+    tsr_mesh_free(&m);
+    tsr_heightfield_destroy(hf);
+}
+
+static void data_file(const char *name, const tsr_load_options *lo, double e)
+{
+    const char *data = check_data_dir();
+    char path[8192];
+    snprintf(path, sizeof path, "%s/terrain/%s", data, name);
+    tsr_heightfield *hf = NULL;
+    tsr_error err = {0};
+    CHECK_MSG(tsr_heightfield_load(path, lo, NULL, &hf, &err) == TSR_OK, "%s", err.message);
+    if (!hf)
+        return;
+    for (int mth = 0; mth < 2; mth++) {
+        tsr_tin_options o = {0};
+        o.method = methods[mth];
+        o.max_error = e;
+        bound_case(hf, o, name);
+    }
+    /* seams on real data */
+    for (int v = 0; v < 2; v++)
+        seam_case(hf, TSR_TIN_DELAUNAY, e, v);
+    tsr_heightfield_destroy(hf);
+}
+
+TEST(data_real_terrain)
+{
+    const char *data = check_data_dir();
+    if (!data)
+        SKIP("no shared data folder (set TESSERA_DATA)");
+    tsr_load_options rgb = {0};
+    rgb.decode = TSR_DECODE_TERRAIN_RGB;
+    data_file("bayhills-14-2625-6369-terrainrgb.png", &rgb, 1.0);
+    data_file("bayhills-14-2625-6369-terrainrgb.png", &rgb, 0.2);
+    data_file("valid_raster-float32.tif", NULL, 0.5);
+    data_file("egm84-epsg3857-float32.tif", NULL, 0.05);
+}
+
+TEST_MAIN(T(error_bound_generated), T(spacing_and_scale), T(flat_and_planar), T(budgets), T(nodata_holes),
+          T(window_seams), T(closed_solid), T(bad_options), T(data_real_terrain))

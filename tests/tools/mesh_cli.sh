@@ -1,0 +1,102 @@
+#!/usr/bin/env bash
+# mesh_cli.sh TESSERA NODE_MODULES [DATA]: `tessera mesh` end to end.
+#  - every method: the stats' measured max_error within --max-error (the
+#    stats' figure is the independent measurement), the stats keys present;
+#  - budgets: --triangles / --vertices never exceeded;
+#  - --window: two adjacent windows of a real heightfield (or a generated
+#    one without the data) write identical vertices on their shared column
+#    and row, read from the OBJ files;
+#  - --base: assimp reads the closed solid; --normal-map and --hillshade
+#    images have the heightfield's size (oiiotool); .glb with normals passes
+#    the Khronos validator.
+set -u
+tessera=$1 modules=$2 data=${3:-}
+dir=$(mktemp -d "${TMPDIR:-/tmp}/tsr-meshcli-XXXXXX")
+trap 'rm -rf "$dir"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+json_num() { grep -o "\"$2\":[[:space:]]*[-0-9.e+]*" "$1" | head -1 | sed 's/.*:[[:space:]]*//'; }
+le() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a <= b) }'; }
+
+"$tessera" generate --width 130 --height 97 --seed 5 -o "$dir/t.png" 2>/dev/null || fail generate
+
+# bound, per method, and the stats keys
+for m in delaunay quadtree; do
+  for e in 0.5 5 40; do
+    "$tessera" mesh "$dir/t.png" --dx 10 --method $m --max-error $e -o "$dir/m.ply" --stats "$dir/s.json" --quiet \
+      || fail "mesh $m $e"
+    for k in vertices triangles max_error rms_error seconds peak_bytes; do
+      [ -n "$(json_num "$dir/s.json" $k)" ] || fail "stats: no $k"
+    done
+    for k in '"method"' '"input"' '"width"' '"height"' '"min"' '"max"' '"nodata"'; do
+      grep -q "$k" "$dir/s.json" || fail "stats: no $k"
+    done
+    got=$(json_num "$dir/s.json" max_error)
+    le "$got" "$e" || fail "$m: measured max error $got > $e"
+    echo "ok $m --max-error $e: measured $got, $(json_num "$dir/s.json" triangles) triangles"
+  done
+done
+
+# budgets
+for m in delaunay quadtree grid; do
+  for kind in triangles vertices; do
+    for n in 50 777 5000; do
+      if ! "$tessera" mesh "$dir/t.png" --method $m --$kind $n -o "$dir/b.obj" --stats "$dir/s.json" --quiet 2> "$dir/err"; then
+        # only "below the coarsest mesh" may refuse a budget
+        grep -q "budget" "$dir/err" || fail "$m --$kind $n: $(cat "$dir/err")"
+        [ -e "$dir/b.obj" ] && fail "$m --$kind $n: output left behind"
+        echo "ok $m --$kind $n refused: $(cat "$dir/err")"
+        continue
+      fi
+      got=$(json_num "$dir/s.json" $kind)
+      [ "$got" -le "$n" ] || fail "$m --$kind $n: $got"
+      echo "ok $m --$kind $n: $got"
+      rm -f "$dir/b.obj"
+    done
+  done
+done
+
+# seams: adjacent windows share a column (vertical seam) or a row
+if [ -n "$data" ] && [ -f "$data/terrain/bayhills-14-2625-6369-terrainrgb.png" ]; then
+  in=$data/terrain/bayhills-14-2625-6369-terrainrgb.png dec="--decode terrain-rgb" W=512 H=512
+else
+  in=$dir/t.png dec="" W=130 H=97
+  echo "note: no shared data; seams on a generated heightfield"
+fi
+sx=$((W / 2 + 7)) sy=$((H / 2 - 3))
+for m in delaunay quadtree grid; do
+  opt="--max-error 1"
+  [ $m = grid ] && opt=""
+  # shellcheck disable=SC2086
+  "$tessera" mesh "$in" $dec --method $m $opt --window 0,0,$((sx + 1)),$H -o "$dir/a.obj" --quiet || fail "window a"
+  # shellcheck disable=SC2086
+  "$tessera" mesh "$in" $dec --method $m $opt --window $sx,0,$((W - sx)),$H -o "$dir/b.obj" --quiet || fail "window b"
+  # shellcheck disable=SC2086
+  "$tessera" mesh "$in" $dec --method $m $opt --window 0,$sy,$W,$((H - sy)) -o "$dir/c.obj" --quiet || fail "window c"
+  # shellcheck disable=SC2086
+  "$tessera" mesh "$in" $dec --method $m $opt --window 0,0,$W,$((sy + 1)) -o "$dir/d.obj" --quiet || fail "window d"
+  awk -v x=$sx '$1 == "v" && $2 == x' "$dir/a.obj" | sort > "$dir/a.seam"
+  awk -v x=$sx '$1 == "v" && $2 == x' "$dir/b.obj" | sort > "$dir/b.seam"
+  awk -v y=$sy '$1 == "v" && $3 == y' "$dir/c.obj" | sort > "$dir/c.seam"
+  awk -v y=$sy '$1 == "v" && $3 == y' "$dir/d.obj" | sort > "$dir/d.seam"
+  [ -s "$dir/a.seam" ] && cmp -s "$dir/a.seam" "$dir/b.seam" || fail "$m: vertical seam differs ($(wc -l < "$dir/a.seam") vs $(wc -l < "$dir/b.seam") vertices)"
+  [ -s "$dir/c.seam" ] && cmp -s "$dir/c.seam" "$dir/d.seam" || fail "$m: horizontal seam differs"
+  cmp -s "$dir/a.obj" "$dir/b.obj" && fail "$m: the windows' meshes are identical"
+  echo "ok $m seams: $(wc -l < "$dir/a.seam") and $(wc -l < "$dir/c.seam") shared vertices"
+done
+
+# a closed solid, images, glb
+"$tessera" mesh "$dir/t.png" --dx 10 --max-error 3 --base 50 -o "$dir/solid.ply" --stats "$dir/s.json" \
+  --normal-map "$dir/n.png" --hillshade "$dir/h.tif" --quiet || fail "base"
+if command -v assimp >/dev/null; then
+  faces=$(assimp info "$dir/solid.ply" 2>&1 | awk '/^Faces:/ {print $2; exit}')
+  [ "$faces" = "$(json_num "$dir/s.json" triangles)" ] || fail "assimp reads $faces faces of the solid"
+fi
+for img in n.png h.tif; do
+  oiiotool --info "$dir/$img" | grep -q "130 x  *97" || fail "$img: $(oiiotool --info "$dir/$img")"
+done
+"$tessera" mesh "$dir/t.png" --dx 10 --normals -o "$dir/m.glb" --quiet || fail "glb"
+if [ -f "$modules/gltf-validator/package.json" ]; then
+  TSR_NODE_MODULES="$modules" node "$(dirname "$0")/gltf_validate.mjs" --strict "$dir/m.glb" || fail "glTF validator"
+  echo "ok glb validated"
+fi
+echo "ok solid, images"

@@ -1,0 +1,20 @@
+/* bench.h: what the benchmarks share: an allocator that counts current and
+ * peak bytes, and the entry points of the benchmarks kept in their own
+ * files. */
+#ifndef TSR_BENCH_H
+#define TSR_BENCH_H
+
+#include "cli.h"
+
+typedef struct bench_counting {
+    size_t now, peak;
+} bench_counting;
+
+/* An allocator over malloc that adds every live byte to c->now and keeps
+ * the maximum in c->peak (c must outlive every block). */
+tsr_allocator bench_counting_allocator(bench_counting *c);
+
+/* `tessera bench mesh` (bench_mesh.c); argv[1] is "mesh". */
+int cli_bench_mesh(int argc, char **argv);
+
+#endif
