@@ -35,11 +35,14 @@
  * at least at the level max_area asks for, and
  *  (a) no vertex and no piece enters it: two triangles, or a fan from the
  *      first midpoint of a side with a finer neighbour (no Steiner point);
- *  (b) one vertex, VERTEX_MARGIN of the cell off its sides (a quarter of
- *      that in the two levels above the depth limit, anything inside at
- *      the limit), and every piece entering has it as an end and leaves
- *      through one ring point: a fan from the vertex (the cell's centre
- *      moved onto it), the edges to the exit points constrained;
+ *  (b) one vertex, strictly inside, and every piece entering that has it
+ *      as an end leaves through one ring point (others pass as chords, as
+ *      in (c)): a fan from the vertex (the cell's centre moved onto it), the
+ *      edges to the exit points constrained. No margin from the sides is
+ *      asked: a vertex near a grid line stays near it at every finer level,
+ *      so a margin split such cells down to the depth limit, with the
+ *      balancing around them (twice the triangles on the bench's polygon),
+ *      and chords give no angle bound anyway;
  *  (c) no vertex, and the pieces entering cross it as chords between two
  *      ring points each, no two crossing or sharing a point: the chords cut
  *      the convex ring into convex faces, each fanned from the first of its
@@ -61,8 +64,27 @@
  * inside. Its vertices map back by id, new ones are appended, its
  * constrained edges go back to the segments of their pieces.
  *
+ * Building: the tree is split first by what is cheap to decide (two
+ * vertices, balance, the area's level), then every leaf with features gets
+ * the full rules, which also triangulate it into the results as a record
+ * (triangles, constrained edges, faces); a leaf whose neighbours change
+ * afterwards is looked at, and recorded, again. Leaves without features are
+ * triangulated last, in Z order, their finer sides found top down.
+ *
+ * Region (tsr__tri_quadtree_region, when no hole seed applies and no cell
+ * went to the fallback): each leaf's rule knows the parts of the leaf
+ * between constrained edges that count (faces: between chords, sectors of
+ * a vertex fan), and which face each ring segment of its sides belongs to.
+ * Faces that meet across a side are joined (union-find, each shared side
+ * once, its lists paired segment by segment), then a breadth-first search
+ * over the joined parts from the square's border, a counted constrained
+ * edge costing one, gives every face the depth region_keep would give its
+ * triangles, without sorting a record per triangle; only kept faces are
+ * written. Where two lists do not pair up the general pass decides.
+ *
  * Constrained edges are listed once per input segment covering them, ids
- * ascending, so region selection can count even-odd parity.
+ * ascending, so region selection can count even-odd parity (once, with the
+ * lowest id, when the region was chosen here).
  * Not served, TSR_ERR_UNSUPPORTED with the reason: the hull region (the
  * quadtree covers the square), conforming or quality refinement, fewer than
  * three distinct points, collinear input, a max_area below the depth limit
@@ -84,8 +106,9 @@
 #define SHIFT_TRIES 8
 #define AREA_LEVEL_MAX 12
 #define GRID_NONE 255
-#define VERTEX_MARGIN 0.0625 /* of the cell; 1/8 gave 60% more triangles and no better angles */
-#define KCACHE_BITS 12       /* recent grid keys: most lookups repeat a corner just seen */
+#define DONE 0x10
+#define PAIRED 0x20
+#define KCACHE_BITS 12 /* recent grid keys: most lookups repeat a corner just seen */
 
 enum { R_SIMPLE, R_SPLIT, R_FALLBACK, R_INTERACT, R_ERROR };
 
@@ -95,12 +118,21 @@ typedef struct qpiece {
     uint32_t cov, ncov; /* all of them: seg alone when ncov is 1, else q->cov[cov..] */
 } qpiece;
 
+/* Nodes: the root, then the children of each split node, four by four
+ * (quadrant x + 2y): node 1 + 4g + k is child k of group g, which holds
+ * what the four share (their parent and its place). */
 typedef struct qnode {
-    uint32_t parent, child; /* child: first of four (quadrant x + 2y); 0 for a leaf */
-    uint32_t ix, iy;
+    uint32_t child;              /* the first of four; 0 for a leaf */
     uint32_t f, nf;              /* features: vertex ids, then PIECE_BIT | piece */
     uint8_t level, queued, fine; /* fine: sides with a finer neighbour, from the last build look */
+    uint8_t done;                /* DONE | fine: the full rules found it simple with those neighbours (and emitted it
+                                    as rec); PAIRED: its features' pairs were tested and nothing met */
+    uint32_t rec;                /* its triangles in the results, NONE until emitted */
 } qnode;
+
+typedef struct qgroup {
+    uint32_t parent, ix, iy; /* the parent and its column and row at its level */
+} qgroup;
 
 typedef struct qinter {
     uint32_t kind; /* 0: vertex `other` lies inside piece p; 1: pieces p < other cross */
@@ -131,7 +163,6 @@ typedef struct qcell {
     double g[8][2];        /* BL BR TR TL, then midpoints of bottom right top left */
     uint64_t gk[8];        /* their integer keys */
     uint64_t lx[3], ly[3]; /* integer coordinates of xs, ys at level depth + 1 */
-    double vx[2], vy[2];   /* where a lone vertex may lie */
     bool fine[4];          /* sides: bottom right top left */
 } qcell;
 
@@ -140,27 +171,33 @@ typedef struct qsplit {
     double t;
 } qsplit;
 
-typedef struct qslot {
-    double x, y;
-    uint32_t id; /* NONE: empty */
-    uint32_t pad;
-} qslot;
-
 typedef struct qkslot {
     uint64_t key;
     uint32_t id; /* NONE: empty */
     uint32_t pad;
 } qkslot;
 
+/* A leaf's triangles in q->tri, its constrained edges in q->edge, and
+ * (when choosing the region) its faces (parts between counted constrained
+ * edges) and side lists in q->sl. */
+typedef struct qrec {
+    uint32_t tri, ntri, edge, nedge;
+    uint32_t side;  /* byte offset of its lists in q->sl; NONE when not choosing */
+    uint32_t nface; /* its faces: face .. face + nface */
+    uint32_t face;  /* NONE for a record a later look replaced */
+} qrec;
+
 typedef struct qt {
     const tsr_allocator *al;
     double *xy; /* output vertices: distinct inputs, crossings, then the rest */
     size_t nxy, capxy;
-    qslot *hs; /* coordinate hash: inputs and crossings */
+    uint32_t *hs; /* coordinate hash: inputs and crossings (vertex ids, NONE: empty) */
     size_t hcap;
-    qkslot *ks; /* integer-key hash: grid points and side crossings */
+    uint32_t *ks; /* integer-key hash: grid points and side crossings (vertex ids, NONE: empty) */
     size_t kcap, nks;
     int kbits;
+    uint64_t *vkey; /* the key of each vertex in ks */
+    size_t capvkey;
     qkslot *kc;        /* direct-mapped cache in front of it, 1 << KCACHE_BITS */
     uint32_t nin, nfv; /* distinct inputs; feature vertices (inputs and crossings) */
     qpiece *pc;
@@ -169,8 +206,10 @@ typedef struct qt {
     size_t ncov, capcov;
     qnode *nd;
     size_t nnd, capnd, budget;
+    qgroup *grp;
+    size_t capgrp;
     uint32_t *ft;
-    size_t nft, capft;
+    size_t nft, capft, ftlive; /* ftlive: entries in leaves' lists */
     uint32_t *stk;
     size_t nstk, capstk;
     uint8_t *mask;
@@ -178,6 +217,7 @@ typedef struct qt {
     double ox, oy, S, h[DEPTH_MAX + 2];
     int depth, min_level;
     bool detect;
+    bool cheap; /* first pass of a build: split by vertex count and balance only */
     qinter *it;
     size_t nit, capit;
     /* one leaf's scratch */
@@ -193,12 +233,33 @@ typedef struct qt {
     size_t nstri, capstri;
     uint32_t *sedge;
     size_t nsedge, capsedge;
+    /* labels of parts of the leaf (faces before merging across constrained
+     * edges that do not count): of each triangle, ring segment i -> i + 1,
+     * and both sides of each constrained edge */
+    uint32_t *stlab, *slab, *elab;
+    size_t capstlab, capslab, capelab;
+    uint32_t nlab, curlab;
     /* results */
     uint32_t *tri;
     size_t ntri, captri;
     uint32_t *edge; /* a, b, segment */
     size_t nedge, capedge;
     uint32_t intersections, fallback_cells;
+    /* emission; the region chosen from the cells (fast: no hole seeds, no
+     * fallback cell, every side matched) */
+    bool fast;
+    tsr_region region;
+    uint8_t *sl; /* per leaf with features: 4 x (n, mid, n faces) from side 0, then npair, npair x (face, face) */
+    size_t nsl, capsl;
+    uint8_t *tface; /* face of each triangle in q->tri, within its leaf */
+    size_t captface;
+    uint8_t *ef; /* faces on both sides of each entry of edge[], within its leaf */
+    size_t capef;
+    qrec *rec;
+    size_t nrec, caprec;
+    uint32_t nface;
+    uint32_t *lfs; /* one leaf's faces */
+    size_t caplfs;
     const char *why_not;
     tsr_status status;
     tsr_error *err;
@@ -251,16 +312,17 @@ static bool hash_grow(qt *q, size_t need)
         nc *= 2;
     if (nc == q->hcap)
         return true;
-    qslot *hs = tsr_alloc(q->al, nc * sizeof *hs);
+    uint32_t *hs = tsr_alloc(q->al, nc * sizeof *hs);
     if (!hs)
         return false;
     for (size_t i = 0; i < nc; i++)
-        hs[i].id = NONE;
+        hs[i] = NONE;
     for (size_t k = 0; k < q->hcap; k++) {
-        if (q->hs[k].id == NONE)
+        if (q->hs[k] == NONE)
             continue;
-        size_t i = hash_xy(q->hs[k].x, q->hs[k].y) & (nc - 1);
-        while (hs[i].id != NONE)
+        const double *P = V(q, q->hs[k]);
+        size_t i = hash_xy(P[0], P[1]) & (nc - 1);
+        while (hs[i] != NONE)
             i = (i + 1) & (nc - 1);
         hs[i] = q->hs[k];
     }
@@ -279,19 +341,21 @@ static uint32_t vertex_id(qt *q, double x, double y, bool *added)
     if (2 * (q->nxy + 1) > q->hcap && !hash_grow(q, q->nxy + 1))
         return NONE;
     size_t mask = q->hcap - 1, i = hash_xy(x, y) & mask;
-    for (; q->hs[i].id != NONE; i = (i + 1) & mask)
-        if (q->hs[i].x == x && q->hs[i].y == y)
-            return q->hs[i].id;
+    for (; q->hs[i] != NONE; i = (i + 1) & mask)
+        if (V(q, q->hs[i])[0] == x && V(q, q->hs[i])[1] == y)
+            return q->hs[i];
     if (q->nxy >= UINT32_MAX - 2 || !RESERVE(q, q->xy, q->capxy, 2 * (q->nxy + 1)))
         return NONE;
     q->xy[2 * q->nxy] = x;
     q->xy[2 * q->nxy + 1] = y;
-    q->hs[i] = (qslot){x, y, (uint32_t)q->nxy, 0};
+    q->hs[i] = (uint32_t)q->nxy;
     if (added)
         *added = true;
     return (uint32_t)q->nxy++;
 }
 
+/* Sizes the key hash for `need` keys (at most half full: every probe reads
+ * the key of a vertex). */
 static bool khash_grow(qt *q, size_t need)
 {
     if (!q->kc) {
@@ -302,23 +366,23 @@ static bool khash_grow(qt *q, size_t need)
             q->kc[i].id = NONE;
     }
     size_t nc = q->kcap ? q->kcap : 1024;
-    while (3 * nc < 4 * need)
+    while (nc < 2 * need)
         nc *= 2;
     if (nc == q->kcap)
         return true;
-    qkslot *ks = tsr_alloc(q->al, nc * sizeof *ks);
+    uint32_t *ks = tsr_alloc(q->al, nc * sizeof *ks);
     if (!ks)
         return false;
     for (size_t i = 0; i < nc; i++)
-        ks[i].id = NONE;
+        ks[i] = NONE;
     int bits = 0;
     while ((size_t)1 << bits < nc)
         bits++;
     for (size_t k = 0; k < q->kcap; k++) {
-        if (q->ks[k].id == NONE)
+        if (q->ks[k] == NONE)
             continue;
-        size_t i = (size_t)((q->ks[k].key * 0x9E3779B97F4A7C15ull) >> (64 - bits));
-        while (ks[i].id != NONE)
+        size_t i = (size_t)((q->vkey[q->ks[k]] * 0x9E3779B97F4A7C15ull) >> (64 - bits));
+        while (ks[i] != NONE)
             i = (i + 1) & (nc - 1);
         ks[i] = q->ks[k];
     }
@@ -333,24 +397,26 @@ static bool khash_grow(qt *q, size_t need)
  * at (x, y), appended when new; NONE when out of memory. */
 static uint32_t point_id(qt *q, uint64_t key, double x, double y)
 {
-    if (4 * (q->nks + 1) > 3 * q->kcap && !khash_grow(q, q->nks + 1))
+    if (2 * (q->nks + 1) > q->kcap && !khash_grow(q, q->nks + 1))
         return NONE;
     uint64_t h = key * 0x9E3779B97F4A7C15ull;
     qkslot *c = &q->kc[h >> (64 - KCACHE_BITS)];
     if (c->id != NONE && c->key == key)
         return c->id;
     size_t mask = q->kcap - 1, i = (size_t)(h >> (64 - q->kbits));
-    for (; q->ks[i].id != NONE; i = (i + 1) & mask)
-        if (q->ks[i].key == key) {
-            *c = q->ks[i];
+    for (; q->ks[i] != NONE; i = (i + 1) & mask)
+        if (q->vkey[q->ks[i]] == key) {
+            *c = (qkslot){key, q->ks[i], 0};
             return c->id;
         }
-    if (q->nxy >= UINT32_MAX - 2 || !RESERVE(q, q->xy, q->capxy, 2 * (q->nxy + 1)))
+    if (q->nxy >= UINT32_MAX - 2 || !RESERVE(q, q->xy, q->capxy, 2 * (q->nxy + 1)) ||
+        !RESERVE(q, q->vkey, q->capvkey, q->nxy + 1))
         return NONE;
     q->xy[2 * q->nxy] = x;
     q->xy[2 * q->nxy + 1] = y;
-    q->ks[i] = (qkslot){key, (uint32_t)q->nxy, 0};
-    *c = q->ks[i];
+    q->vkey[q->nxy] = key;
+    q->ks[i] = (uint32_t)q->nxy;
+    *c = (qkslot){key, q->ks[i], 0};
     q->nks++;
     return (uint32_t)q->nxy++;
 }
@@ -495,6 +561,19 @@ static bool is_leaf(const qt *q, uint32_t n)
     return q->nd[n].child == 0;
 }
 
+/* Node n's column and row at its level. */
+static void node_at(const qt *q, uint32_t n, uint32_t *ix, uint32_t *iy)
+{
+    if (n == 0) {
+        *ix = *iy = 0;
+        return;
+    }
+    const qgroup *g = &q->grp[(n - 1) >> 2];
+    unsigned quad = (n - 1) & 3;
+    *ix = 2 * g->ix + (quad & 1);
+    *iy = 2 * g->iy + (quad >> 1);
+}
+
 /* The node of n's level across side s (0 bottom, 1 right, 2 top, 3 left),
  * or the coarser leaf there; NONE at the border of the square. */
 static uint32_t neighbour(const qt *q, uint32_t n, int s)
@@ -507,18 +586,25 @@ static uint32_t neighbour(const qt *q, uint32_t n, int s)
     for (;;) {
         if (cur == 0)
             return NONE;
-        const qnode *c = &q->nd[cur];
-        unsigned quad = (c->ix & 1) | ((c->iy & 1) << 1);
+        uint32_t g = (cur - 1) >> 2;
+        unsigned quad = (cur - 1) & 3;
         if ((quad & bit[s]) == inside[s]) {
-            cur = q->nd[c->parent].child + (quad ^ bit[s]);
+            cur = 1 + 4 * g + (quad ^ bit[s]); /* a sibling */
             break;
         }
         path[k++] = (uint8_t)quad;
-        cur = c->parent;
+        cur = q->grp[g].parent;
     }
     while (k > 0 && !is_leaf(q, cur))
         cur = q->nd[cur].child + (path[--k] ^ bit[s]);
     return cur;
+}
+
+/* The node across a side from the child `quad` of a node whose neighbour
+ * there is m: m's child when m is an inner node of the same level. */
+static uint32_t down(const qt *q, uint32_t m, unsigned quad)
+{
+    return m != NONE && !is_leaf(q, m) ? q->nd[m].child + quad : m;
 }
 
 static bool push(qt *q, uint32_t n)
@@ -541,30 +627,19 @@ static void cell_geometry(const qt *q, uint32_t n, qcell *c)
 {
     const qnode *d = &q->nd[n];
     int L = d->level;
-    double fx = d->ix, fy = d->iy;
+    uint32_t ix, iy;
+    node_at(q, n, &ix, &iy);
+    double fx = ix, fy = iy;
     c->n = n;
     c->level = L;
     for (int i = 0; i < 3; i++) {
         c->xs[i] = gcoord(q, q->ox, L, fx + 0.5 * i);
         c->ys[i] = gcoord(q, q->oy, L, fy + 0.5 * i);
     }
-    /* a vertex keeps VERTEX_MARGIN of the cell from its sides, less in the last
-     * levels before the depth limit, and at the limit only off them */
-    double m = L < q->depth - 2 ? VERTEX_MARGIN : L < q->depth ? VERTEX_MARGIN / 4 : 0;
-    c->vx[0] = gcoord(q, q->ox, L, fx + m);
-    c->vx[1] = gcoord(q, q->ox, L, fx + 1 - m);
-    c->vy[0] = gcoord(q, q->oy, L, fy + m);
-    c->vy[1] = gcoord(q, q->oy, L, fy + 1 - m);
-    if (m == 0) {
-        c->vx[0] = nextafter(c->vx[0], INFINITY);
-        c->vx[1] = nextafter(c->vx[1], -INFINITY);
-        c->vy[0] = nextafter(c->vy[0], INFINITY);
-        c->vy[1] = nextafter(c->vy[1], -INFINITY);
-    }
     int sh = q->depth - L; /* half a cell at level depth + 1 */
     for (int i = 0; i < 3; i++) {
-        c->lx[i] = ((uint64_t)2 * d->ix + (unsigned)i) << sh;
-        c->ly[i] = ((uint64_t)2 * d->iy + (unsigned)i) << sh;
+        c->lx[i] = ((uint64_t)2 * ix + (unsigned)i) << sh;
+        c->ly[i] = ((uint64_t)2 * iy + (unsigned)i) << sh;
     }
     static const uint8_t gi[8][2] = {{0, 0}, {2, 0}, {2, 2}, {0, 2}, {1, 0}, {2, 1}, {1, 2}, {0, 1}};
     for (int k = 0; k < 8; k++) {
@@ -572,6 +647,25 @@ static void cell_geometry(const qt *q, uint32_t n, qcell *c)
         c->g[k][1] = c->ys[gi[k][1]];
         c->gk[k] = c->lx[gi[k][0]] << 31 | c->ly[gi[k][1]];
     }
+}
+
+/* Moves the leaves' feature lists to the front of q->ft, dropping those of
+ * inner nodes (lists lie in node order). */
+static void compact_features(qt *q)
+{
+    size_t w = 0;
+    for (size_t n = 0; n < q->nnd; n++) {
+        qnode *d = &q->nd[n];
+        if (d->child != 0) {
+            d->f = (uint32_t)w;
+            d->nf = 0;
+            continue;
+        }
+        memmove(q->ft + w, q->ft + d->f, d->nf * sizeof *q->ft);
+        d->f = (uint32_t)w;
+        w += d->nf;
+    }
+    q->nft = w;
 }
 
 /* Splits leaf n into four, handing each child the features meeting its
@@ -583,7 +677,10 @@ static int split(qt *q, uint32_t n)
         q->status = TSR_ERR_UNSUPPORTED;
         return R_ERROR;
     }
-    uint32_t nf = q->nd[n].nf, f0 = q->nd[n].f;
+    uint32_t nf = q->nd[n].nf;
+    if (q->nft + 4 * (size_t)nf > q->capft && 2 * q->ftlive < q->nft)
+        compact_features(q);
+    uint32_t f0 = q->nd[n].f;
     if (!RESERVE(q, q->nd, q->capnd, q->nnd + 4) || !RESERVE(q, q->ft, q->capft, q->nft + 4 * (size_t)nf) ||
         !RESERVE(q, q->mask, q->capmask, nf))
         return nomem(q);
@@ -592,69 +689,138 @@ static int split(qt *q, uint32_t n)
         q->status = TSR_ERR_UNSUPPORTED;
         return R_ERROR;
     }
-    qcell c;
-    cell_geometry(q, n, &c);
+    const qnode *pd = &q->nd[n];
+    int L = pd->level;
+    uint32_t pix, piy;
+    node_at(q, n, &pix, &piy);
+    double xs[3], ys[3];
+    for (int i = 0; i < 3; i++) {
+        xs[i] = gcoord(q, q->ox, L, pix + 0.5 * i);
+        ys[i] = gcoord(q, q->oy, L, piy + 0.5 * i);
+    }
+    static const uint8_t only[9] = {0, 0, 1, 0, 2, 0, 0, 0, 3}; /* the quadrant of a one-bit mask */
     const uint32_t *list = q->ft + f0;
+    uint32_t count[4] = {0, 0, 0, 0}, nvert[4] = {0, 0, 0, 0};
     for (uint32_t i = 0; i < nf; i++) {
         uint32_t f = list[i];
         unsigned m = 0;
         if (!(f & PIECE_BIT)) {
             const double *P = V(q, f);
-            unsigned wx = P[0] <= c.xs[1], ex = P[0] >= c.xs[1], sy = P[1] <= c.ys[1], ny = P[1] >= c.ys[1];
-            m = (wx && sy) | (ex && sy) << 1 | (wx && ny) << 2 | (ex && ny) << 3;
+            unsigned wx = P[0] <= xs[1], ex = P[0] >= xs[1], sy = P[1] <= ys[1], ny = P[1] >= ys[1];
+            m = (wx & sy) | (ex & sy) << 1 | (wx & ny) << 2 | (ex & ny) << 3;
+            if (m == 1 || m == 2 || m == 4 || m == 8)
+                nvert[only[m]]++;
+            else
+                for (unsigned quad = 0; quad < 4; quad++)
+                    nvert[quad] += m >> quad & 1;
         } else {
             const qpiece *p = &q->pc[f & ~PIECE_BIT];
             const double *A = V(q, p->a), *B = V(q, p->b);
             double lx = A[0] < B[0] ? A[0] : B[0];
             double ux = A[0] < B[0] ? B[0] : A[0], ly = A[1] < B[1] ? A[1] : B[1], uy = A[1] < B[1] ? B[1] : A[1];
-            int o[9];
-            bool have[9] = {false};
-            for (unsigned quad = 0; quad < 4; quad++) {
-                unsigned cx = quad & 1, cy = quad >> 1;
-                if (ux < c.xs[cx] || lx > c.xs[cx + 1] || uy < c.ys[cy] || ly > c.ys[cy + 1])
-                    continue;
-                int pos = 0, neg = 0;
-                for (unsigned k = 0; k < 4; k++) {
-                    unsigned gx = cx + (k & 1), gy = cy + (k >> 1), g = gy * 3 + gx;
-                    if (!have[g]) {
-                        double P[2] = {c.xs[gx], c.ys[gy]};
-                        o[g] = sgn(tsr_orient2d(A, B, P));
-                        have[g] = true;
+            /* the quadrants its box meets; the piece meets the closed cell, so
+             * one quadrant alone is met (the common case, with no predicate) */
+            unsigned bx = (lx <= xs[1]) | (ux >= xs[1]) << 1, by = (ly <= ys[1]) | (uy >= ys[1]) << 1;
+            unsigned box =
+                (bx & 1 && by & 1) | (bx >> 1 && by & 1) << 1 | (bx & 1 && by >> 1) << 2 | (bx >> 1 && by >> 1) << 3;
+            if ((box & (box - 1)) == 0)
+                m = box;
+            else {
+                int o[9];
+                bool have[9] = {false};
+                for (unsigned quad = 0; quad < 4; quad++) {
+                    unsigned cx = quad & 1, cy = quad >> 1;
+                    if (!(box >> quad & 1))
+                        continue;
+                    int pos = 0, neg = 0;
+                    for (unsigned k = 0; k < 4; k++) {
+                        unsigned gx = cx + (k & 1), gy = cy + (k >> 1), g = gy * 3 + gx;
+                        if (!have[g]) {
+                            double P[2] = {xs[gx], ys[gy]};
+                            o[g] = sgn(tsr_orient2d(A, B, P));
+                            have[g] = true;
+                        }
+                        pos += o[g] > 0;
+                        neg += o[g] < 0;
                     }
-                    pos += o[g] > 0;
-                    neg += o[g] < 0;
+                    if (pos < 4 && neg < 4)
+                        m |= 1u << quad;
                 }
-                if (pos < 4 && neg < 4)
-                    m |= 1u << quad;
             }
         }
         q->mask[i] = (uint8_t)m;
+        if (m == 1 || m == 2 || m == 4 || m == 8)
+            count[only[m]]++;
+        else
+            for (unsigned quad = 0; quad < 4; quad++)
+                count[quad] += m >> quad & 1;
     }
-    uint32_t first = (uint32_t)q->nnd;
+    uint32_t first = (uint32_t)q->nnd, at[4];
+    if (!RESERVE(q, q->grp, q->capgrp, (first - 1) / 4 + 1))
+        return nomem(q);
+    q->grp[(first - 1) / 4] = (qgroup){n, pix, piy};
     q->nnd += 4;
     qnode *d = &q->nd[n];
     d->child = first;
     for (unsigned quad = 0; quad < 4; quad++) {
         qnode *ch = &q->nd[first + quad];
-        ch->parent = n;
         ch->child = 0;
-        ch->ix = 2 * d->ix + (quad & 1);
-        ch->iy = 2 * d->iy + (quad >> 1);
         ch->level = (uint8_t)(d->level + 1);
         ch->queued = 0;
         ch->fine = 0;
-        ch->f = (uint32_t)q->nft;
-        for (uint32_t i = 0; i < nf; i++)
-            if (q->mask[i] >> quad & 1)
-                q->ft[q->nft++] = q->ft[f0 + i];
-        ch->nf = (uint32_t)(q->nft - ch->f);
+        ch->done = d->done & PAIRED; /* a subset of the features: their pairs are tested */
+        ch->rec = NONE;
+        ch->f = at[quad] = (uint32_t)q->nft;
+        ch->nf = count[quad];
+        q->nft += count[quad];
+        q->ftlive += count[quad];
     }
-    for (unsigned quad = 0; quad < 4; quad++)
-        if (!push(q, first + quad))
+    q->ftlive -= nf;
+    for (uint32_t i = 0; i < nf; i++) { /* in order: vertices stay first */
+        unsigned m = q->mask[i];
+        uint32_t f = q->ft[f0 + i];
+        if (m & 1)
+            q->ft[at[0]++] = f;
+        if (m & 2)
+            q->ft[at[1]++] = f;
+        if (m & 4)
+            q->ft[at[2]++] = f;
+        if (m & 8)
+            q->ft[at[3]++] = f;
+    }
+    uint32_t nb[4];
+    for (int s = 0; s < 4; s++)
+        nb[s] = neighbour(q, n, s);
+    /* the children to look at: those the rules may split (two vertices,
+     * the area's level, a neighbour two levels finer: balance is checked
+     * here from n's neighbours), and with the full rules those with
+     * features */
+    static const uint8_t adj[4][2] = {{2, 3}, {0, 2}, {0, 1}, {1, 3}};
+    for (unsigned quad = 0; quad < 4; quad++) {
+        const qnode *ch = &q->nd[first + quad];
+        bool look = nvert[quad] >= 2 || ch->level < q->min_level || (!q->cheap && ch->nf > 0);
+        for (int s = 0; s < 4 && !look; s++) {
+            unsigned x = quad & 1, y = quad >> 1;
+            bool out = s == 0 ? !y : s == 1 ? x : s == 2 ? y : !x;
+            if (!out)
+                continue; /* a sibling: a leaf */
+            uint32_t m = down(q, nb[s], s == 0 ? quad + 2 : s == 1 ? quad - 1 : s == 2 ? quad - 2 : quad + 1);
+            if (m != NONE && !is_leaf(q, m) && q->nd[m].level == ch->level) {
+                uint32_t c2 = q->nd[m].child;
+                look = !is_leaf(q, c2 + adj[s][0]) || !is_leaf(q, c2 + adj[s][1]);
+            }
+        }
+        if (look && !push(q, first + quad))
             return nomem(q);
+    }
+    /* neighbours to look at again: a coarser leaf may now be out of
+     * balance; one of the same level has a finer side now, which matters to
+     * a leaf with features, emitted by the full rules (a leaf without
+     * features finds its finer sides when emitted) */
     for (int s = 0; s < 4; s++) {
-        uint32_t m = neighbour(q, n, s);
-        if (m != NONE && is_leaf(q, m) && !push(q, m))
+        uint32_t m = nb[s];
+        if (m != NONE && is_leaf(q, m) && (q->nd[m].level < q->nd[n].level || (!q->cheap && q->nd[m].nf > 0)) &&
+            !push(q, m))
             return nomem(q);
     }
     return R_SPLIT;
@@ -879,8 +1045,9 @@ static bool build_ring(qt *q, const qcell *c, bool all_meets, bool with_vertices
 
 static bool add_tri(qt *q, uint32_t a, uint32_t b, uint32_t c)
 {
-    if (!RESERVE(q, q->stri, q->capstri, q->nstri + 3))
+    if (!RESERVE(q, q->stri, q->capstri, q->nstri + 3) || !RESERVE(q, q->stlab, q->capstlab, q->nstri / 3 + 1))
         return false;
+    q->stlab[q->nstri / 3] = q->curlab;
     q->stri[q->nstri++] = a;
     q->stri[q->nstri++] = b;
     q->stri[q->nstri++] = c;
@@ -889,7 +1056,7 @@ static bool add_tri(qt *q, uint32_t a, uint32_t b, uint32_t c)
 
 static bool add_sedge(qt *q, uint32_t a, uint32_t b, uint32_t piece)
 {
-    if (!RESERVE(q, q->sedge, q->capsedge, q->nsedge + 3))
+    if (!RESERVE(q, q->sedge, q->capsedge, q->nsedge + 3) || !RESERVE(q, q->elab, q->capelab, 2 * (q->nsedge / 3 + 1)))
         return false;
     q->sedge[q->nsedge++] = a;
     q->sedge[q->nsedge++] = b;
@@ -939,7 +1106,7 @@ static bool fan_part(qt *q, const uint32_t *idx, size_t k)
     for (size_t a = 0; a < tries; a++) {
         unsigned ma = side_mask(&q->ring[idx[a]]);
         double worst = 1;
-        for (size_t e = 0; e < k && worst >= 0; e++) {
+        for (size_t e = 0; e < k && worst >= 0 && worst > best_shape; e++) { /* stop once it cannot win */
             size_t f = (e + 1) % k;
             if (e == a || f == a)
                 continue;
@@ -1020,7 +1187,17 @@ static bool pair_tests(qt *q)
             uint32_t pi = q->sm[i].piece, pj = q->sm[j].piece;
             const qpiece *p = &q->pc[pi], *r = &q->pc[pj];
             const double *A = V(q, p->a), *B = V(q, p->b), *C = V(q, r->a), *D = V(q, r->b);
-            int o1 = sgn(tsr_orient2d(A, B, C)), o2 = sgn(tsr_orient2d(A, B, D));
+            int o1, o2;
+            if (r->a == p->a || r->a == p->b) { /* a shared end gives an exact zero, which the filter cannot certify */
+                o1 = 0;
+                o2 = sgn(tsr_orient2d(A, B, D));
+            } else if (r->b == p->a || r->b == p->b) {
+                o1 = sgn(tsr_orient2d(A, B, C));
+                o2 = 0;
+            } else {
+                o1 = sgn(tsr_orient2d(A, B, C));
+                o2 = sgn(tsr_orient2d(A, B, D));
+            }
             if (o1 == 0 && o2 == 0) { /* collinear: split each at the other's ends inside it */
                 const uint32_t ends[4][2] = {{pi, r->a}, {pi, r->b}, {pj, p->a}, {pj, p->b}};
                 for (int k = 0; k < 4; k++) {
@@ -1049,29 +1226,83 @@ static bool pair_tests(qt *q)
 
 static tsr_status fallback(qt *q, const qcell *c);
 
+/* Does crossing piece pi count for the region (the even-odd rule skips
+ * pieces covered by an even number of segments)? */
+static bool piece_counts(const qt *q, uint32_t pi)
+{
+    return q->region != TSR_REGION_EVEN_ODD || (q->pc[pi].ncov & 1);
+}
+
+/* Fans face[0 .. k) (ring positions, counter-clockwise) from ring point a,
+ * labelled by sector: the constrained edges from a to its exits (xse[pos]:
+ * the sedge of the exit at ring position pos, or NONE) that count part it.
+ * The face's ring segments get the labels of their triangles; a chord on
+ * the face (cse[pos]: the sedge of the chord from pos, partner[pos] its
+ * other end) has its side `flab` relabelled. */
+static bool apex_fan(qt *q, uint32_t a, const uint32_t *face, size_t k, const uint32_t *xse, const uint32_t *cse,
+                     const uint32_t *partner, uint32_t flab)
+{
+    uint32_t cnt = 0, base = q->nlab, sec = 0, first = NONE, prev = NONE;
+    for (size_t e = 0; e < k; e++)
+        cnt += xse[face[e]] != NONE && piece_counts(q, q->sedge[3 * xse[face[e]] + 2]);
+    if (cnt > 0)
+        q->nlab += cnt;
+    for (size_t e = 0; e < k; e++) {
+        uint32_t u = face[e], v = face[e + 1 == k ? 0 : e + 1], x = xse[u];
+        if (e > 0 && x != NONE && piece_counts(q, q->sedge[3 * x + 2]))
+            sec++;
+        uint32_t lab = cnt ? base + sec % cnt : flab;
+        q->curlab = lab;
+        if (!add_tri(q, a, u, v))
+            return false;
+        if (partner && partner[u] == v) { /* a chord: this side of it */
+            uint32_t c = cse[u];
+            q->elab[2 * c + (q->elab[2 * c] == flab ? 0 : 1)] = lab;
+        } else
+            q->slab[u] = lab;
+        if (x != NONE) {
+            q->elab[2 * x + 1] = lab;
+            if (e > 0)
+                q->elab[2 * x] = prev;
+        }
+        if (e == 0)
+            first = x;
+        prev = lab;
+    }
+    if (first != NONE)
+        q->elab[2 * first] = prev; /* the last triangle is before the first */
+    return true;
+}
+
 /* The ring cut by the chords (meets with use 1; they must not cross: their
  * ring intervals nest) into convex faces, each fanned from the first of its
  * points that serves, except the face holding the apex (ring index `apex`,
  * or NONE), which is fanned from it: the exits of the apex's pieces (meets
  * with use 2) must lie on that face. Chords and apex-to-exit edges become
- * constrained edges. R_SIMPLE, R_SPLIT (chords cross or share a point, an
- * exit lies beyond a chord, a face cannot be fanned) or R_ERROR. */
+ * constrained edges. Labels the parts (q->stlab, slab, elab). R_SIMPLE,
+ * R_SPLIT (chords cross or share a point, an exit lies beyond a chord, a
+ * face cannot be fanned) or R_ERROR. */
 static int chord_faces(qt *q, uint32_t nr, uint32_t apex)
 {
     /* partner[i]: the other end of the chord at ring position i */
-    if (!RESERVE(q, q->idx, q->capidx, 10 * (size_t)nr + 8))
+    if (!RESERVE(q, q->idx, q->capidx, 12 * (size_t)nr + 8))
         return nomem(q);
     uint32_t *partner = q->idx, *stack = partner + nr, *exit = stack + nr + 1, *start = exit + nr;
-    uint32_t *pairs = start + nr + 2, *poly = pairs + 4 * (size_t)nr, nface = 0;
+    uint32_t *pairs = start + nr + 2, *poly = pairs + 4 * (size_t)nr, *cse = poly + 2 * (size_t)nr, *xse = cse + nr;
+    uint32_t nface = 0;
     /* pairs: (face, position), at most 2 per position; poly: faces' points
      * grouped by face, face f at poly[start[f] .. start[f + 1]) */
     size_t nexit = 0;
     for (uint32_t i = 0; i < nr; i++)
-        partner[i] = NONE;
+        partner[i] = xse[i] = NONE;
     for (size_t i = 0; i < q->nsm; i++) {
         const qmeet *m = &q->sm[i];
         if (m->use == 2) {
             exit[nexit++] = m->ri[0];
+            if (xse[m->ri[0]] != NONE)
+                q->fast = false; /* two exits at one point: one edge, covered twice */
+            else
+                xse[m->ri[0]] = (uint32_t)(q->nsedge / 3);
             if (!add_sedge(q, apex, m->ri[0], m->piece))
                 return nomem(q);
         }
@@ -1082,6 +1313,7 @@ static int chord_faces(qt *q, uint32_t nr, uint32_t apex)
             return R_SPLIT;
         partner[u] = v;
         partner[v] = u;
+        cse[u] = cse[v] = (uint32_t)(q->nsedge / 3);
         if (!add_sedge(q, u, v, m->piece))
             return nomem(q);
     }
@@ -1095,22 +1327,24 @@ static int chord_faces(qt *q, uint32_t nr, uint32_t apex)
         uint32_t j = partner[i];
         pairs[2 * np] = stack[depth - 1];
         pairs[2 * np++ + 1] = i;
-        if (j == NONE)
-            continue;
-        if (j > i) {
+        if (j != NONE && j > i) {
+            q->elab[2 * cse[i]] = stack[depth - 1];
+            q->elab[2 * cse[i] + 1] = nface;
             stack[depth++] = nface++;
             pairs[2 * np] = stack[depth - 1];
             pairs[2 * np++ + 1] = i;
-        } else {
+        } else if (j != NONE) {
             if (depth < 2)
                 return R_SPLIT;
             depth--;
             pairs[2 * np] = stack[depth - 1];
             pairs[2 * np++ + 1] = i;
         }
+        q->slab[i] = stack[depth - 1]; /* the segment i -> i + 1 */
     }
     if (depth != 1)
         return R_SPLIT;
+    q->nlab = nface;
     for (uint32_t f = 0; f <= nface; f++)
         start[f] = 0;
     for (size_t e = 0; e < np; e++)
@@ -1139,19 +1373,147 @@ static int chord_faces(qt *q, uint32_t nr, uint32_t apex)
                 if (e == k)
                     return R_SPLIT; /* a chord between the vertex and its exit */
             }
-            for (size_t e = 0; e < k; e++)
-                if (!add_tri(q, apex, face[e], face[(e + 1) % k]))
-                    return nomem(q);
+            if (!apex_fan(q, apex, face, k, xse, cse, partner, f))
+                return nomem(q);
             placed = true;
             continue;
         }
+        q->curlab = f;
         if (!fan_part(q, face, k))
             return q->status != TSR_OK ? R_ERROR : R_SPLIT;
     }
     return placed ? R_SIMPLE : R_SPLIT;
 }
 
-/* Decides leaf n (and with emit, triangulates it into the results). */
+static uint32_t uf_find(uint32_t *par, uint32_t x)
+{
+    while (par[x] != x)
+        x = par[x] = par[par[x]];
+    return x;
+}
+
+/* The faces of the leaf just triangulated, from the labels its rules gave
+ * (q->stlab, slab, elab): labels joined across constrained edges that do
+ * not count. Leaves in q->lfs the face of each triangle, then of both sides
+ * of each constrained edge; appends to q->sl its side lists (each side's
+ * ring segments in ascending coordinate order: how many, how many lie below
+ * the midpoint, and their faces) and its pairs of faces across counted
+ * constrained edges, all in bytes. False on running out of memory
+ * (q->status), or with q->fast cleared for a leaf too big for bytes. */
+static bool cell_faces(qt *q, qrec *lf, const qcell *c)
+{
+    uint32_t T = (uint32_t)(q->nstri / 3), nr = (uint32_t)q->nring, ns = (uint32_t)(q->nsedge / 3), nl = q->nlab;
+    if (!RESERVE(q, q->lfs, q->caplfs, (size_t)T + 2 * (size_t)ns + 2 * (size_t)nl + 8)) {
+        q->status = TSR_ERR_NOMEM;
+        return false;
+    }
+    uint32_t *face = q->lfs, *sface = face + T, *par = sface + 2 * ns, *lface = par + nl;
+    for (uint32_t l = 0; l < nl; l++) {
+        par[l] = l;
+        lface[l] = NONE;
+    }
+    for (uint32_t e = 0; e < ns; e++)
+        if (!piece_counts(q, q->sedge[3 * e + 2]))
+            par[uf_find(par, q->elab[2 * e])] = uf_find(par, q->elab[2 * e + 1]);
+    uint32_t nf = 0;
+    for (uint32_t l = 0; l < nl; l++) {
+        uint32_t r = uf_find(par, l);
+        if (lface[r] == NONE)
+            lface[r] = nf++;
+        lface[l] = lface[r];
+    }
+    for (uint32_t t = 0; t < T; t++)
+        face[t] = lface[q->stlab[t]];
+    uint32_t cs[5], mid[4] = {NONE, NONE, NONE, NONE}, npair = 0;
+    for (uint32_t i = 0; i < nr; i++) {
+        uint8_t g = q->ring[i].grid;
+        if (g < 4)
+            cs[g] = i;
+        else if (g < 8)
+            mid[g - 4] = i;
+    }
+    cs[4] = nr;
+    for (uint32_t e = 0; e < ns; e++) {
+        sface[2 * e] = lface[q->elab[2 * e]];
+        sface[2 * e + 1] = lface[q->elab[2 * e + 1]];
+        npair += piece_counts(q, q->sedge[3 * e + 2]) && sface[2 * e] != sface[2 * e + 1];
+    }
+    bool small = nf < 255 && npair < 255;
+    for (int s = 0; s < 4; s++)
+        small &= cs[s + 1] - cs[s] < 255;
+    if (!small) {
+        q->fast = false;
+        return false;
+    }
+    if (!RESERVE(q, q->sl, q->capsl, q->nsl + 9 + (size_t)nr + 2 * (size_t)npair)) {
+        q->status = TSR_ERR_NOMEM;
+        return false;
+    }
+    lf->nface = nf;
+    lf->side = (uint32_t)q->nsl;
+    uint8_t *o = q->sl + q->nsl;
+    for (int s = 0; s < 4; s++) {
+        uint32_t a = cs[s], b = cs[s + 1], n = b - a;
+        *o++ = (uint8_t)n;
+        *o++ = (uint8_t)(!c->fine[s] ? 255 : s < 2 ? mid[s] - a : b - mid[s]);
+        for (uint32_t j = 0; j < n; j++)
+            *o++ = (uint8_t)lface[q->slab[s < 2 ? a + j : b - 1 - j]]; /* the segment i -> i + 1 */
+    }
+    *o++ = (uint8_t)npair;
+    for (uint32_t e = 0; e < ns; e++)
+        if (piece_counts(q, q->sedge[3 * e + 2]) && sface[2 * e] != sface[2 * e + 1]) {
+            *o++ = (uint8_t)sface[2 * e];
+            *o++ = (uint8_t)sface[2 * e + 1];
+        }
+    q->nsl = (size_t)(o - q->sl);
+    return true;
+}
+
+/* Writes the leaf just found simple (q->ring, q->stri, q->sedge) into the
+ * results as record q->nd[n].rec: vertex ids, triangles, constrained edges,
+ * and when choosing the region its faces and side lists. False when out of
+ * memory. */
+static bool emit_cell(qt *q, uint32_t n, const qcell *c)
+{
+    for (size_t i = 0; i < q->npt; i++)
+        if (ring_id(q, &q->ring[i]) == NONE)
+            return false;
+    qrec r = {(uint32_t)(q->ntri / 3), (uint32_t)(q->nstri / 3), (uint32_t)(q->nedge / 3), 0, NONE, 1, NONE};
+    if (q->fast && !cell_faces(q, &r, c) && q->status != TSR_OK)
+        return false; /* else, when it failed, q->fast is now false */
+    if (!RESERVE(q, q->tri, q->captri, q->ntri + q->nstri) || !RESERVE(q, q->rec, q->caprec, q->nrec + 1))
+        return false;
+    if (q->fast) {
+        if (!RESERVE(q, q->tface, q->captface, (q->ntri + q->nstri) / 3))
+            return false;
+        for (size_t i = 0; i < q->nstri / 3; i++)
+            q->tface[q->ntri / 3 + i] = (uint8_t)q->lfs[i];
+    }
+    for (size_t i = 0; i < q->nstri; i++)
+        q->tri[q->ntri++] = q->ring[q->stri[i]].id;
+    for (size_t i = 0; i < q->nsedge; i += 3) {
+        size_t e0 = q->nedge / 3;
+        if (!add_edge(q, q->ring[q->sedge[i]].id, q->ring[q->sedge[i + 1]].id, q->sedge[i + 2]))
+            return false;
+        if (q->fast) {
+            if (!RESERVE(q, q->ef, q->capef, 2 * (q->nedge / 3)))
+                return false;
+            for (size_t e = e0; e < q->nedge / 3; e++) {
+                q->ef[2 * e] = (uint8_t)q->lfs[q->nstri / 3 + 2 * (i / 3)];
+                q->ef[2 * e + 1] = (uint8_t)q->lfs[q->nstri / 3 + 2 * (i / 3) + 1];
+            }
+        }
+    }
+    r.nedge = (uint32_t)(q->nedge / 3) - r.edge;
+    q->rec[q->nrec] = r;
+    q->nd[n].rec = (uint32_t)q->nrec++;
+    return true;
+}
+
+/* Decides leaf n; when the full rules find it simple, triangulates it into
+ * the results (emit_cell). emit: the tree is final (the leaf's finer sides
+ * are those its last look saw), and a leaf that is not simple goes to the
+ * Delaunay fallback. */
 static int eval(qt *q, uint32_t n, bool emit)
 {
     qcell c;
@@ -1174,6 +1536,8 @@ static int eval(qt *q, uint32_t n, bool emit)
             }
         }
         q->nd[n].fine = (uint8_t)fine;
+        if ((q->nd[n].done & (DONE | 15)) == (DONE | fine))
+            return R_SIMPLE; /* nothing it depends on changed since */
     }
     if (L < q->min_level)
         return R_SPLIT;
@@ -1184,16 +1548,28 @@ static int eval(qt *q, uint32_t n, bool emit)
     uint32_t nf = d->nf, nvert = 0;
     while (nvert < nf && !(list[nvert] & PIECE_BIT))
         nvert++;
-    bool test_pairs = q->detect && (nf <= PAIR_TEST_MAX || L >= q->depth);
-    if (nvert >= 2 && L < q->depth && !test_pairs)
-        return R_SPLIT;
-    cell_geometry(q, n, &c);
+    bool test_pairs = q->detect && !(d->done & PAIRED) && (nf <= PAIR_TEST_MAX || L >= q->depth);
     if (!RESERVE(q, q->sv, q->capsv, nvert) || !RESERVE(q, q->sm, q->capsm, nf - nvert))
         return nomem(q);
     q->nsv = 0;
     q->nsm = 0;
     for (uint32_t i = 0; i < nvert; i++)
         q->sv[q->nsv++] = list[i];
+    if (nvert >= 2 && L < q->depth) { /* not simple: only the pairs are of interest */
+        if (!test_pairs)
+            return R_SPLIT;
+        for (uint32_t i = nvert; i < nf; i++) /* every listed piece meets the closed cell */
+            q->sm[q->nsm++].piece = list[i] & ~PIECE_BIT;
+        if (pair_tests(q))
+            return R_INTERACT;
+        if (q->status != TSR_OK)
+            return R_ERROR;
+        q->nd[n].done |= PAIRED;
+        return R_SPLIT;
+    }
+    if (q->cheap)
+        return R_SIMPLE; /* for now: the second pass applies the full rules */
+    cell_geometry(q, n, &c);
     for (uint32_t i = nvert; i < nf; i++)
         if (piece_meet(q, &c, list[i] & ~PIECE_BIT, &q->sm[q->nsm]))
             q->nsm++;
@@ -1205,8 +1581,8 @@ static int eval(qt *q, uint32_t n, bool emit)
     else if (q->nsv == 1) {
         apex = q->sv[0];
         const double *P = V(q, apex);
-        if (P[0] < c.vx[0] || P[0] > c.vx[1] || P[1] < c.vy[0] || P[1] > c.vy[1])
-            ok = false;
+        if (!(P[0] > c.xs[0] && P[0] < c.xs[2] && P[1] > c.ys[0] && P[1] < c.ys[2]))
+            ok = false; /* on a side: the fan would be flat there */
         /* its pieces leave through one point each; others may pass as chords */
         for (size_t i = 0; i < q->nsm && ok; i++) {
             qmeet *m = &q->sm[i];
@@ -1237,6 +1613,8 @@ static int eval(qt *q, uint32_t n, bool emit)
     }
     q->nstri = 0;
     q->nsedge = 0;
+    q->nlab = 1;
+    q->curlab = 0;
     /* chords that would be fine but for where their side points fell */
     bool conflict = ok && q->nsv == 0 && nchord > 0;
     if (ok && !build_ring(q, &c, false, false)) {
@@ -1246,6 +1624,10 @@ static int eval(qt *q, uint32_t n, bool emit)
     }
     if (ok) {
         uint32_t nr = (uint32_t)q->nring;
+        if (!RESERVE(q, q->slab, q->capslab, nr))
+            return nomem(q);
+        for (uint32_t i = 0; i < nr; i++)
+            q->slab[i] = 0;
         if (apex != NONE) {
             if (!RESERVE(q, q->ring, q->capring, q->npt + 1))
                 return nomem(q);
@@ -1263,15 +1645,30 @@ static int eval(qt *q, uint32_t n, bool emit)
                     return R_ERROR;
                 ok = r == R_SIMPLE;
             }
-            for (uint32_t i = 0; i < nr && ok && !nchord; i++) {
-                uint32_t j = i + 1 == nr ? 0 : i + 1;
-                ok = ccw(q, a, i, j);
-                if (ok && !add_tri(q, a, i, j))
+            for (uint32_t i = 0; i < nr && ok && !nchord; i++)
+                ok = ccw(q, a, i, i + 1 == nr ? 0 : i + 1);
+            if (ok && !nchord) {
+                if (!RESERVE(q, q->idx, q->capidx, 2 * (size_t)nr))
+                    return nomem(q);
+                uint32_t *face = q->idx, *xse = face + nr;
+                for (uint32_t i = 0; i < nr; i++) {
+                    face[i] = i;
+                    xse[i] = NONE;
+                }
+                for (size_t i = 0; i < q->nsm; i++) {
+                    const qmeet *m = &q->sm[i];
+                    if (!m->use)
+                        continue;
+                    if (xse[m->ri[0]] != NONE)
+                        q->fast = false; /* two exits at one point: one edge, covered twice */
+                    else
+                        xse[m->ri[0]] = (uint32_t)(q->nsedge / 3);
+                    if (!add_sedge(q, a, m->ri[0], m->piece))
+                        return nomem(q);
+                }
+                if (!apex_fan(q, a, face, nr, xse, NULL, NULL, 0))
                     return nomem(q);
             }
-            for (size_t i = 0; i < q->nsm && ok && !nchord; i++)
-                if (q->sm[i].use && !add_sedge(q, a, q->sm[i].ri[0], q->sm[i].piece))
-                    return nomem(q);
         } else if (nchord) {
             int r = chord_faces(q, nr, NONE);
             if (r == R_ERROR)
@@ -1297,29 +1694,25 @@ static int eval(qt *q, uint32_t n, bool emit)
             return R_INTERACT;
         if (q->status != TSR_OK)
             return R_ERROR;
+        if (test_pairs)
+            q->nd[n].done |= PAIRED;
         /* Chords that neither cross nor touch, yet coincide or interleave
          * on the sides: their pieces are a rounding error apart (two
          * crossings an ulp apart joined to one vertex, say), which
          * splitting does not change along their whole length. */
-        bool rounding = conflict && (test_pairs || !q->detect);
+        bool rounding = conflict && (test_pairs || (q->nd[n].done & PAIRED) || !q->detect);
         if (L < q->depth && !rounding)
             return R_SPLIT;
         if (emit && fallback(q, &c) != TSR_OK)
             return R_ERROR;
         return R_FALLBACK;
     }
-    if (!emit)
-        return R_SIMPLE;
-    for (size_t i = 0; i < q->npt; i++)
-        if (ring_id(q, &q->ring[i]) == NONE)
-            return nomem(q);
-    if (!RESERVE(q, q->tri, q->captri, q->ntri + q->nstri))
+    /* simple: into the results now (a later look that finds it changed or
+     * splits it leaves this record unused), unless features met: then the
+     * build starts again */
+    if (q->nit == 0 && !emit_cell(q, n, &c))
         return nomem(q);
-    for (size_t i = 0; i < q->nstri; i++)
-        q->tri[q->ntri++] = q->ring[q->stri[i]].id;
-    for (size_t i = 0; i < q->nsedge; i += 3)
-        if (!add_edge(q, q->ring[q->sedge[i]].id, q->ring[q->sedge[i + 1]].id, q->sedge[i + 2]))
-            return nomem(q);
+    q->nd[n].done = (uint8_t)(DONE | q->nd[n].fine | (q->nd[n].done & PAIRED));
     return R_SIMPLE;
 }
 
@@ -1348,6 +1741,7 @@ static tsr_status fallback(qt *q, const qcell *c)
 {
     tsr_status st = TSR_ERR_NOMEM;
     q->fallback_cells++;
+    q->fast = false; /* its triangles come from elsewhere: the general region pass decides */
     if (!build_ring(q, c, true, true) && q->status != TSR_OK)
         return q->status;
     size_t nr = q->nring, cap = nr + q->nsv + 1;
@@ -1509,25 +1903,34 @@ static tsr_status build(qt *q)
     }
     if (!RESERVE(q, q->nd, q->capnd, 1) || !RESERVE(q, q->ft, q->capft, nf))
         return q->status = TSR_ERR_NOMEM;
-    q->nd[0] = (qnode){NONE, 0, 0, 0, 0, (uint32_t)nf, 0, 0, 0};
+    q->nd[0] = (qnode){0, 0, (uint32_t)nf, 0, 0, 0, 0, NONE};
     q->nnd = 1;
     for (uint32_t v = 0; v < q->nfv; v++)
         q->ft[q->nft++] = v;
     for (size_t p = 0; p < q->npc; p++)
         q->ft[q->nft++] = PIECE_BIT | (uint32_t)p;
-    if (!push(q, 0))
-        return q->status = TSR_ERR_NOMEM;
-    while (q->nstk) {
-        uint32_t n = q->stk[--q->nstk];
-        q->nd[n].queued = 0;
-        if (!is_leaf(q, n))
-            continue;
-        int r = eval(q, n, false);
-        if (r == R_SPLIT)
-            r = split(q, n);
-        if (r == R_ERROR)
-            return q->status;
+    q->ftlive = q->nft;
+    /* first split by what is cheap to decide (two vertices, balance), then
+     * apply the full rules to every leaf with features: most leaves then
+     * see their final neighbours at their first full look */
+    for (int pass = 0; pass < 2; pass++) {
+        q->cheap = pass == 0;
+        for (size_t n = 0; n < (pass ? q->nnd : 1); n++)
+            if (is_leaf(q, (uint32_t)n) && (pass == 0 || q->nd[n].nf > 0) && !push(q, (uint32_t)n))
+                return q->status = TSR_ERR_NOMEM;
+        while (q->nstk) {
+            uint32_t n = q->stk[--q->nstk];
+            q->nd[n].queued = 0;
+            if (!is_leaf(q, n))
+                continue;
+            int r = eval(q, n, false);
+            if (r == R_SPLIT)
+                r = split(q, n);
+            if (r == R_ERROR)
+                return q->status;
+        }
     }
+    q->cheap = false;
     return TSR_OK;
 }
 
@@ -1634,6 +2037,18 @@ fail:
     return q->status = TSR_ERR_NOMEM;
 }
 
+/* Forgets what a build emitted: the pieces are about to change. */
+static void reset_results(qt *q)
+{
+    q->ntri = q->nedge = q->nrec = q->nsl = 0;
+    q->nxy = q->nfv;
+    for (size_t i = 0; i < q->kcap; i++)
+        q->ks[i] = NONE;
+    q->nks = 0;
+    for (size_t i = 0; q->kc && i < (size_t)1 << KCACHE_BITS; i++)
+        q->kc[i].id = NONE;
+}
+
 /* ---- the square ---------------------------------------------------- */
 
 static bool on_grid(double x, double o, double hD)
@@ -1692,6 +2107,390 @@ static bool place_square(qt *q, int want_depth)
     return false;
 }
 
+/* ---- emission and the region ------------------------------------ */
+
+/* Rule (a) for a leaf without features, into the results: two triangles,
+ * or a fan from the first midpoint of a side with a finer neighbour (bits
+ * of fine). The same points and keys as cell_geometry's. */
+static bool emit_empty(qt *q, uint32_t n, unsigned fine)
+{
+    static const uint8_t gi[8][2] = {{0, 0}, {2, 0}, {2, 2}, {0, 2}, {1, 0}, {2, 1}, {1, 2}, {0, 1}};
+    const qnode *d = &q->nd[n];
+    int L = d->level, sh = q->depth - L;
+    uint32_t ix, iy;
+    node_at(q, n, &ix, &iy);
+    double fx = ix, fy = iy;
+    uint32_t ring[8], k = 0, w = NONE;
+    for (int s = 0; s < 4; s++)
+        for (int g = s; g < 8; g += 4) {
+            if (g >= 4 && !(fine >> s & 1))
+                break;
+            if (g >= 4 && w == NONE)
+                w = k;
+            uint64_t lx = ((uint64_t)2 * ix + gi[g][0]) << sh, ly = ((uint64_t)2 * iy + gi[g][1]) << sh;
+            ring[k] = point_id(q, lx << 31 | ly, gcoord(q, q->ox, L, fx + 0.5 * gi[g][0]),
+                               gcoord(q, q->oy, L, fy + 0.5 * gi[g][1]));
+            if (ring[k++] == NONE)
+                return false;
+        }
+    if (!RESERVE(q, q->tri, q->captri, q->ntri + 3 * (size_t)k))
+        return false;
+    uint32_t *t = q->tri + q->ntri;
+    if (w == NONE) {
+        t[0] = ring[0], t[1] = ring[1], t[2] = ring[2], t[3] = ring[0], t[4] = ring[2], t[5] = ring[3];
+        q->ntri += 6;
+        return true;
+    }
+    for (uint32_t i = 0; i < k; i++) {
+        uint32_t j = i + 1 == k ? 0 : i + 1;
+        if (i != w && j != w) {
+            *t++ = ring[w];
+            *t++ = ring[i];
+            *t++ = ring[j];
+        }
+    }
+    q->ntri += 3 * (size_t)(k - 2);
+    return true;
+}
+
+/* A leaf's first face, once number_faces has run: its feature list's
+ * place, no longer needed, holds it. */
+static uint32_t face_of(const qt *q, uint32_t n)
+{
+    return q->nd[n].f;
+}
+
+/* Numbers the faces, leaf by leaf (face_of, the records' face); a leaf
+ * with features the build did not emit goes to the Delaunay fallback now. */
+static tsr_status number_faces(qt *q)
+{
+    q->nface = 0;
+    for (size_t n = 0; n < q->nnd; n++) {
+        qnode *d = &q->nd[n];
+        if (!is_leaf(q, (uint32_t)n))
+            continue;
+        if (d->nf == 0) {
+            d->f = q->nface++;
+            continue;
+        }
+        if (d->rec == NONE) {
+            size_t t0 = q->ntri / 3, e0 = q->nedge / 3;
+            int r = eval(q, (uint32_t)n, true);
+            if (r == R_ERROR)
+                return q->status;
+            assert(r == R_FALLBACK || r == R_SIMPLE); /* the build emitted every other leaf */
+            if (!RESERVE(q, q->rec, q->caprec, q->nrec + 1))
+                return q->status = TSR_ERR_NOMEM;
+            q->rec[q->nrec] = (qrec){
+                (uint32_t)t0, (uint32_t)(q->ntri / 3 - t0), (uint32_t)e0, (uint32_t)(q->nedge / 3 - e0), NONE, 1, NONE};
+            q->nd[n].rec = (uint32_t)q->nrec++;
+        }
+        qrec *r = &q->rec[q->nd[n].rec];
+        r->face = q->nd[n].f = q->nface;
+        q->nface += r->nface;
+    }
+    return TSR_OK;
+}
+
+typedef struct qvisit {
+    uint32_t n, nb[4]; /* nb: across each side, the node of n's level, or the coarser leaf; NONE: the border */
+} qvisit;
+
+/* Pushes the children of inner node v, their neighbours found from v's,
+ * so that they come off the stack in Z order (at most 3 per level and 4
+ * more on it). */
+static void push_children(const qt *q, qvisit *stack, size_t *top, const qvisit *v)
+{
+    uint32_t c = q->nd[v->n].child;
+    for (unsigned k = 4; k-- > 0;) {
+        unsigned x = k & 1, y = k >> 1;
+        stack[(*top)++] =
+            (qvisit){c + k,
+                     {y ? c + k - 2 : down(q, v->nb[0], k + 2), x ? down(q, v->nb[1], k - 1) : c + k + 1,
+                      y ? down(q, v->nb[2], k - 2) : c + k + 2, x ? c + k - 1 : down(q, v->nb[3], k + 1)}};
+    }
+}
+
+/* Leaf n's list for side s (s == 4: its face pairs); NULL for a leaf
+ * without features. */
+static const uint8_t *side_list(const qt *q, uint32_t n, int s)
+{
+    if (q->nd[n].nf == 0)
+        return NULL;
+    const uint8_t *p = q->sl + q->rec[q->nd[n].rec].side;
+    for (int k = 0; k < s; k++)
+        p += 2 + (size_t)p[0];
+    return p;
+}
+
+static uint32_t uf_root(uint32_t *par, uint32_t x)
+{
+    while (par[x] != x)
+        x = par[x] = par[par[x]];
+    return x;
+}
+
+/* Joins the faces on both sides of a shared side: leaf c's list cl[c0 ..
+ * c0 + cn) (NULL: c's one face) with leaf x's xl[x0 .. x0 + xn) (c's
+ * faces from fc on, x's from fx on). False when the lists do not pair up. */
+static bool join_across(uint32_t *par, uint32_t fc, const uint8_t *cl, uint32_t c0, uint32_t cn, uint32_t fx,
+                        const uint8_t *xl, uint32_t x0, uint32_t xn)
+{
+    if (!cl || !xl) {
+        if ((cl ? cn : xn) != 1) /* a leaf without features has no point inside its sides */
+            return false;
+        uint32_t a = fc + (cl ? cl[2 + c0] : 0), b = fx + (xl ? xl[2 + x0] : 0);
+        par[uf_root(par, a)] = uf_root(par, b);
+        return true;
+    }
+    if (cn != xn)
+        return false;
+    for (uint32_t j = 0; j < cn; j++)
+        par[uf_root(par, fc + cl[2 + c0 + j])] = uf_root(par, fx + xl[2 + x0 + j]);
+    return true;
+}
+
+/* The region from the cells, as region_keep chooses it over triangles:
+ * faces that meet across a cell's side are joined (crossing there costs
+ * nothing), then a breadth-first search over the joined parts, a counted
+ * constrained edge costing one, from those on the square's border. Sets
+ * keep[face]; clears q->fast when two cells' lists of a shared side do not
+ * pair up (the general pass decides then). */
+static tsr_status choose_region(qt *q, uint8_t *keep)
+{
+    uint32_t nf = q->nface, npart = 0, nedge = 0;
+    size_t nborder = 0, capborder = 0;
+    uint32_t *depth = NULL, *start = NULL, *to = NULL, *queue = NULL, *border = NULL;
+    tsr_status st = TSR_ERR_NOMEM;
+    bool ok = true;
+    qvisit stack[4 * (DEPTH_MAX + 3)];
+    size_t top = 0;
+    if (nf >= PIECE_BIT) { /* parts are marked with that bit below */
+        q->fast = false;
+        return TSR_OK;
+    }
+    if (!RESERVE(q, q->ft, q->capft, nf)) /* the feature lists are done with */
+        goto done;
+    uint32_t *par = q->ft;
+    for (uint32_t i = 0; i < nf; i++)
+        par[i] = i;
+    /* each shared side once: from the finer leaf, or from the left or lower
+     * of two of one level; neighbours found top down */
+    stack[top++] = (qvisit){0, {NONE, NONE, NONE, NONE}};
+    while (top && ok) {
+        qvisit v = stack[--top];
+        const qnode *cn = &q->nd[v.n];
+        if (!is_leaf(q, v.n)) {
+            push_children(q, stack, &top, &v);
+            continue;
+        }
+        for (int s = 0; s < 4 && ok; s++) {
+            uint32_t m = v.nb[s];
+            const uint8_t *cl = side_list(q, v.n, s);
+            if (m == NONE) { /* on the border: outside */
+                if (!RESERVE(q, border, capborder, nborder + 256))
+                    goto done;
+                for (uint32_t j = 0; j < (cl ? cl[0] : 1); j++)
+                    border[nborder++] = face_of(q, v.n) + (cl ? cl[2 + j] : 0);
+                continue;
+            }
+            if (!is_leaf(q, m))
+                continue; /* finer leaves join from their side */
+            bool coarser = q->nd[m].level < cn->level;
+            if (!coarser && (s == 0 || s == 3))
+                continue;
+            const uint8_t *xl = side_list(q, m, s ^ 2);
+            uint32_t x0 = 0, xn = xl ? xl[0] : 1;
+            if (xl && coarser) {                                                          /* the half beside c */
+                uint32_t mid = xl[1], upper = ((s & 1) ? (v.n - 1) >> 1 : (v.n - 1)) & 1; /* v.n is a child */
+                if (mid == 255 || mid > xl[0]) {
+                    ok = false;
+                    break;
+                }
+                x0 = upper ? mid : 0;
+                xn = upper ? xl[0] - mid : mid;
+            }
+            ok = join_across(par, face_of(q, v.n), cl, 0, cl ? cl[0] : 1, face_of(q, m), xl, x0, xn);
+        }
+    }
+    if (!ok) {
+        q->fast = false;
+        st = TSR_OK;
+        goto done;
+    }
+    /* parts: par[] becomes the part of each face (roots numbered first,
+     * marked with PIECE_BIT, then every face takes its root's number) */
+    for (uint32_t i = 0; i < nf; i++)
+        par[i] = uf_root(par, i);
+    for (uint32_t i = 0; i < nf; i++)
+        if (par[i] == i)
+            par[i] = PIECE_BIT | npart++;
+    for (uint32_t i = 0; i < nf; i++)
+        if (!(par[i] & PIECE_BIT))
+            par[i] = par[par[i]];
+    for (uint32_t i = 0; i < nf; i++)
+        par[i] &= ~PIECE_BIT;
+    depth = tsr_alloc(q->al, ((size_t)npart + 1) * sizeof *depth);
+    start = tsr_alloc(q->al, ((size_t)npart + 2) * sizeof *start);
+    queue = tsr_alloc(q->al, ((size_t)npart + 1) * sizeof *queue);
+    if (!depth || !start || !queue)
+        goto done;
+    for (uint32_t p = 0; p < npart + 2; p++)
+        start[p] = 0;
+    /* counted constrained edges between parts */
+    for (int pass = 0; pass < 2; pass++) {
+        for (size_t i = 0; i < q->nrec; i++) {
+            const qrec *r = &q->rec[i];
+            if (r->face == NONE || r->side == NONE)
+                continue;
+            const uint8_t *pl = q->sl + r->side;
+            for (int k = 0; k < 4; k++)
+                pl += 2 + (size_t)pl[0];
+            for (uint32_t j = 0; j < pl[0]; j++) {
+                uint32_t u = par[r->face + pl[1 + 2 * j]], w = par[r->face + pl[2 + 2 * j]];
+                if (u == w)
+                    continue;
+                if (pass == 0) {
+                    start[u + 1]++;
+                    start[w + 1]++;
+                } else {
+                    to[start[u]++] = w;
+                    to[start[w]++] = u;
+                }
+            }
+        }
+        if (pass == 0) {
+            for (uint32_t p = 0; p < npart; p++)
+                start[p + 1] += start[p];
+            nedge = start[npart];
+            to = tsr_alloc(q->al, ((size_t)nedge + 1) * sizeof *to);
+            if (!to)
+                goto done;
+        } else {
+            for (uint32_t p = npart; p > 0; p--)
+                start[p] = start[p - 1];
+            start[0] = 0;
+        }
+    }
+    /* breadth-first from the parts on the border */
+    size_t head = 0, tail = 0;
+    for (uint32_t p = 0; p < npart; p++)
+        depth[p] = NONE;
+    for (size_t i = 0; i < nborder; i++) {
+        uint32_t p = par[border[i]];
+        if (depth[p] == NONE) {
+            depth[p] = 0;
+            queue[tail++] = p;
+        }
+    }
+    while (head < tail) {
+        uint32_t p = queue[head++];
+        for (uint32_t k = start[p]; k < start[p + 1]; k++)
+            if (depth[to[k]] == NONE) {
+                depth[to[k]] = depth[p] + 1;
+                queue[tail++] = to[k];
+            }
+    }
+    for (uint32_t i = 0; i < nf; i++) {
+        uint32_t dd = depth[par[i]];
+        keep[i] = dd != NONE && (q->region == TSR_REGION_ENCLOSED ? dd >= 1 : dd % 2 == 1);
+    }
+    st = TSR_OK;
+done:
+    tsr_free(q->al, depth);
+    tsr_free(q->al, start);
+    tsr_free(q->al, to);
+    tsr_free(q->al, queue);
+    tsr_free(q->al, border);
+    return st;
+}
+
+/* The results: the triangles of the records' kept faces (all when keep is
+ * NULL), in place, then the leaves without features, in Z order so that
+ * the corners they share are looked up close together in time. */
+static bool emit_output(qt *q, const uint8_t *keep)
+{
+    size_t k = 0;
+    for (size_t i = 0; i < q->nrec; i++) { /* records in order: k never passes t */
+        const qrec *r = &q->rec[i];
+        if (r->face == NONE)
+            continue;
+        for (size_t t = r->tri; t < (size_t)r->tri + r->ntri; t++)
+            if (!keep || keep[r->face + q->tface[t]]) {
+                memmove(q->tri + 3 * k, q->tri + 3 * t, 3 * sizeof *q->tri);
+                k++;
+            }
+    }
+    q->ntri = 3 * k;
+    qvisit stack[4 * (DEPTH_MAX + 3)];
+    size_t top = 0;
+    stack[top++] = (qvisit){0, {NONE, NONE, NONE, NONE}};
+    while (top) {
+        qvisit v = stack[--top];
+        const qnode *d = &q->nd[v.n];
+        if (!is_leaf(q, v.n)) {
+            push_children(q, stack, &top, &v);
+            continue;
+        }
+        if (d->nf > 0 || (keep && !keep[face_of(q, v.n)]))
+            continue;
+        unsigned fine = 0;
+        for (int s = 0; s < 4; s++)
+            fine |= (unsigned)(v.nb[s] != NONE && !is_leaf(q, v.nb[s])) << s;
+        if (!emit_empty(q, v.n, fine))
+            return false;
+    }
+    return true;
+}
+
+static unsigned popcount64(uint64_t x)
+{
+    x -= (x >> 1) & 0x5555555555555555ull;
+    x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+    x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+    return (unsigned)((x * 0x0101010101010101ull) >> 56);
+}
+
+/* Drops the Steiner vertices no output triangle uses (input vertices keep
+ * their ids; records a later look replaced left some), renumbering the
+ * output triangles and the n edges in edge[]. Which vertices stay is a
+ * bitmap, and a vertex's new id its rank in it: a few kilobytes, where a
+ * map of ids read in triangle order would miss the cache. */
+static bool drop_unused(qt *q, uint32_t *edge, size_t n)
+{
+    size_t words = q->nxy / 64 + 1;
+    uint64_t *bit = tsr_alloc(q->al, words * (sizeof *bit + sizeof(uint32_t)));
+    if (!bit)
+        return false;
+    uint32_t *rank = (uint32_t *)(bit + words);
+    for (size_t w = 0; w < words; w++)
+        bit[w] = 0;
+    for (size_t v = 0; v < q->nin; v++)
+        bit[v >> 6] |= 1ull << (v & 63);
+    for (size_t i = 0; i < q->ntri; i++)
+        bit[q->tri[i] >> 6] |= 1ull << (q->tri[i] & 63);
+    uint32_t m = 0;
+    for (size_t w = 0; w < words; w++) {
+        rank[w] = m;
+        for (uint64_t b = bit[w]; b; b &= b - 1, m++) {
+            size_t v = 64 * w + popcount64((b & -b) - 1); /* the lowest set bit */
+            q->xy[2 * (size_t)m] = q->xy[2 * v];
+            q->xy[2 * (size_t)m + 1] = q->xy[2 * v + 1];
+        }
+    }
+    for (size_t i = 0; i < q->ntri; i++) {
+        uint32_t v = q->tri[i];
+        q->tri[i] = rank[v >> 6] + popcount64(bit[v >> 6] & ((1ull << (v & 63)) - 1));
+    }
+    for (size_t i = 0; i < 2 * n; i++) {
+        uint32_t v = edge[i];
+        edge[i] = rank[v >> 6] + popcount64(bit[v >> 6] & ((1ull << (v & 63)) - 1));
+    }
+    q->nxy = m;
+    tsr_free(q->al, bit);
+    return true;
+}
+
 /* ---- entry --------------------------------------------------------- */
 
 static int edge3_cmp(const void *x, const void *y)
@@ -1711,10 +2510,12 @@ static void qt_free(qt *q)
     tsr_free(q->al, q->xy);
     tsr_free(q->al, q->hs);
     tsr_free(q->al, q->ks);
+    tsr_free(q->al, q->vkey);
     tsr_free(q->al, q->kc);
     tsr_free(q->al, q->pc);
     tsr_free(q->al, q->cov);
     tsr_free(q->al, q->nd);
+    tsr_free(q->al, q->grp);
     tsr_free(q->al, q->ft);
     tsr_free(q->al, q->stk);
     tsr_free(q->al, q->mask);
@@ -1725,8 +2526,16 @@ static void qt_free(qt *q)
     tsr_free(q->al, q->idx);
     tsr_free(q->al, q->stri);
     tsr_free(q->al, q->sedge);
+    tsr_free(q->al, q->stlab);
+    tsr_free(q->al, q->slab);
+    tsr_free(q->al, q->elab);
     tsr_free(q->al, q->tri);
     tsr_free(q->al, q->edge);
+    tsr_free(q->al, q->sl);
+    tsr_free(q->al, q->tface);
+    tsr_free(q->al, q->rec);
+    tsr_free(q->al, q->ef);
+    tsr_free(q->al, q->lfs);
 }
 
 static tsr_status unsupported(qt *q, const char **why_not, const char *why, tsr_error *err)
@@ -1736,18 +2545,23 @@ static tsr_status unsupported(qt *q, const char **why_not, const char *why, tsr_
     return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "quadtree method: %s", why);
 }
 
-tsr_status tsr__tri_quadtree(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out,
-                             const tsr_allocator *alloc, const char **why_not, tsr_error *err)
+static tsr_status quadtree(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out,
+                           const tsr_allocator *alloc, bool *region_done, const char **why_not, tsr_error *err)
 {
     static const tsr_tri_options defaults;
     if (!opt)
         opt = &defaults;
     memset(out, 0, sizeof *out);
     *why_not = NULL;
+    if (region_done)
+        *region_done = false;
     qt q;
     memset(&q, 0, sizeof q);
     q.al = alloc;
     q.err = err;
+    q.region = opt->region;
+    q.fast =
+        region_done && in->nholes == 0 && (opt->region == TSR_REGION_ENCLOSED || opt->region == TSR_REGION_EVEN_ODD);
     for (size_t i = 0; i < 2 * (size_t)in->nv; i++)
         if (!isfinite(in->xy[i]))
             return tsr_error_set(err, TSR_ERR_ARGUMENT, "point %zu has a non-finite coordinate", i / 2);
@@ -1816,6 +2630,22 @@ tsr_status tsr__tri_quadtree(const tsr_pslg *in, const tsr_tri_options *opt, tsr
     if (q.budget > UINT32_MAX / 2)
         q.budget = UINT32_MAX / 2;
 
+    /* the points the build will key (grid points and crossings): about
+     * three per feature on the bench's polygon */
+    {
+        size_t nf = (size_t)q.nfv + q.npc, guess = 3 * nf + 64;
+        if (!khash_grow(&q, guess) || !RESERVE(&q, q.xy, q.capxy, 2 * (q.nxy + guess)) ||
+            !RESERVE(&q, q.vkey, q.capvkey, q.nxy + guess))
+            goto fail;
+        /* and the rest, so that growing them copies nothing (what is not
+         * used is not touched); from the same polygon */
+        if (!RESERVE(&q, q.nd, q.capnd, 4 * nf + 64) || !RESERVE(&q, q.grp, q.capgrp, nf + 16) ||
+            !RESERVE(&q, q.ft, q.capft, 6 * nf + 64) || !RESERVE(&q, q.tri, q.captri, 15 * nf + 64) ||
+            !RESERVE(&q, q.edge, q.capedge, 5 * (size_t)q.npc + 64) || !RESERVE(&q, q.rec, q.caprec, nf + 64) ||
+            !RESERVE(&q, q.sl, q.capsl, 16 * nf + 64) || !RESERVE(&q, q.tface, q.captface, 4 * nf + 64) ||
+            !RESERVE(&q, q.ef, q.capef, 4 * (size_t)q.npc + 64))
+            goto fail;
+    }
     for (int round = 0;; round++) {
         q.detect = round < ROUNDS - 1;
         st = build(&q);
@@ -1823,46 +2653,57 @@ tsr_status tsr__tri_quadtree(const tsr_pslg *in, const tsr_tri_options *opt, tsr
             goto fail;
         if (q.nit == 0)
             break;
+        reset_results(&q);
         st = apply_interactions(&q);
         if (st != TSR_OK)
             goto fail;
     }
-    /* triangulate the leaves in depth-first (Z) order, so the corners
-     * they share are looked up close together in time */
     q.detect = false;
-    size_t leaves = (q.nnd - 1) / 4 * 3 + 1;
-    if (!RESERVE(&q, q.tri, q.captri, 9 * leaves) || !RESERVE(&q, q.xy, q.capxy, 2 * (q.nxy + leaves + leaves / 4)) ||
-        !khash_grow(&q, leaves + leaves / 4) || !RESERVE(&q, q.stk, q.capstk, 4 * (DEPTH_MAX + 2))) {
+    st = number_faces(&q);
+    if (st != TSR_OK)
+        goto fail;
+    uint8_t *keep = NULL;
+    if (q.fast) {
+        keep = tsr_alloc(alloc, (size_t)q.nface + 1);
+        if (!keep || (st = choose_region(&q, keep)) != TSR_OK) {
+            tsr_free(alloc, keep);
+            st = TSR_ERR_NOMEM;
+            goto fail;
+        }
+        if (!q.fast) {
+            tsr_free(alloc, keep);
+            keep = NULL;
+        }
+    }
+    if (!emit_output(&q, keep)) {
+        tsr_free(alloc, keep);
         st = TSR_ERR_NOMEM;
         goto fail;
     }
-    q.nstk = 0;
-    q.stk[q.nstk++] = 0;
-    while (q.nstk) {
-        uint32_t n = q.stk[--q.nstk];
-        if (!is_leaf(&q, n)) {
-            for (uint32_t k = 4; k-- > 0;)
-                q.stk[q.nstk++] = q.nd[n].child + k; /* at most 3 per level and 4 more */
-            continue;
-        }
-        int r = eval(&q, n, true);
-        if (r == R_ERROR) {
-            st = q.status;
-            goto fail;
-        }
-        assert(r == R_SIMPLE || r == R_FALLBACK); /* the build left every leaf decided */
-    }
     if (q.ntri / 3 > UINT32_MAX || q.nedge / 3 > UINT32_MAX) {
+        tsr_free(alloc, keep);
         st = TSR_ERR_NOMEM;
         goto fail;
     }
     /* constrained edges: one per undirected edge and covering segment,
-     * ascending ids (an edge seen from two cells is listed once) */
-    size_t ne = q.nedge / 3, m = 0;
-    if (ne > 1)
+     * ascending ids (an edge seen from two cells is listed once); with the
+     * region chosen, those of kept faces, the lowest id only */
+    size_t ne = 0, m = 0;
+    for (size_t i = 0; i < q.nrec; i++) {
+        const qrec *r = &q.rec[i];
+        if (r->face == NONE)
+            continue;
+        for (size_t e = r->edge; e < (size_t)r->edge + r->nedge; e++)
+            if (!keep || keep[r->face + q.ef[2 * e]] || keep[r->face + q.ef[2 * e + 1]]) {
+                memmove(q.edge + 3 * ne, q.edge + 3 * e, 3 * sizeof *q.edge); /* ne <= e: records in order */
+                ne++;
+            }
+    }
+    if (ne > 1 && !keep)
         qsort(q.edge, ne, 3 * sizeof *q.edge, edge3_cmp);
     uint32_t *edge = tsr_alloc(alloc, (2 * ne + 1) * sizeof *edge), *eseg = tsr_alloc(alloc, (ne + 1) * sizeof *eseg);
     if (!edge || !eseg) {
+        tsr_free(alloc, keep);
         tsr_free(alloc, edge);
         tsr_free(alloc, eseg);
         st = TSR_ERR_NOMEM;
@@ -1870,7 +2711,7 @@ tsr_status tsr__tri_quadtree(const tsr_pslg *in, const tsr_tri_options *opt, tsr
     }
     for (size_t i = 0; i < ne; i++) {
         const uint32_t *e = q.edge + 3 * i;
-        if (m && eseg[m - 1] == e[2] &&
+        if (m && (keep || eseg[m - 1] == e[2]) &&
             ((e[0] == edge[2 * m - 2] && e[1] == edge[2 * m - 1]) ||
              (e[0] == edge[2 * m - 1] && e[1] == edge[2 * m - 2])))
             continue;
@@ -1878,6 +2719,16 @@ tsr_status tsr__tri_quadtree(const tsr_pslg *in, const tsr_tri_options *opt, tsr
         edge[2 * m + 1] = e[1];
         eseg[m++] = e[2];
     }
+    if (region_done)
+        *region_done = keep != NULL;
+    if (!drop_unused(&q, edge, m)) {
+        tsr_free(alloc, keep);
+        tsr_free(alloc, edge);
+        tsr_free(alloc, eseg);
+        st = TSR_ERR_NOMEM;
+        goto fail;
+    }
+    tsr_free(alloc, keep);
     if (alloc)
         out->alloc = *alloc;
     out->xy = q.xy;
@@ -1912,4 +2763,16 @@ fail:
     if (err && err->status == st)
         return st; /* the Delaunay fallback's own message */
     return tsr_error_set(err, st, "quadtree triangulation failed: %s", tsr_status_str(st));
+}
+
+tsr_status tsr__tri_quadtree(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out,
+                             const tsr_allocator *alloc, const char **why_not, tsr_error *err)
+{
+    return quadtree(in, opt, out, alloc, NULL, why_not, err);
+}
+
+tsr_status tsr__tri_quadtree_region(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out,
+                                    const tsr_allocator *alloc, bool *region_done, const char **why_not, tsr_error *err)
+{
+    return quadtree(in, opt, out, alloc, region_done, why_not, err);
 }

@@ -13,7 +13,9 @@
  * does not depend on the path, so the least depth gives the even-odd
  * rule; an edge covered by an even number of input segments, such as a
  * ring given twice or a spike that doubles back, is not counted). Hole seeds then remove the triangles reachable from
- * them without crossing a constrained edge, like Triangle's holes. */
+ * them without crossing a constrained edge, like Triangle's holes. The
+ * quadtree method makes the same choice from its cells where it can
+ * (qtri.c), and comes here only otherwise. */
 #include "tessellate/cdt_internal.h"
 #include "tessellate/triangulate_internal.h"
 
@@ -432,6 +434,13 @@ fail:
                                : tsr_error_set(err, st, "triangulation failed: %s", tsr_status_str(st));
 }
 
+/* Finite, and where the exact predicates stay exact (predicates.h): below
+ * 2^250 (no product of four coordinates overflows) and, unless zero, at
+ * least 2^-128 (no product of four differences, nor the error terms of
+ * the expansions, underflows; the BRIO key's scale stays finite). */
+#define COORDINATE_RANGE "out of range (0, or 2^-128 <= |x| < 2^250)"
+static bool coordinate_ok(double x) { return x == 0 || (fabs(x) >= 0x1p-128 && fabs(x) < 0x1p250); }
+
 tsr_status tsr_triangulate(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out,
                            const tsr_allocator *alloc, tsr_error *err)
 {
@@ -442,11 +451,13 @@ tsr_status tsr_triangulate(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
     if (alloc)
         out->alloc = *alloc;
     for (uint32_t i = 0; i < 2 * in->nv; i++)
-        if (!isfinite(in->xy[i]))
-            return tsr_error_set(err, TSR_ERR_ARGUMENT, "point %u has a non-finite coordinate", i / 2);
+        if (!coordinate_ok(in->xy[i]))
+            return tsr_error_set(err, TSR_ERR_ARGUMENT, "point %u has a %s coordinate (%g)", i / 2,
+                                 isfinite(in->xy[i]) ? COORDINATE_RANGE : "non-finite", in->xy[i]);
     for (uint32_t i = 0; i < 2 * in->nholes; i++)
-        if (!isfinite(in->holes[i]))
-            return tsr_error_set(err, TSR_ERR_ARGUMENT, "hole %u has a non-finite coordinate", i / 2);
+        if (!coordinate_ok(in->holes[i]))
+            return tsr_error_set(err, TSR_ERR_ARGUMENT, "hole %u has a %s coordinate (%g)", i / 2,
+                                 isfinite(in->holes[i]) ? COORDINATE_RANGE : "non-finite", in->holes[i]);
     for (uint32_t s = 0; s < in->nseg; s++)
         if (in->seg[2 * (size_t)s] >= in->nv || in->seg[2 * (size_t)s + 1] >= in->nv)
             return tsr_error_set(err, TSR_ERR_ARGUMENT, "segment %u refers to point %u, but there are %u points", s,
@@ -458,8 +469,9 @@ tsr_status tsr_triangulate(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
     tsr_status st;
     if (opt->method == TSR_TRI_QUADTREE) {
         const char *why = NULL;
-        st = tsr__tri_quadtree(in, opt, out, alloc, &why, err);
-        if (st == TSR_OK)
+        bool region_done = false;
+        st = tsr__tri_quadtree_region(in, opt, out, alloc, &region_done, &why, err);
+        if (st == TSR_OK && !region_done)
             st = tsr__tri_apply_region(out, in, opt);
         if (st != TSR_ERR_UNSUPPORTED) {
             if (st != TSR_OK)

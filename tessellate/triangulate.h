@@ -90,15 +90,22 @@ typedef struct tsr_triangulation {
     uint32_t fallback_cells;   /* quadtree: cells given to the Delaunay path */
     bool fell_back;            /* quadtree: the whole input went to Delaunay */
     const char *fallback_reason; /* static text, or NULL */
-    bool quality_limited;      /* refinement stopped at max_steiner */
+    bool quality_limited;      /* refinement stopped at max_steiner, or got stuck
+                                  (a triangle still bad and not exempt, or, when
+                                  conforming, an edge still encroached) */
     uint32_t small_angle_exempt; /* triangles below min_angle left because an
-                                    input angle is smaller (terminator rule) */
+                                    input angle is smaller (terminator rule), or
+                                    because they are flatter than the rounding
+                                    of their coordinates (features closer than
+                                    a few ulps that do not meet) */
     tsr_allocator alloc;
 } tsr_triangulation;
 
 /* Triangulates in. On failure out is empty (nothing to free). Errors:
- * TSR_ERR_ARGUMENT for a non-finite coordinate or a segment index out of
- * range (message names it), TSR_ERR_NOMEM. Input that has no triangle
+ * TSR_ERR_ARGUMENT for a coordinate that is not 0 or of magnitude in
+ * [2^-128, 2^250) (non-finite, subnormal-small or so large the exact
+ * predicates would overflow) or a segment index out of range (message
+ * names it), TSR_ERR_NOMEM. Input that has no triangle
  * (fewer than 3 distinct points, all collinear) is TSR_OK with nt = 0. */
 tsr_status tsr_triangulate(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out,
                            const tsr_allocator *alloc, tsr_error *err);

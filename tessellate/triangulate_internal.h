@@ -17,6 +17,15 @@
 tsr_status tsr__tri_quadtree(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out,
                              const tsr_allocator *alloc, const char **why_not, tsr_error *err);
 
+/* As tsr__tri_quadtree, but where it can (no hole seeds, no cell through
+ * the Delaunay fallback) it also chooses the region from the cells and
+ * keeps only its triangles, exactly as tsr__tri_apply_region would (each
+ * constrained edge listed once, with its lowest segment id; unused Steiner
+ * points dropped); *region_done says whether it did. */
+tsr_status tsr__tri_quadtree_region(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out,
+                                    const tsr_allocator *alloc, bool *region_done, const char **why_not,
+                                    tsr_error *err);
+
 /* Region removal on a finished triangulation (both methods): keeps the
  * triangles of opt->region and in->holes, drops the rest, drops vertices no
  * longer used by a triangle only when they are Steiner points (input

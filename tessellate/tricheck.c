@@ -1184,13 +1184,18 @@ static tsr_status run_check(ck *c, geom *g)
             for (uint32_t i = 0; i < nhull; i++)
                 memcpy(hull_xy + 2 * (size_t)i, gp(g, hull[i]), 2 * sizeof(double));
             free(hull);
-            if (ha == 0)
+            /* degenerate or not from the exact hull (three corners found
+             * with exact orientation), not from its area: summed in
+             * floating point, that can cancel to 0 (a point at 1e30 beside
+             * others at 1) */
+            bool solid = nhull >= 3;
+            if (!solid)
                 nhull = 0;
             if (in->nholes == 0) {
-                expected = ha;
-                expected_euler = ha > 0 ? 1 : 0;
+                expected = solid ? fmax(ha, 0) : 0;
+                expected_euler = solid ? 1 : 0;
                 /* the whole hull is kept, so every input point is a corner */
-                for (uint32_t i = 0; ha > 0 && out->vertex_of_input && i < in->nv; i++) {
+                for (uint32_t i = 0; solid && out->vertex_of_input && i < in->nv; i++) {
                     uint32_t v = out->vertex_of_input[i];
                     if (v < nv && !c->used[v]) {
                         res->bad_topology++;

@@ -832,6 +832,178 @@ TEST(lattice_segments_degenerate)
     }
 }
 
+/* ---- the region chosen from the cells against the general pass -------- */
+
+typedef struct ctri {
+    double c[6];
+} ctri;
+
+static int ctri_cmp(const void *a, const void *b)
+{
+    const double *x = ((const ctri *)a)->c, *y = ((const ctri *)b)->c;
+    for (int k = 0; k < 6; k++)
+        if (x[k] != y[k])
+            return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+/* The triangles by their corners' coordinates, each starting at its least
+ * corner, sorted: equal lists mean the same triangles, whatever the
+ * vertex numbering. */
+static ctri *canonical(const tsr_triangulation *t)
+{
+    ctri *c = malloc(((size_t)t->nt + 1) * sizeof *c);
+    for (uint32_t i = 0; i < t->nt; i++) {
+        int first = 0;
+        for (int k = 1; k < 3; k++) {
+            const double *p = t->xy + 2 * t->tri[3 * i + k], *f = t->xy + 2 * t->tri[3 * i + first];
+            if (p[0] < f[0] || (p[0] == f[0] && p[1] < f[1]))
+                first = k;
+        }
+        for (int k = 0; k < 3; k++) {
+            const double *p = t->xy + 2 * t->tri[3 * i + (first + k) % 3];
+            c[i].c[2 * k] = p[0];
+            c[i].c[2 * k + 1] = p[1];
+        }
+    }
+    qsort(c, t->nt, sizeof *c, ctri_cmp);
+    return c;
+}
+
+/* The same with the constrained edges: both ends (least first) and the
+ * segment. */
+static ctri *canonical_edges(const tsr_triangulation *t)
+{
+    ctri *c = malloc(((size_t)t->nedge + 1) * sizeof *c);
+    for (uint32_t i = 0; i < t->nedge; i++) {
+        const double *p = t->xy + 2 * t->edge[2 * i], *q = t->xy + 2 * t->edge[2 * i + 1];
+        if (q[0] < p[0] || (q[0] == p[0] && q[1] < p[1])) {
+            const double *w = p;
+            p = q, q = w;
+        }
+        c[i] = (ctri){{p[0], p[1], q[0], q[1], t->edge_segment[i], 0}};
+    }
+    qsort(c, t->nedge, sizeof *c, ctri_cmp);
+    return c;
+}
+
+/* tsr_triangulate's quadtree result (the region chosen from the cells where
+ * it can) against the raw method followed by the general region pass: the
+ * same triangles, constrained edges and vertices. Returns whether the cells
+ * chose (-1: the method did not apply). */
+static int same_as_general(const tsr_pslg *in, tsr_tri_options o, const char *what)
+{
+    o.method = TSR_TRI_QUADTREE;
+    tsr_triangulation a, b;
+    const char *why = NULL;
+    bool done = false;
+    tsr_error err;
+    tsr_status sa = tsr__tri_quadtree_region(in, &o, &a, NULL, &done, &why, &err);
+    tsr_status sb = tsr__tri_quadtree(in, &o, &b, NULL, &why, &err);
+    CHECK_MSG(sa == sb, "%s: statuses %d and %d", what, (int)sa, (int)sb);
+    if (sa != TSR_OK || sb != TSR_OK) {
+        if (sa == TSR_OK)
+            tsr_triangulation_free(&a);
+        if (sb == TSR_OK)
+            tsr_triangulation_free(&b);
+        return -1;
+    }
+    if (!done)
+        CHECK(tsr__tri_apply_region(&a, in, &o) == TSR_OK);
+    CHECK(tsr__tri_apply_region(&b, in, &o) == TSR_OK);
+    CHECK_MSG(a.nt == b.nt && a.nv == b.nv && a.nedge == b.nedge && a.steiner == b.steiner,
+              "%s (%s): %u/%u triangles, %u/%u vertices, %u/%u edges", what, done ? "cells" : "general", a.nt, b.nt,
+              a.nv, b.nv, a.nedge, b.nedge);
+    if (a.nt == b.nt) {
+        ctri *ca = canonical(&a), *cb = canonical(&b);
+        CHECK_MSG(memcmp(ca, cb, a.nt * sizeof *ca) == 0, "%s: different triangles", what);
+        free(ca);
+        free(cb);
+    }
+    if (a.nedge == b.nedge) {
+        ctri *ca = canonical_edges(&a), *cb = canonical_edges(&b);
+        CHECK_MSG(memcmp(ca, cb, a.nedge * sizeof *ca) == 0, "%s: different constrained edges", what);
+        free(ca);
+        free(cb);
+    }
+    for (uint32_t i = 0; i < in->nv; i++)
+        CHECK(a.vertex_of_input[i] == b.vertex_of_input[i]);
+    tsr_triangulation_free(&a);
+    tsr_triangulation_free(&b);
+    return done;
+}
+
+TEST(region_from_cells_matches_general_pass)
+{
+    uint32_t cells = 0, runs = 0;
+    for (uint32_t seed = 0; seed < 160 && !check_failures; seed++) {
+        rs = seed * 7919 + 3;
+        uint32_t kind = seed % 4, nv, ns;
+        double xy[2 * 400];
+        uint32_t seg[2 * 420];
+        if (kind == 0) { /* star polygons, some with a ring inside given once or twice */
+            nv = 3 + (uint32_t)(urand() * 200);
+            star_polygon(nv, 0, 0, 1, xy, seg);
+            ns = nv;
+            if (seed % 8 == 0) {
+                double sq[8] = {-0.1, -0.1, 0.1, -0.1, 0.1, 0.1, -0.1, 0.1};
+                for (uint32_t k = 0; k < 4; k++) {
+                    xy[2 * (nv + k)] = sq[2 * k], xy[2 * (nv + k) + 1] = sq[2 * k + 1];
+                    for (uint32_t r = 0; r < 1 + (seed / 8) % 2; r++) {
+                        seg[2 * ns] = nv + k, seg[2 * ns + 1] = nv + (k + 1) % 4;
+                        ns++;
+                    }
+                }
+                nv += 4;
+            }
+        } else if (kind == 1) { /* random crossing segments, open polylines */
+            ns = 2 + (uint32_t)(urand() * 30);
+            nv = 2 * ns;
+            for (uint32_t i = 0; i < 2 * nv; i++)
+                xy[i] = urand();
+            for (uint32_t i = 0; i < 2 * ns; i++)
+                seg[i] = i;
+        } else if (kind == 2) { /* lattice: duplicates, overlaps, points on segments */
+            nv = 4 + (uint32_t)(urand() * 30);
+            ns = (uint32_t)(urand() * 25);
+            for (uint32_t i = 0; i < 2 * nv; i++)
+                xy[i] = floor(urand() * (3 + seed % 5)) * 0.5;
+            for (uint32_t i = 0; i < 2 * ns; i++)
+                seg[i] = (uint32_t)(urand() * nv);
+        } else { /* a fan of segments from one vertex, with a ring around it */
+            nv = 1 + (uint32_t)(3 + urand() * 60);
+            xy[0] = 0.01 * urand(), xy[1] = 0.01 * urand();
+            ns = 0;
+            for (uint32_t i = 1; i < nv; i++) {
+                double ang = 2 * PI * (i + 0.5 * urand()) / (nv - 1), r = 0.3 + urand();
+                xy[2 * i] = r * cos(ang), xy[2 * i + 1] = r * sin(ang);
+                seg[2 * ns] = 0, seg[2 * ns + 1] = i, ns++;
+                seg[2 * ns] = i, seg[2 * ns + 1] = i + 1 < nv ? i + 1 : 1, ns++;
+            }
+        }
+        tsr_pslg in = {xy, nv, seg, ns, NULL, 0};
+        for (int region = 0; region < 2; region++) {
+            tsr_tri_options o = {.region = region ? TSR_REGION_EVEN_ODD : TSR_REGION_ENCLOSED};
+            o.max_depth = seed % 9 == 4 ? 6 : 0; /* some cells through the Delaunay fallback */
+            o.max_area = seed % 11 == 5 ? 0.01 : 0;
+            char what[80];
+            snprintf(what, sizeof what, "seed %u kind %u %s", seed, kind, region ? "even-odd" : "enclosed");
+            int r = same_as_general(&in, o, what);
+            runs += r >= 0;
+            cells += r == 1;
+        }
+    }
+    /* most inputs have no fallback cell: the cells chose their region */
+    CHECK_MSG(cells * 2 > runs, "the cells chose the region in %u of %u runs", cells, runs);
+    /* hole seeds: the general pass */
+    static const double hxy[] = {0, 0, 4, 0, 4, 4, 0, 4, 1, 1, 3, 1, 3, 3, 1, 3};
+    static const uint32_t hseg[] = {0, 1, 1, 2, 2, 3, 3, 0, 4, 5, 5, 6, 6, 7, 7, 4};
+    static const double seed_xy[] = {2, 2};
+    tsr_pslg hin = {hxy, 8, hseg, 8, seed_xy, 1};
+    tsr_tri_options o = {.region = TSR_REGION_ENCLOSED};
+    CHECK(same_as_general(&hin, o, "hole seed") == 0);
+}
+
 /* ---- allocator: everything freed, and every failure handled ----------- */
 
 typedef struct counting {
@@ -881,6 +1053,20 @@ TEST(allocator_failures)
             tsr_triangulation_free(&t);
         CHECK_MSG(c.live == 0, "failure at allocation %ld: %ld blocks leaked", k, c.live);
     }
+    /* and with the region chosen from the cells */
+    bool done = false;
+    c = (counting){0, 0, 0};
+    CHECK(tsr__tri_quadtree_region(&in, &o, &t, &al, &done, &why, NULL) == TSR_OK && done);
+    calls = c.calls;
+    tsr_triangulation_free(&t);
+    for (long k = 1; k <= calls; k += 1 + calls / 200) {
+        c = (counting){0, 0, k};
+        tsr_status st = tsr__tri_quadtree_region(&in, &o, &t, &al, &done, &why, NULL);
+        CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "region: failure at allocation %ld: status %d", k, (int)st);
+        if (st == TSR_OK)
+            tsr_triangulation_free(&t);
+        CHECK_MSG(c.live == 0, "region: failure at allocation %ld: %ld blocks leaked", k, c.live);
+    }
 }
 
 TEST_MAIN(T(single_triangle), T(round_coordinates_square_with_hole), T(star_polygons_many_seeds),
@@ -888,4 +1074,4 @@ TEST_MAIN(T(single_triangle), T(round_coordinates_square_with_hole), T(star_poly
           T(vertex_on_segment_and_collinear_overlap), T(duplicates_and_degenerate_segments),
           T(vertex_near_cell_corner_and_grid_lines), T(high_degree_vertex), T(max_area),
           T(near_coincident_features_fall_back), T(even_odd_parity_of_overlaps), T(lattice_segments_degenerate),
-          T(unsupported_inputs), T(allocator_failures))
+          T(unsupported_inputs), T(region_from_cells_matches_general_pass), T(allocator_failures))

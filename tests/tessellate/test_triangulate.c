@@ -395,6 +395,95 @@ TEST(small_input_angles_terminate)
     build_free(&b);
 }
 
+/* A fan of 300 thin spikes (angular step 0.036 degrees, radii a random
+ * walk in [1, 5]) closed at the centre, like cdt/debug2.txt: many pairs
+ * of nearly parallel segments that do not meet (thin strips, which need
+ * vertices all along them) beside pairs meeting at tiny angles. Splitting
+ * every encroached segment made the sides of the strips and wedges split
+ * each other in turn: over 130 Steiner points per vertex, so debug2
+ * stopped at the Steiner limit. About 20 per vertex now. */
+TEST(thin_spikes_quality)
+{
+    build b = {0};
+    uint64_t s = 7;
+    double r = 3;
+    pt(&b, 0, 0);
+    for (int i = 0; i < 300; i++) {
+        s = s * 6364136223846793005ull + 1442695040888963407ull;
+        r = fmin(5, fmax(1, r + ((double)(s >> 11) * (1.0 / 9007199254740992.0) - 0.5) * 1.2));
+        double a = i * 2 * 3.14159265358979 / 10000;
+        pt(&b, r * cos(a), r * sin(a));
+    }
+    for (uint32_t i = 0; i < b.nv; i++)
+        sg(&b, i, (i + 1) % b.nv);
+    tsr_tri_options o = {.min_angle = 25, .max_steiner = 40 * b.nv};
+    tsr_triangulation t = run(&b, &o, "thin spikes");
+    CHECK_MSG(!t.quality_limited, "%u Steiner points", t.steiner);
+    tsr_triangulation_free(&t);
+    build_free(&b);
+}
+
+/* From cdt/guitar-no-box.txt: input vertex q lies 7e-16 inside the hull
+ * edge c-e (exactly representable coordinates, so it is not on it), and
+ * the segment q-e meets that hull edge at e at 1e-13 degrees. The
+ * terminator did not see the wedge (q is an input vertex, not a segment
+ * split) and q and the hull edge split each other until the Steiner
+ * limit; the wedge is excused now and needs no Steiner point at all. */
+TEST(vertex_ulps_inside_hull_edge)
+{
+    build b = {0};
+    double p[12] = {30.4, 9.16, 30.4, 9.45, 30.2, 9.53, 29.5, 6.0, 31.5, 6.0, 31.0, 9.21};
+    ring(&b, p, 6);
+    tsr_tri_options o = {.min_angle = 25};
+    tsr_triangulation t = run(&b, &o, "vertex inside hull edge");
+    CHECK(!t.quality_limited);
+    CHECK_MSG(t.steiner < 100, "%u Steiner points", t.steiner);
+    tsr_triangulation_free(&t);
+    build_free(&b);
+}
+
+/* Also from guitar-no-box.txt: the segment (33.6, 8.17)-(33.4, 8.25) lies
+ * 3e-16 and 1.3e-15 inside the hull edge (34.2, 7.93)-(31.0, 9.21), less
+ * than a unit in the last place, without touching it. Every triangle
+ * between them is flat and no vertex fits between them; the checker
+ * cannot excuse them (the segment and the hull edge do not meet), so the
+ * result fails its angle rule, but refinement must stop at once rather
+ * than split the two until the Steiner limit. What the checker finds
+ * below the bound must be such sub-resolution flat triangles only. */
+TEST(segment_ulps_inside_hull_edge)
+{
+    build b = {0};
+    double p[20] = {34.2, 7.93, 34.0, 7.3,  33.6, 8.17, 33.4, 8.25, 33.1, 7.5,
+                    32.6, 8.57, 31.0, 9.21, 31.0, 6.0,  34.4, 6.0,  34.4, 7.85};
+    ring(&b, p, 10);
+    tsr_tri_options o = {.min_angle = 25};
+    tsr_pslg in = pslg_of(&b);
+    tsr_triangulation t;
+    tsr_error err = {0};
+    CHECK(tsr_triangulate(&in, &o, &t, NULL, &err) == TSR_OK);
+    CHECK(!t.quality_limited);
+    CHECK_MSG(t.steiner < 100, "%u Steiner points", t.steiner);
+    uint32_t flat = 0;
+    for (uint32_t i = 0; i < t.nt; i++) {
+        const double *q[3] = {t.xy + 2 * (size_t)t.tri[3 * i], t.xy + 2 * (size_t)t.tri[3 * i + 1],
+                              t.xy + 2 * (size_t)t.tri[3 * i + 2]};
+        double longest = 0, m = 0;
+        for (int k = 0; k < 3; k++) {
+            longest = fmax(longest, hypot(q[(k + 1) % 3][0] - q[k][0], q[(k + 1) % 3][1] - q[k][1]));
+            m = fmax(m, fmax(fabs(q[k][0]), fabs(q[k][1])));
+        }
+        flat += tsr_orient2d(q[0], q[1], q[2]) / longest < 8 * 2.220446049250313e-16 * m;
+    }
+    tsr_tri_check c;
+    CHECK(tsr_triangulation_check(&in, &o, &t, &c) == TSR_OK);
+    CHECK(c.not_ccw == 0 && c.bad_topology == 0 && c.not_delaunay == 0 && c.missing_segments == 0);
+    CHECK(c.overlapping == 0 && c.area_ok && c.above_max_area == 0);
+    CHECK_MSG(c.below_min_angle > 0 && c.below_min_angle <= flat, "%u below the bound, %u flat: %s", c.below_min_angle,
+              flat, c.first_problem);
+    tsr_triangulation_free(&t);
+    build_free(&b);
+}
+
 TEST(conforming_delaunay)
 {
     build b = {0};
@@ -487,5 +576,6 @@ TEST(incremental_changes)
 TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T(segments_crossing_at_one_point),
           T(overlapping_collinear_segments), T(points_on_segments), T(integer_grid_1000),
           T(hole_touching_outer_boundary), T(self_touching_ring), T(polygon_with_1024_holes), T(hole_seeds),
-          T(quality_refinement), T(small_input_angles_terminate), T(conforming_delaunay),
+          T(quality_refinement), T(small_input_angles_terminate), T(thin_spikes_quality),
+          T(vertex_ulps_inside_hull_edge), T(segment_ulps_inside_hull_edge), T(conforming_delaunay),
           T(random_crossing_segments), T(bad_input_refused), T(incremental_changes))

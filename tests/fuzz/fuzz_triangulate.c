@@ -1,0 +1,134 @@
+/* fuzz_triangulate.c: tsr_triangulate on small graphs decoded from bytes,
+ * every result judged by the independent checker tsr_triangulation_check.
+ *
+ * Layout (missing bytes read as 0):
+ *   0  flags: bit 0 quadtree; bits 1-2 region (3: HULL); bit 3 conforming;
+ *      bit 4 min_angle; bit 5 max_area; bit 6 shallow quadtree (max_depth
+ *      2..9, forcing fallback cells); bit 7 allow invalid input (non-
+ *      finite or too large coordinates, segment indices out of range)
+ *   1  min_angle = (b % 61) / 2 degrees (0 .. 30)
+ *   2  max_area from a table (1/16 .. 64); b >> 4 the quadtree max_depth
+ *   3  points (b % 48), 4 segments (b % 64), 5 hole seeds (b % 4)
+ *   then 2 bytes per point (x, y), 2 per segment (a, b), 2 per hole (x, y).
+ * A coordinate byte: low 5 bits k give k - 16 (-16 .. 15), the top 3 a
+ * form: integer (0-3), k/2, k/4, k/1024, or k * (1 + 2^-40) (almost
+ * collinear). So duplicates, collinear runs, crossing and overlapping
+ * segments and points on segments are common. With bit 7, byte 0xff is
+ * NaN, 0xfe +inf, 0xfd -2^250 (too large), and a segment index byte
+ * >= 0xf0 is out of range.
+ *
+ * Checked: no allocation above 256 MiB; valid input gives TSR_OK (or
+ * NOMEM), invalid input TSR_ERR_ARGUMENT with a message; every result
+ * passes fuzz_check_triangulation (fuzz.h), the independent checker among
+ * others. max_steiner is 4000 so that every run stays short. */
+#include "fuzz.h"
+
+#include <math.h>
+#include <string.h>
+
+#define MAX_POINTS 48
+#define MAX_SEGMENTS 64
+#define MAX_HOLES 4
+
+typedef struct reader {
+    const uint8_t *p;
+    size_t n, at;
+} reader;
+
+static uint8_t byte(reader *r)
+{
+    return r->at < r->n ? r->p[r->at++] : 0;
+}
+
+static double coordinate(uint8_t b, bool invalid, bool *bad)
+{
+    if (invalid && b == 0xff) {
+        *bad = true;
+        return NAN;
+    }
+    if (invalid && b == 0xfe) {
+        *bad = true;
+        return INFINITY;
+    }
+    if (invalid && b == 0xfd) {
+        *bad = true;
+        return -0x1p250; /* beyond the exact predicates */
+    }
+    double k = (double)(b & 31) - 16;
+    switch (b >> 5) {
+    case 4:
+        return k / 2;
+    case 5:
+        return k / 4;
+    case 6:
+        return k / 1024;
+    case 7:
+        return k * (1 + 0x1p-40);
+    default:
+        return k;
+    }
+}
+
+int fuzz_triangulate(const uint8_t *data, size_t size)
+{
+    reader r = {data, size, 0};
+    uint8_t flags = byte(&r), angle = byte(&r), area = byte(&r);
+    uint32_t nv = byte(&r) % MAX_POINTS, ns = byte(&r) % MAX_SEGMENTS, nh = byte(&r) % MAX_HOLES;
+    bool invalid = flags & 0x80, bad = false;
+    static const double areas[16] = {0.0625, 0.125, 0.25, 0.5, 1, 1.5, 2, 3, 4, 6, 8, 12, 16, 24, 32, 64};
+
+    tsr_tri_options o = {0};
+    o.method = flags & 1 ? TSR_TRI_QUADTREE : TSR_TRI_DELAUNAY;
+    o.region = ((flags >> 1) & 3) == 3 ? TSR_REGION_HULL : (tsr_region)((flags >> 1) & 3);
+    o.conforming = flags & 8;
+    o.min_angle = flags & 16 ? (angle % 61) / 2.0 : 0;
+    o.max_area = flags & 32 ? areas[area & 15] : 0;
+    o.max_depth = flags & 64 ? 2 + (area >> 4) % 8 : 0;
+    o.max_steiner = 4000; /* keeps every run short; quality_limited says when it bit */
+
+    double xy[2 * MAX_POINTS + 1], holes[2 * MAX_HOLES + 1];
+    uint32_t seg[2 * MAX_SEGMENTS + 1];
+    for (uint32_t i = 0; i < 2 * nv; i++)
+        xy[i] = coordinate(byte(&r), invalid, &bad);
+    for (uint32_t i = 0; i < 2 * ns; i++) {
+        uint8_t b = byte(&r);
+        if (invalid && b >= 0xf0) {
+            seg[i] = nv + (b - 0xf0);
+            bad = true;
+        } else {
+            seg[i] = nv ? b % nv : 0;
+            bad = bad || nv == 0;
+        }
+    }
+    for (uint32_t i = 0; i < 2 * nh; i++)
+        holes[i] = coordinate(byte(&r), invalid, &bad);
+
+    tsr_pslg in = {xy, nv, seg, ns, holes, nh};
+    tsr_triangulation t;
+    tsr_error err = {0};
+    size_t limit = (size_t)256 << 20; /* far above what 48 points and 4000 Steiner points need */
+    tsr_allocator alloc;
+    fuzz_limited_allocator(&alloc, &limit);
+    tsr_status s = tsr_triangulate(&in, &o, &t, &alloc, &err);
+    if (s == TSR_ERR_NOMEM)
+        return 0;
+    if (bad) {
+        if (s != TSR_ERR_ARGUMENT || !err.message[0])
+            fuzz_fail("triangulate: invalid input gave status %d (%s), not TSR_ERR_ARGUMENT", (int)s, err.message);
+        return 0;
+    }
+    if (s != TSR_OK)
+        fuzz_fail("triangulate: valid input refused, status %d: %s", (int)s, err.message);
+
+    fuzz_check_triangulation(&in, &o, &t, "triangulate");
+    tsr_triangulation_free(&t);
+    return 0;
+}
+
+#ifdef TSR_LIBFUZZER
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    return fuzz_triangulate(data, size);
+}
+#endif
