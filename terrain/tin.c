@@ -419,6 +419,22 @@ static inline bool vedge(const tin *t, int64_t c, int64_t r)
     return cell_ok(t, c - 1, r) != cell_ok(t, c, r);
 }
 
+/* Along line `line` of an axis (0: row `line`, 1: column `line`), the
+ * sample at position i, whether the lattice edge from i to i + 1 is on the
+ * boundary, and whether a boundary edge of the other axis meets point i. */
+static inline uint32_t run_sample(const tin *t, int axis, uint32_t line, uint32_t i)
+{
+    return axis ? i * t->w + line : line * t->w + i;
+}
+static inline bool run_edge(const tin *t, int axis, uint32_t line, uint32_t i)
+{
+    return axis ? vedge(t, line, i) : hedge(t, i, line);
+}
+static inline bool run_crossed(const tin *t, int axis, uint32_t line, uint32_t i)
+{
+    return axis ? hedge(t, line, i) || hedge(t, (int64_t)line - 1, i) : vedge(t, i, line) || vedge(t, i, (int64_t)line - 1);
+}
+
 /* The boundary: the outer border's four sides, or, with no-data, every
  * maximal straight run of boundary edges (split where another boundary
  * edge meets it). Horizontal runs in increasing c, vertical in increasing
@@ -434,59 +450,38 @@ static bool add_boundary(tin *t, double tol)
     b.keep = tsr_alloc(t->a, cap);
     bool ok = b.pts && b.stack && b.keep;
     uint32_t w = t->w, h = t->h;
-    if (ok && !t->nodata) {
-        /* the corners first, so the hull is the rectangle at once */
-        uint32_t corners[4] = {0, w - 1, (h - 1) * w, (h - 1) * w + w - 1};
-        for (int k = 0; k < 4 && ok; k++)
-            ok = add_sample(t, corners[k], UINT32_MAX) != UINT32_MAX;
+    /* the corners first, so the hull is the rectangle at once */
+    uint32_t corners[4] = {0, w - 1, (h - 1) * w, (h - 1) * w + w - 1};
+    for (int k = 0; k < 4 && ok; k++)
+        ok = add_sample(t, corners[k], UINT32_MAX) != UINT32_MAX;
+    if (!t->nodata) {
         for (int side = 0; side < 4 && ok; side++) {
             uint32_t n = side < 2 ? w : h;
             for (uint32_t i = 0; i < n; i++)
                 b.pts[i] = side == 0 ? i : side == 1 ? (h - 1) * w + i : side == 2 ? i * w : i * w + w - 1;
             ok = add_run(t, &b, n, tol, false);
         }
-    } else if (ok) {
-        uint32_t corners[4] = {0, w - 1, (h - 1) * w, (h - 1) * w + w - 1};
-        for (int k = 0; k < 4 && ok; k++)
-            ok = add_sample(t, corners[k], UINT32_MAX) != UINT32_MAX;
-        /* horizontal runs */
-        for (uint32_t r = 0; r < h && ok; r++) {
+    }
+    /* with no-data: horizontal runs along each row (axis 0), vertical runs
+     * along each column (axis 1) */
+    for (int axis = 0; axis < 2 && ok && t->nodata; axis++) {
+        uint32_t lines = axis ? w : h, len = axis ? h : w;
+        for (uint32_t line = 0; line < lines && ok; line++) {
             uint32_t n = 0;
-            for (uint32_t c = 0; c + 1 < w && ok; c++) {
-                if (!hedge(t, c, r)) {
+            for (uint32_t i = 0; i + 1 < len && ok; i++) {
+                if (!run_edge(t, axis, line, i)) {
                     ok = add_run(t, &b, n, tol, true);
                     n = 0;
                     continue;
                 }
                 if (n == 0)
-                    b.pts[n++] = r * w + c;
-                else if (vedge(t, c, r) || (r > 0 && vedge(t, c, (int64_t)r - 1))) { /* a junction: break */
+                    b.pts[n++] = run_sample(t, axis, line, i);
+                else if (run_crossed(t, axis, line, i)) { /* a junction: break */
                     ok = add_run(t, &b, n, tol, true);
                     n = 0;
-                    b.pts[n++] = r * w + c;
+                    b.pts[n++] = run_sample(t, axis, line, i);
                 }
-                b.pts[n++] = r * w + c + 1;
-            }
-            if (ok)
-                ok = add_run(t, &b, n, tol, true);
-        }
-        /* vertical runs */
-        for (uint32_t c = 0; c < w && ok; c++) {
-            uint32_t n = 0;
-            for (uint32_t r = 0; r + 1 < h && ok; r++) {
-                if (!vedge(t, c, r)) {
-                    ok = add_run(t, &b, n, tol, true);
-                    n = 0;
-                    continue;
-                }
-                if (n == 0)
-                    b.pts[n++] = r * w + c;
-                else if (hedge(t, c, r) || (c > 0 && hedge(t, (int64_t)c - 1, r))) {
-                    ok = add_run(t, &b, n, tol, true);
-                    n = 0;
-                    b.pts[n++] = r * w + c;
-                }
-                b.pts[n++] = (r + 1) * w + c;
+                b.pts[n++] = run_sample(t, axis, line, i + 1);
             }
             if (ok)
                 ok = add_run(t, &b, n, tol, true);
