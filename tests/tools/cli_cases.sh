@@ -5,31 +5,8 @@
 # problem, and leave no output file behind.
 set -u
 tessera=$1 fixtures=$2 case=$3
-dir=$(mktemp -d "${TMPDIR:-/tmp}/tsr-cli-XXXXXX")
-cap=$(mktemp -d "${TMPDIR:-/tmp}/tsr-cli-out-XXXXXX")
-trap 'rm -rf "$dir" "$cap"' EXIT
-"$fixtures" "$dir" || { echo "fixtures failed"; exit 1; }
-
-fail() { echo "FAIL [$case]: $*"; exit 1; }
-
-# expect_error WANT_EXIT PATTERN -- command...: runs the command, checks the
-# exit code, one stderr line matching PATTERN, and no stray output files.
-expect_error() {
-  local want=$1 pattern=$2
-  shift 3
-  local before after
-  before=$(ls -A "$dir" | sort)
-  "$@" >"$cap/stdout" 2>"$cap/stderr"
-  local rc=$?
-  after=$(ls -A "$dir" | sort)
-  local err
-  err=$(cat "$cap/stderr")
-  [ "$rc" -eq "$want" ] || fail "exit $rc, wanted $want; stderr: $err"
-  [ "$(printf '%s\n' "$err" | wc -l)" -eq 1 ] || fail "stderr is not one line: $err"
-  printf '%s\n' "$err" | grep -qE -- "$pattern" || fail "stderr '$err' does not match '$pattern'"
-  [ "$before" = "$after" ] || fail "files changed: before [$before] after [$after]"
-  echo "ok [$case]: $err"
-}
+# shellcheck source=cli_harness.sh
+. "$(dirname "$0")/cli_harness.sh"
 
 out="$dir/out.obj"
 case "$case" in

@@ -6,33 +6,8 @@
 # no output file behind.
 set -u
 tessera=$1 fixtures=$2 case=$3
-dir=$(mktemp -d "${TMPDIR:-/tmp}/tsr-tri-XXXXXX")
-cap=$(mktemp -d "${TMPDIR:-/tmp}/tsr-tri-out-XXXXXX")
-trap 'chmod -R u+w "$dir" 2>/dev/null; rm -rf "$dir" "$cap"' EXIT
-"$fixtures" "$dir" || { echo "fixtures failed"; exit 1; }
-
-fail() { echo "FAIL [$case]: $*"; exit 1; }
-
-# expect_error WANT_EXIT PATTERN -- command...: runs the command, checks the
-# exit code, one stderr line matching PATTERN, nothing on stdout, and no
-# stray output files.
-expect_error() {
-  local want=$1 pattern=$2
-  shift 3
-  local before after
-  before=$(ls -A "$dir" | sort)
-  "$@" >"$cap/stdout" 2>"$cap/stderr"
-  local rc=$?
-  after=$(ls -A "$dir" | sort)
-  local err
-  err=$(cat "$cap/stderr")
-  [ "$rc" -eq "$want" ] || fail "exit $rc, wanted $want; stderr: $err"
-  [ "$(printf '%s\n' "$err" | wc -l)" -eq 1 ] || fail "stderr is not one line: $err"
-  printf '%s\n' "$err" | grep -qE -- "$pattern" || fail "stderr '$err' does not match '$pattern'"
-  [ ! -s "$cap/stdout" ] || fail "output on stdout: $(head -c 300 "$cap/stdout")"
-  [ "$before" = "$after" ] || fail "files changed: before [$before] after [$after]"
-  echo "ok [$case]: $err"
-}
+# shellcheck source=cli_harness.sh
+. "$(dirname "$0")/cli_harness.sh"
 
 # tri FILE [options]: triangulate FILE into $dir/out.node with --check
 tri() { local f=$1; shift; "$tessera" triangulate "$f" -o "$dir/out.node" --check "$@"; }
