@@ -1,6 +1,8 @@
 /* null_backend.c: the backend without a device (GLFW's null platform and
  * sokol's dummy backend do the same). It validates every call as a real
- * driver would and counts what would have been uploaded and drawn. */
+ * driver would (hw.h's rules for buffers, frames and tile draws) and
+ * counts what would have been uploaded and drawn, so the renderer's logic
+ * is tested without a GPU. */
 #include "hw/hw.h"
 
 #include <string.h>
@@ -15,6 +17,8 @@ typedef struct null_backend {
     tsr_allocator alloc;
     null_buffer *buffers;
     uint32_t count, cap;
+    bool in_frame;
+    uint64_t frame_triangles;
 } null_backend;
 
 static const tsr_allocator *alloc_of(null_backend *b) { return b->alloc.realloc ? &b->alloc : NULL; }
@@ -64,18 +68,6 @@ static bool nb_upload(tsr_hw_backend *self, tsr_hw_buffer id, uint64_t offset, c
     return true;
 }
 
-static bool nb_draw(tsr_hw_backend *self, tsr_hw_buffer vertices, tsr_hw_buffer indices, uint32_t index_count)
-{
-    null_backend *b = (null_backend *)self;
-    null_buffer *v = lookup(b, vertices), *i = lookup(b, indices);
-    if (!v || !i || v->kind != TSR_HW_VERTEX || i->kind != TSR_HW_INDEX || index_count % 3 ||
-        (uint64_t)index_count * 4 > i->size)
-        return false;
-    self->stats.draws++;
-    self->stats.triangles_drawn += index_count / 3;
-    return true;
-}
-
 static void nb_destroy_buffer(tsr_hw_backend *self, tsr_hw_buffer id)
 {
     null_buffer *buf = lookup((null_backend *)self, id);
@@ -84,6 +76,80 @@ static void nb_destroy_buffer(tsr_hw_backend *self, tsr_hw_buffer id)
     self->stats.buffers_live--;
     self->stats.bytes_live -= buf->size;
     buf->kind = 0;
+}
+
+static bool nb_begin_frame(tsr_hw_backend *self, const tsr_hw_frame *frame)
+{
+    null_backend *b = (null_backend *)self;
+    if (b->in_frame || !frame)
+        return false;
+    b->in_frame = true;
+    b->frame_triangles = 0;
+    return true;
+}
+
+/* Bytes the samples of an n x n tile occupy in a format; 0 for an unknown
+ * format. */
+static uint64_t sample_bytes(tsr_hw_height_format format, uint32_t n)
+{
+    uint64_t count = (uint64_t)(n + 1) * (n + 1);
+    if (format == TSR_HW_HEIGHT_U16)
+        return (count + 1) / 2 * 4;
+    if (format == TSR_HW_HEIGHT_F32)
+        return count * 4;
+    return 0;
+}
+
+static bool nb_draw_tile(tsr_hw_backend *self, const tsr_hw_tile_draw *d)
+{
+    null_backend *b = (null_backend *)self;
+    if (!b->in_frame || !d)
+        return false;
+    if (d->n < TSR_TILE_MIN || d->n > TSR_TILE_MAX || (d->n & 1))
+        return false;
+    null_buffer *s = lookup(b, d->samples), *ix = lookup(b, d->indices);
+    if (!s || s->kind != TSR_HW_VERTEX || !ix || ix->kind != TSR_HW_INDEX)
+        return false;
+    uint64_t bytes = sample_bytes(d->format, d->n);
+    if (bytes == 0 || d->samples_offset % 4 || d->samples_offset > s->size || bytes > s->size - d->samples_offset)
+        return false;
+    if (d->index_count % 3 || ((uint64_t)d->first_index + d->index_count) * 4 > ix->size)
+        return false;
+    /* negated comparisons so that NaN fails too */
+    if (!(d->spacing[0] > 0) || !(d->spacing[1] > 0) || !(d->morph >= 0 && d->morph <= 1))
+        return false;
+    self->stats.draws++;
+    self->stats.triangles_drawn += d->index_count / 3;
+    b->frame_triangles += d->index_count / 3;
+    return true;
+}
+
+static bool nb_end_frame(tsr_hw_backend *self, tsr_hw_frame_stats *stats)
+{
+    null_backend *b = (null_backend *)self;
+    if (!b->in_frame)
+        return false;
+    b->in_frame = false;
+    self->stats.frames++;
+    if (stats) {
+        memset(stats, 0, sizeof *stats);
+        stats->triangles = b->frame_triangles;
+    }
+    return true;
+}
+
+static bool nb_read_color(tsr_hw_backend *self, uint8_t *rgba)
+{
+    (void)self;
+    (void)rgba;
+    return false;
+}
+
+static bool nb_read_depth(tsr_hw_backend *self, float *depth)
+{
+    (void)self;
+    (void)depth;
+    return false;
 }
 
 static void nb_destroy(tsr_hw_backend *self)
@@ -95,7 +161,7 @@ static void nb_destroy(tsr_hw_backend *self)
     tsr_free(ap, b);
 }
 
-tsr_hw_backend *tsr_hw_null_create(const tsr_allocator *alloc)
+tsr_hw_backend *tsr_hw_null_create(uint32_t width, uint32_t height, const tsr_allocator *alloc)
 {
     null_backend *b = tsr_alloc(alloc, sizeof *b);
     if (!b)
@@ -104,10 +170,16 @@ tsr_hw_backend *tsr_hw_null_create(const tsr_allocator *alloc)
     if (alloc)
         b->alloc = *alloc;
     b->base.name = "null";
+    b->base.width = width;
+    b->base.height = height;
     b->base.create_buffer = nb_create;
     b->base.upload = nb_upload;
-    b->base.draw = nb_draw;
     b->base.destroy_buffer = nb_destroy_buffer;
+    b->base.begin_frame = nb_begin_frame;
+    b->base.draw_tile = nb_draw_tile;
+    b->base.end_frame = nb_end_frame;
+    b->base.read_color = nb_read_color;
+    b->base.read_depth = nb_read_depth;
     b->base.destroy = nb_destroy;
     return &b->base;
 }

@@ -259,6 +259,15 @@ size_t tsr_terrain_extra_bytes(const tsr_terrain *t);
  * misses (cells with a NaN corner are holes). */
 bool tsr_terrain_pick(const tsr_terrain *t, const double origin[3], const double dir[3], double *t_hit);
 
+/* ---- Images --------------------------------------------------------------- */
+
+/* Writes 8-bit pixels (channels 1 to 4 interleaved, row 0 first) to path,
+ * the format chosen by its extension, under a temporary name beside it
+ * renamed when complete: on failure no file is left. Checks the extension
+ * before touching the disk (TSR_ERR_UNSUPPORTED); messages name path. */
+tsr_status tsr_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
+                             const uint8_t *pixels, tsr_error *err);
+
 /* ---- Independent error measurement -------------------------------------- */
 
 /* What an output mesh does to the samples, measured by brute force from

@@ -39,12 +39,6 @@ tsr_status tsr_image_read(const char *path, const tsr_allocator *alloc, uint64_t
 tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
                            const float *values, bool as_u16, double scale, double offset, tsr_error *err);
 
-/* Writes 8-bit pixels (channels 1 to 4 interleaved, row 0 first) to path,
- * the format chosen by its extension, under a temporary name beside it
- * renamed when complete: on failure no file is left. Checks the extension
- * before touching the disk (TSR_ERR_UNSUPPORTED); messages name path. */
-tsr_status tsr_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
-                             const uint8_t *pixels, tsr_error *err);
 
 /* The unit normal at sample (c, r) from central differences of the
  * heights (one-sided at borders and next to no-data), in world units. */

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 /* ---- Atomic output ---------------------------------------------------- */
@@ -32,6 +33,11 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
     int fd = mkstemps(tmp, (int)strlen(ext));
     if (fd < 0)
         return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
+    /* mkstemps makes the file 0600; the output gets the permissions any
+     * new file would (0666 less the umask) */
+    mode_t mask = umask(0);
+    umask(mask);
+    fchmod(fd, 0666 & ~mask);
     close(fd);
     return TSR_OK;
 }

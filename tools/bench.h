@@ -17,4 +17,7 @@ tsr_allocator bench_counting_allocator(bench_counting *c);
 /* `tessera bench mesh` (bench_mesh.c); argv[1] is "mesh". */
 int cli_bench_mesh(int argc, char **argv);
 
+/* `tessera bench fly` (bench_fly.c); argv[1] is "fly". */
+int cli_bench_fly(int argc, char **argv);
+
 #endif

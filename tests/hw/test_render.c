@@ -1,0 +1,261 @@
+/* Renders a known terrain through the Vulkan backend (lavapipe in CI) and
+ * checks the image against independent oracles:
+ *  - every pixel's depth against the CPU ray cast (tsr_terrain_pick on the
+ *    full-resolution surface) through the pixel's centre: where both hit,
+ *    the drawn point and the true surface point vertically below or above
+ *    it are at most tau pixels apart on screen (what the cut promises);
+ *    where they disagree (sky against terrain), only along silhouettes;
+ *  - the GPU's own triangle count (pipeline statistics) against the cut's,
+ *    counted here from the quadtree's leaves and tsr_tile_pattern;
+ *  - the image has terrain and sky, changes when the camera moves, and
+ *    matches a stored reference within a small per-pixel tolerance;
+ *  - the validation layers (required here when installed) say nothing.
+ * Skipped when no Vulkan device is available. */
+#include "check.h"
+#include "terrain/terrain_internal.h" /* tsr_image_read */
+#include "tools/fly.h"
+
+#define W 240
+#define H 160
+
+static tsr_heightfield *make_terrain(void)
+{
+    tsr_heightfield *hf = tsr_heightfield_create(257, 257, NULL);
+    tsr_generate_options g = {.seed = 7, .relief = 400};
+    tsr_terrain_generate(hf, &g);
+    tsr_heightfield_set_spacing(hf, 10, 10, 1);
+    return hf;
+}
+
+/* The backend, with the validation layers when they are installed. */
+static tsr_hw_backend *backend(void)
+{
+    tsr_hw_vulkan_options o = {.width = W, .height = H, .validation = 1};
+    tsr_hw_backend *b = NULL;
+    tsr_error err = {0};
+    if (tsr_hw_vulkan_create(&o, NULL, &b, &err) == TSR_OK)
+        return b;
+    o.validation = -1;
+    if (tsr_hw_vulkan_create(&o, NULL, &b, &err) == TSR_OK) {
+        fprintf(stderr, "note: validation layers not installed; rendering without them\n");
+        return b;
+    }
+    fprintf(stderr, "no Vulkan device: %s\n", err.message);
+    return NULL;
+}
+
+typedef struct view {
+    double eye[3], target[3];
+} view;
+
+/* A high oblique view, a low grazing one, and one looking across a valley. */
+static const view views[] = {
+    {{-300, -300, 900}, {1280, 1280, 0}},
+    {{1280, 200, 260}, {1280, 2200, 150}},
+    {{2400, 2400, 700}, {900, 1100, 100}},
+};
+
+static uint8_t *render(fly_ctx *f, const view *v, fly_frame_stats *fs, float *depth)
+{
+    tsr_camera cam;
+    CHECK(fly_camera(f, v->eye, v->target, &cam));
+    tsr_error err = {0};
+    tsr_status st = fly_frame(f, &cam, fs, &err);
+    CHECK_MSG(st == TSR_OK, "%s", err.message);
+    uint8_t *rgba = malloc(W * H * 4);
+    CHECK(f->backend->read_color(f->backend, rgba));
+    if (depth)
+        CHECK(f->backend->read_depth(f->backend, depth));
+    return rgba;
+}
+
+static void ground_below(const tsr_terrain *t, const double p[3], double *z)
+{
+    *z = ground_height(t, p[0], p[1]);
+}
+
+TEST(depth_matches_picking)
+{
+    tsr_hw_backend *b = backend();
+    if (!b)
+        SKIP("no Vulkan device");
+    tsr_heightfield *hf = make_terrain();
+    fly_options o = {.tile_n = 8, .pixel_error = 1.5, .fog_distance = -1};
+    fly_ctx f;
+    tsr_error err = {0};
+    CHECK(fly_init(&f, hf, b, &o, &err) == TSR_OK);
+    float *depth = malloc(W * H * sizeof *depth);
+    for (size_t vi = 0; vi < sizeof views / sizeof views[0]; vi++) {
+        fly_frame_stats fs;
+        uint8_t *rgba = render(&f, &views[vi], &fs, depth);
+        tsr_camera cam;
+        fly_camera(&f, views[vi].eye, views[vi].target, &cam);
+        uint32_t hits = 0, both = 0, mismatch = 0, far_mismatch = 0, over = 0;
+        double worst = 0;
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                /* the ray through the pixel's centre, with unit depth */
+                double u = (x + 0.5 - W / 2.0) / cam.K, w = -(y + 0.5 - H / 2.0) / cam.K, dir[3];
+                for (int k = 0; k < 3; k++)
+                    dir[k] = cam.fwd[k] + u * cam.right[k] + w * cam.up[k];
+                double t;
+                bool cpu = tsr_terrain_pick(f.terrain, cam.eye, dir, &t);
+                float d = depth[y * W + x];
+                bool gpu = d > 0;
+                hits += gpu;
+                if (gpu != cpu) {
+                    mismatch++;
+                    /* only along a silhouette: a pixel of the other kind nearby */
+                    bool edge = false;
+                    for (int dy = -2; dy <= 2 && !edge; dy++)
+                        for (int dx = -2; dx <= 2 && !edge; dx++) {
+                            int xx = x + dx, yy = y + dy;
+                            if (xx >= 0 && yy >= 0 && xx < W && yy < H)
+                                edge = (depth[yy * W + xx] > 0) == cpu;
+                        }
+                    far_mismatch += !edge;
+                    continue;
+                }
+                if (!gpu)
+                    continue;
+                both++;
+                double dist = cam.near_dist / d, p[3], q[3];
+                for (int k = 0; k < 3; k++)
+                    p[k] = cam.eye[k] + dist * dir[k];
+                double gz;
+                ground_below(f.terrain, p, &gz);
+                if (isnan(gz))
+                    continue; /* on the border, outside by rounding */
+                memcpy(q, p, sizeof q);
+                q[2] = gz;
+                double px, py, pd, qx, qy, qd;
+                tsr_camera_project(&cam, p, &px, &py, &pd);
+                tsr_camera_project(&cam, q, &qx, &qy, &qd);
+                double e = hypot(px - qx, py - qy);
+                worst = e > worst ? e : worst;
+                /* tau, plus the rounding of a float depth buffer and a float mesh */
+                over += e > o.pixel_error * 1.05 + 0.05;
+            }
+        fprintf(stderr, "view %zu: %u terrain pixels, %u checked, worst %.3f px (tau %.1f), %u silhouette "
+                        "disagreements\n",
+                vi, hits, both, worst, o.pixel_error, mismatch);
+        CHECK(hits > W * H / 5);     /* terrain on screen */
+        CHECK(hits < W * H);         /* and sky */
+        CHECK_MSG(over == 0, "%u pixels beyond tau (worst %.3f px)", over, worst);
+        CHECK_MSG(far_mismatch == 0, "%u sky/terrain disagreements away from any silhouette", far_mismatch);
+        CHECK(mismatch < W * H / 100);
+        free(rgba);
+    }
+    CHECK_MSG(b->stats.validation_messages == 0, "%llu validation messages",
+              (unsigned long long)b->stats.validation_messages);
+    free(depth);
+    fly_free(&f);
+    b->destroy(b);
+    tsr_heightfield_destroy(hf);
+}
+
+TEST(triangles_drawn_match_cut)
+{
+    tsr_hw_backend *b = backend();
+    if (!b)
+        SKIP("no Vulkan device");
+    tsr_heightfield *hf = make_terrain();
+    for (uint32_t tile = 4; tile <= 16; tile *= 4) {
+        fly_options o = {.tile_n = tile, .pixel_error = 1, .wireframe = tile == 16, .geomorph = true};
+        fly_ctx f;
+        tsr_error err = {0};
+        CHECK(fly_init(&f, hf, b, &o, &err) == TSR_OK);
+        for (size_t vi = 0; vi < sizeof views / sizeof views[0]; vi++) {
+            fly_frame_stats fs;
+            free(render(&f, &views[vi], &fs, NULL));
+            /* the cut's triangles, counted from the leaves */
+            uint64_t want = 0;
+            const tsr_qleaf *L = tsr_quadtree_leaves(f.qt);
+            for (uint32_t i = 0; i < tsr_quadtree_leaf_count(f.qt); i++)
+                if (!L[i].culled)
+                    want += tsr_tile_pattern(tile, L[i].stitch, NULL);
+            CHECK(want > 0);
+            CHECK_MSG(fs.render.device.triangles == want, "tile %u view %zu: GPU %llu, cut %llu", tile, vi,
+                      (unsigned long long)fs.render.device.triangles, (unsigned long long)want);
+            CHECK(fs.render.triangles == want);
+        }
+        fly_free(&f);
+    }
+    CHECK(b->stats.validation_messages == 0);
+    b->destroy(b);
+    tsr_heightfield_destroy(hf);
+}
+
+static double differing(const uint8_t *a, const uint8_t *b, int tol)
+{
+    uint32_t n = 0;
+    for (int i = 0; i < W * H; i++) {
+        int d = 0;
+        for (int c = 0; c < 3; c++) {
+            int e = abs((int)a[4 * i + c] - (int)b[4 * i + c]);
+            d = e > d ? e : d;
+        }
+        n += d > tol;
+    }
+    return (double)n / (W * H);
+}
+
+TEST(image_moves_and_matches_reference)
+{
+    tsr_hw_backend *b = backend();
+    if (!b)
+        SKIP("no Vulkan device");
+    tsr_heightfield *hf = make_terrain();
+    fly_options o = {.tile_n = 16, .pixel_error = 2, .geomorph = true};
+    fly_ctx f;
+    tsr_error err = {0};
+    CHECK(fly_init(&f, hf, b, &o, &err) == TSR_OK);
+    fly_frame_stats fs;
+    uint8_t *a = render(&f, &views[0], &fs, NULL);
+    /* not blank: many distinct colours */
+    uint32_t distinct = 0;
+    uint8_t *seen = calloc(1 << 15, 1);
+    for (int i = 0; i < W * H; i++) {
+        uint32_t key = (a[4 * i] >> 3) << 10 | (a[4 * i + 1] >> 3) << 5 | a[4 * i + 2] >> 3;
+        distinct += !seen[key];
+        seen[key] = 1;
+    }
+    free(seen);
+    CHECK_MSG(distinct > 100, "%u distinct colours", distinct);
+    view moved = views[0];
+    moved.eye[0] += 60;
+    moved.eye[1] -= 30;
+    uint8_t *m = render(&f, &moved, &fs, NULL);
+    CHECK_MSG(differing(a, m, 8) > 0.05, "%.3f of the pixels changed", differing(a, m, 8));
+
+    char ref[1024];
+    snprintf(ref, sizeof ref, "%s/tests/hw/reference/view0_%dx%d.png", TSR_SOURCE_DIR, W, H);
+    if (getenv("TSR_UPDATE_REFERENCE")) {
+        CHECK(tsr_image_save_u8(ref, W, H, 4, a, &err) == TSR_OK);
+        fprintf(stderr, "wrote %s\n", ref);
+    }
+    float *px = NULL;
+    tsr_image_info info;
+    tsr_status st = tsr_image_read(ref, NULL, 1 << 24, &px, &info, &err);
+    CHECK_MSG(st == TSR_OK, "%s (set TSR_UPDATE_REFERENCE=1 to write it)", err.message);
+    if (st == TSR_OK) {
+        CHECK(info.width == W && info.height == H && info.channels == 4);
+        if (info.width == W && info.height == H && info.channels == 4) {
+            uint8_t *r = malloc(W * H * 4);
+            for (int i = 0; i < W * H * 4; i++)
+                r[i] = (uint8_t)px[i];
+            double off = differing(a, r, 6);
+            CHECK_MSG(off < 0.002, "%.4f of the pixels differ from %s by more than 6/255", off, ref);
+            free(r);
+        }
+        tsr_free(NULL, px);
+    }
+    CHECK(b->stats.validation_messages == 0);
+    free(a);
+    free(m);
+    fly_free(&f);
+    b->destroy(b);
+    tsr_heightfield_destroy(hf);
+}
+
+TEST_MAIN(T(depth_matches_picking), T(triangles_drawn_match_cut), T(image_moves_and_matches_reference))

@@ -1,0 +1,556 @@
+/* cmd_fly.c: `tessera fly IN`: a real-time flyover of a heightfield, in a
+ * window (GLFW) or headless along a path into numbered PNGs. */
+#define _POSIX_C_SOURCE 200809L
+#include "fly.h"
+
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+static void help(FILE *f)
+{
+    fprintf(f, "usage: tessera fly IN [options]\n\n"
+               "Flies over a heightfield drawn by the GPU (Vulkan; Mesa's lavapipe where there is no GPU):\n"
+               "a restricted quadtree of grid tiles chosen each frame so that no sample is more than the\n"
+               "pixel error off screen, crack-free, with geomorphing.\n\n"
+               "In a window: mouse (hold the left button) looks around, W A S D fly, Q and E go down and up,\n"
+               "Shift goes faster, + and - raise and lower the pixel error, F toggles the wireframe (tile\n"
+               "borders white, levels in colour), G toggles geomorphing, Esc quits. The title bar shows frame\n"
+               "time, tiles, triangles, pixel error and MB resident.\n\n"
+               "options:\n"
+               "  --headless            render offscreen along the flight path instead of a window\n"
+               "  --frames N            headless: frames to render (default 120); window: quit after N\n"
+               "  --out DIR             headless: where the frames go, DIR/frame_00000.png ... (default fly-frames)\n"
+               "  --video FILE.mp4      headless: assemble the frames with ffmpeg (30 fps) when it is installed\n"
+               "  --path FILE           keyframes, one per line: EX EY EZ [TX TY TZ] (world units); default: an\n"
+               "                        automatic loop over the terrain, kept above the ground\n"
+               "  --width W, --height H viewport in pixels (default 1280 x 720)\n"
+               "  --pixel-error T       screen-space error allowed, pixels (default 2)\n"
+               "  --tile N              tile size: 2, 4, ..., 128 quads (default 16)\n"
+               "  --fov DEG             vertical field of view (default 60)\n"
+               "  --wireframe           start with the wireframe overlay\n"
+               "  --no-geomorph         start without geomorphing\n"
+               "  --cache MB            resident tile budget (default 256)\n"
+               "  --device NAME|INDEX   the Vulkan device (default: TESSERA_VK_DEVICE, else a discrete GPU,\n"
+               "                        then integrated, then lavapipe)\n"
+               "  --stats FILE.json     per-frame select, upload, record, draw and wait times, tiles, triangles\n"
+               "                        and uploaded bytes\n"
+               "  --quiet               no progress\n" CLI_HEIGHTFIELD_HELP
+               "  -h, --help            this help\n");
+}
+
+typedef struct frame_rec {
+    double select_ms, upload_ms, record_ms, gpu_ms, wait_ms, frame_ms;
+    uint32_t tiles, uploaded;
+    uint64_t triangles, gpu_triangles, bytes_uploaded, bytes_resident;
+} frame_rec;
+
+typedef struct fly_args {
+    const char *in, *out_dir, *video, *path_file, *stats, *device;
+    bool headless, quiet;
+    uint32_t frames, width, height;
+    fly_options o;
+} fly_args;
+
+static cJSON *stats_json(const fly_args *a, const char *device, const frame_rec *r, uint32_t n)
+{
+    cJSON *root = cJSON_CreateObject();
+    cJSON_AddStringToObject(root, "input", a->in);
+    cJSON_AddStringToObject(root, "device", device);
+    cJSON_AddNumberToObject(root, "width", a->width);
+    cJSON_AddNumberToObject(root, "height", a->height);
+    cJSON_AddNumberToObject(root, "tile", a->o.tile_n);
+    cJSON_AddNumberToObject(root, "pixel_error", a->o.pixel_error);
+    cJSON *frames = cJSON_AddArrayToObject(root, "frames");
+    double sum[6] = {0};
+    for (uint32_t i = 0; i < n; i++) {
+        cJSON *f = cJSON_CreateObject();
+        cJSON_AddNumberToObject(f, "select_ms", r[i].select_ms);
+        cJSON_AddNumberToObject(f, "upload_ms", r[i].upload_ms);
+        cJSON_AddNumberToObject(f, "record_ms", r[i].record_ms);
+        cJSON_AddNumberToObject(f, "draw_ms", r[i].gpu_ms);
+        cJSON_AddNumberToObject(f, "wait_ms", r[i].wait_ms);
+        cJSON_AddNumberToObject(f, "frame_ms", r[i].frame_ms);
+        cJSON_AddNumberToObject(f, "tiles", r[i].tiles);
+        cJSON_AddNumberToObject(f, "tiles_uploaded", r[i].uploaded);
+        cJSON_AddNumberToObject(f, "triangles", (double)r[i].triangles);
+        cJSON_AddNumberToObject(f, "gpu_triangles", (double)r[i].gpu_triangles);
+        cJSON_AddNumberToObject(f, "uploaded_bytes", (double)r[i].bytes_uploaded);
+        cJSON_AddNumberToObject(f, "resident_bytes", (double)r[i].bytes_resident);
+        cJSON_AddItemToArray(frames, f);
+        double v[6] = {r[i].select_ms, r[i].upload_ms, r[i].record_ms, r[i].gpu_ms, r[i].wait_ms, r[i].frame_ms};
+        for (int k = 0; k < 6; k++)
+            sum[k] += v[k];
+    }
+    cJSON *mean = cJSON_AddObjectToObject(root, "mean");
+    const char *names[6] = {"select_ms", "upload_ms", "record_ms", "draw_ms", "wait_ms", "frame_ms"};
+    for (int k = 0; k < 6; k++)
+        cJSON_AddNumberToObject(mean, names[k], n ? sum[k] / n : 0);
+    return root;
+}
+
+static int write_stats(const fly_args *a, const char *device, const frame_rec *r, uint32_t n)
+{
+    if (!a->stats)
+        return CLI_OK;
+    cJSON *root = stats_json(a, device, r, n);
+    char *text = root ? cJSON_Print(root) : NULL;
+    cJSON_Delete(root);
+    if (!text) {
+        cli_error("fly", "out of memory writing %s", a->stats);
+        return CLI_FAIL;
+    }
+    tsr_error err = {0};
+    tsr_status st = cli_write_text(a->stats, text, &err);
+    free(text);
+    if (st != TSR_OK) {
+        cli_error("fly", "%s", err.message);
+        return CLI_FAIL;
+    }
+    return CLI_OK;
+}
+
+static void record(frame_rec *rec, const fly_frame_stats *fs, double frame_ms)
+{
+    rec->select_ms = fs->select_ms;
+    rec->upload_ms = fs->render.upload_ms;
+    rec->record_ms = fs->render.record_ms;
+    rec->gpu_ms = fs->render.device.gpu_ms;
+    rec->wait_ms = fs->render.device.submit_wait_ms;
+    rec->frame_ms = frame_ms;
+    rec->tiles = fs->render.tiles;
+    rec->uploaded = fs->render.tiles_uploaded;
+    rec->triangles = fs->render.triangles;
+    rec->gpu_triangles = fs->render.device.triangles;
+    rec->bytes_uploaded = fs->render.bytes_uploaded;
+    rec->bytes_resident = fs->render.bytes_resident;
+}
+
+static bool make_dir(const char *dir)
+{
+    char buf[4096];
+    size_t n = strlen(dir);
+    if (n == 0 || n >= sizeof buf)
+        return false;
+    memcpy(buf, dir, n + 1);
+    for (size_t i = 1; i <= n; i++)
+        if (buf[i] == '/' || buf[i] == 0) {
+            char c = buf[i];
+            buf[i] = 0;
+            if (mkdir(buf, 0777) != 0 && errno != EEXIST)
+                return false;
+            buf[i] = c;
+        }
+    struct stat sb;
+    return stat(dir, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+static bool have_program(const char *name)
+{
+    const char *path = getenv("PATH");
+    if (!path)
+        return false;
+    char buf[4096];
+    while (*path) {
+        const char *colon = strchr(path, ':');
+        size_t len = colon ? (size_t)(colon - path) : strlen(path);
+        if (len && len + strlen(name) + 2 < sizeof buf) {
+            memcpy(buf, path, len);
+            buf[len] = '/';
+            strcpy(buf + len + 1, name);
+            if (access(buf, X_OK) == 0)
+                return true;
+        }
+        path += len + (colon ? 1 : 0);
+    }
+    return false;
+}
+
+/* Runs ffmpeg on the frames into a temporary beside `video`, renamed when
+ * complete. */
+static int assemble_video(const fly_args *a)
+{
+    if (!have_program("ffmpeg")) {
+        cli_error("fly", "ffmpeg is not installed, so %s was not made; the frames are in %s", a->video, a->out_dir);
+        return CLI_FAIL;
+    }
+    char pattern[4200], tmp[4200];
+    snprintf(pattern, sizeof pattern, "%s/frame_%%05d.png", a->out_dir);
+    snprintf(tmp, sizeof tmp, "%s.tmp-%ld.mp4", a->video, (long)getpid());
+    pid_t pid = fork();
+    if (pid == 0) {
+        execlp("ffmpeg", "ffmpeg", "-y", "-loglevel", "error", "-framerate", "30", "-i", pattern, "-pix_fmt",
+               "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", tmp, (char *)NULL);
+        _exit(127);
+    }
+    int status = 0;
+    if (pid < 0 || waitpid(pid, &status, 0) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        unlink(tmp);
+        cli_error("fly", "ffmpeg failed to make %s from %s", a->video, pattern);
+        return CLI_FAIL;
+    }
+    if (rename(tmp, a->video) != 0) {
+        unlink(tmp);
+        cli_error("fly", "%s: %s", a->video, strerror(errno));
+        return CLI_FAIL;
+    }
+    return CLI_OK;
+}
+
+static int run_headless(fly_args *a, const tsr_heightfield *hf)
+{
+    tsr_hw_vulkan_options vo = {.width = a->width, .height = a->height, .device = a->device};
+    tsr_hw_backend *be = NULL;
+    tsr_error err = {0};
+    if (tsr_hw_vulkan_create(&vo, NULL, &be, &err) != TSR_OK) {
+        cli_error("fly", "%s", err.message);
+        return CLI_FAIL;
+    }
+    fly_ctx f;
+    if (fly_init(&f, hf, be, &a->o, &err) != TSR_OK) {
+        cli_error("fly", "%s: %s", a->in, err.message);
+        be->destroy(be);
+        return CLI_FAIL;
+    }
+    fly_path path;
+    tsr_status st = a->path_file ? fly_path_read(a->path_file, &path, &err) : fly_path_auto(&f, &path, &err);
+    int rc = CLI_OK;
+    frame_rec *recs = calloc(a->frames, sizeof *recs);
+    uint8_t *rgba = malloc((size_t)a->width * a->height * 4);
+    if (st != TSR_OK || !recs || !rgba) {
+        cli_error("fly", "%s", st != TSR_OK ? err.message : "out of memory");
+        rc = CLI_FAIL;
+        goto done;
+    }
+    if (!make_dir(a->out_dir)) {
+        cli_error("fly", "cannot create the output folder %s: %s", a->out_dir, strerror(errno));
+        rc = CLI_FAIL;
+        goto done;
+    }
+    double clearance = 0.01 * (f.zmax - f.zmin) + 2 * f.o.near_dist;
+    bool tty = !a->quiet && isatty(2);
+    double t_start = cli_now();
+    for (uint32_t i = 0; i < a->frames; i++) {
+        double s = path.closed ? (double)i / a->frames : a->frames > 1 ? (double)i / (a->frames - 1) : 0;
+        tsr_camera cam;
+        if (!fly_path_camera(&f, &path, s, clearance, &cam)) {
+            cli_error("fly", "frame %u: the camera is degenerate (looking straight up or down, or target at the eye)",
+                      i);
+            rc = CLI_FAIL;
+            goto done;
+        }
+        double t0 = cli_now();
+        fly_frame_stats fs;
+        if (fly_frame(&f, &cam, &fs, &err) != TSR_OK) {
+            cli_error("fly", "frame %u: %s", i, err.message);
+            rc = CLI_FAIL;
+            goto done;
+        }
+        record(&recs[i], &fs, (cli_now() - t0) * 1e3);
+        char name[4200];
+        snprintf(name, sizeof name, "%s/frame_%05u.png", a->out_dir, i);
+        if (!be->read_color(be, rgba) || tsr_image_save_u8(name, a->width, a->height, 4, rgba, &err) != TSR_OK) {
+            cli_error("fly", "%s", err.message[0] ? err.message : "cannot read the frame back");
+            rc = CLI_FAIL;
+            goto done;
+        }
+        if (tty)
+            fprintf(stderr, "\rtessera fly: frame %u/%u (%.1f ms, %u tiles, %llu triangles)   ", i + 1, a->frames,
+                    recs[i].frame_ms, recs[i].tiles, (unsigned long long)recs[i].triangles);
+    }
+    if (tty)
+        fprintf(stderr, "\n");
+    if (be->stats.validation_messages) {
+        cli_error("fly", "the Vulkan validation layers reported %llu message(s)",
+                  (unsigned long long)be->stats.validation_messages);
+        rc = CLI_FAIL;
+    }
+    if (!a->quiet) {
+        double ms = 0;
+        for (uint32_t i = 0; i < a->frames; i++)
+            ms += recs[i].frame_ms;
+        fprintf(stderr, "tessera fly: %u frames on %s in %.1f s (%.1f ms per frame to draw), in %s/\n", a->frames,
+                be->name, cli_now() - t_start, a->frames ? ms / a->frames : 0, a->out_dir);
+    }
+    if (rc == CLI_OK)
+        rc = write_stats(a, be->name, recs, a->frames);
+    if (rc == CLI_OK && a->video)
+        rc = assemble_video(a);
+done:
+    free(recs);
+    free(rgba);
+    fly_path_free(&path);
+    fly_free(&f);
+    be->destroy(be);
+    return rc;
+}
+
+/* ---- the window --------------------------------------------------------------- */
+
+typedef struct window_state {
+    double yaw, pitch, last_x, last_y;
+    bool looking, have_last;
+} window_state;
+
+static void key_cb(GLFWwindow *w, int key, int scancode, int action, int mods)
+{
+    (void)scancode;
+    (void)mods;
+    fly_ctx *f = glfwGetWindowUserPointer(w);
+    if (action != GLFW_PRESS && action != GLFW_REPEAT)
+        return;
+    if (key == GLFW_KEY_ESCAPE)
+        glfwSetWindowShouldClose(w, GLFW_TRUE);
+    else if (key == GLFW_KEY_F && action == GLFW_PRESS)
+        f->o.wireframe = !f->o.wireframe;
+    else if (key == GLFW_KEY_G && action == GLFW_PRESS)
+        f->o.geomorph = !f->o.geomorph;
+    else if (key == GLFW_KEY_EQUAL || key == GLFW_KEY_KP_ADD)
+        f->o.pixel_error = fmin(f->o.pixel_error * 1.25, 64);
+    else if (key == GLFW_KEY_MINUS || key == GLFW_KEY_KP_SUBTRACT)
+        f->o.pixel_error = fmax(f->o.pixel_error / 1.25, 0.25);
+}
+
+static int run_window(fly_args *a, const tsr_heightfield *hf)
+{
+    if (!glfwInit()) {
+        cli_error("fly", "cannot open a window (no display?); use --headless to render frames offscreen");
+        return CLI_FAIL;
+    }
+    if (!glfwVulkanSupported()) {
+        glfwTerminate();
+        cli_error("fly", "no Vulkan loader or driver for windows; install libvulkan1 and mesa-vulkan-drivers");
+        return CLI_FAIL;
+    }
+    glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
+    GLFWwindow *win = glfwCreateWindow((int)a->width, (int)a->height, "tessera fly", NULL, NULL);
+    if (!win) {
+        glfwTerminate();
+        cli_error("fly", "cannot create a %ux%u window", a->width, a->height);
+        return CLI_FAIL;
+    }
+    tsr_hw_vulkan_options vo = {.width = a->width, .height = a->height, .device = a->device, .window = win};
+    tsr_hw_backend *be = NULL;
+    tsr_error err = {0};
+    int rc = CLI_OK;
+    if (tsr_hw_vulkan_create(&vo, NULL, &be, &err) != TSR_OK) {
+        cli_error("fly", "%s", err.message);
+        glfwDestroyWindow(win);
+        glfwTerminate();
+        return CLI_FAIL;
+    }
+    fly_ctx f;
+    if (fly_init(&f, hf, be, &a->o, &err) != TSR_OK) {
+        cli_error("fly", "%s: %s", a->in, err.message);
+        be->destroy(be);
+        glfwDestroyWindow(win);
+        glfwTerminate();
+        return CLI_FAIL;
+    }
+    glfwSetWindowUserPointer(win, &f);
+    glfwSetKeyCallback(win, key_cb);
+    /* start where the automatic path starts */
+    fly_path path = {0};
+    tsr_camera cam;
+    double eye[3], yaw = 0, pitch = -0.2;
+    if ((a->path_file ? fly_path_read(a->path_file, &path, &err) : fly_path_auto(&f, &path, &err)) == TSR_OK &&
+        fly_path_camera(&f, &path, 0, 1, &cam)) {
+        memcpy(eye, cam.eye, sizeof eye);
+        yaw = atan2(cam.fwd[1], cam.fwd[0]);
+        pitch = asin(fmax(-0.99, fmin(0.99, cam.fwd[2])));
+    } else {
+        eye[0] = eye[1] = 0;
+        eye[2] = f.zmax + 10;
+    }
+    fly_path_free(&path);
+    double extent = fmax((tsr_heightfield_width(hf) - 1) * f.dx, (tsr_heightfield_height(hf) - 1) * f.dy);
+    double last = cli_now(), title_at = 0, last_x = 0, last_y = 0;
+    bool have_cursor = false;
+    frame_rec *recs = NULL;
+    uint32_t nrec = 0, caprec = 0;
+    while (!glfwWindowShouldClose(win) && (!a->frames || nrec < a->frames)) {
+        glfwPollEvents();
+        double now = cli_now(), dt = fmin(now - last, 0.1);
+        last = now;
+        double cx, cy;
+        glfwGetCursorPos(win, &cx, &cy);
+        if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
+            if (have_cursor) {
+                yaw -= (cx - last_x) * 0.003;
+                pitch = fmax(-1.5, fmin(1.5, pitch - (cy - last_y) * 0.003));
+            }
+            have_cursor = true;
+        } else
+            have_cursor = false;
+        last_x = cx;
+        last_y = cy;
+        double fwd[3] = {cos(pitch) * cos(yaw), cos(pitch) * sin(yaw), sin(pitch)};
+        double right[2] = {sin(yaw), -cos(yaw)};
+        double speed = extent * 0.05 * dt * (glfwGetKey(win, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ? 5 : 1);
+        int kw = glfwGetKey(win, GLFW_KEY_W) == GLFW_PRESS, ks = glfwGetKey(win, GLFW_KEY_S) == GLFW_PRESS;
+        int ka = glfwGetKey(win, GLFW_KEY_A) == GLFW_PRESS, kd = glfwGetKey(win, GLFW_KEY_D) == GLFW_PRESS;
+        int kq = glfwGetKey(win, GLFW_KEY_Q) == GLFW_PRESS, ke = glfwGetKey(win, GLFW_KEY_E) == GLFW_PRESS;
+        for (int c = 0; c < 3; c++)
+            eye[c] += speed * (kw - ks) * fwd[c];
+        eye[0] += speed * (kd - ka) * right[0];
+        eye[1] += speed * (kd - ka) * right[1];
+        eye[2] += speed * (ke - kq);
+        double g = ground_height(f.terrain, eye[0], eye[1]);
+        if (!isnan(g) && eye[2] < g + 2 * f.o.near_dist)
+            eye[2] = g + 2 * f.o.near_dist;
+        double target[3] = {eye[0] + fwd[0], eye[1] + fwd[1], eye[2] + fwd[2]};
+        if (!fly_camera(&f, eye, target, &cam))
+            continue;
+        fly_frame_stats fs;
+        double t0 = cli_now();
+        if (fly_frame(&f, &cam, &fs, &err) != TSR_OK) {
+            cli_error("fly", "%s", err.message);
+            rc = CLI_FAIL;
+            break;
+        }
+        if (nrec == caprec) {
+            caprec = caprec ? caprec * 2 : 256;
+            frame_rec *nr = realloc(recs, caprec * sizeof *nr);
+            if (!nr) {
+                rc = CLI_FAIL;
+                break;
+            }
+            recs = nr;
+        }
+        record(&recs[nrec++], &fs, (cli_now() - t0) * 1e3);
+        if (now - title_at > 0.25) {
+            title_at = now;
+            char title[256];
+            snprintf(title, sizeof title,
+                     "tessera fly - %.1f ms - %u tiles - %.0fk triangles - tau %.2f px - %.0f MB resident%s%s",
+                     recs[nrec - 1].frame_ms, fs.render.tiles, fs.render.triangles / 1e3, f.o.pixel_error,
+                     fs.render.bytes_resident / 1048576.0, f.o.wireframe ? " - wireframe" : "",
+                     f.o.geomorph ? "" : " - no geomorph");
+            glfwSetWindowTitle(win, title);
+        }
+    }
+    if (be->stats.validation_messages) {
+        cli_error("fly", "the Vulkan validation layers reported %llu message(s)",
+                  (unsigned long long)be->stats.validation_messages);
+        rc = CLI_FAIL;
+    }
+    if (rc == CLI_OK)
+        rc = write_stats(a, be->name, recs, nrec);
+    if (!a->quiet)
+        fprintf(stderr, "tessera fly: %u frames on %s\n", nrec, be->name);
+    free(recs);
+    fly_free(&f);
+    be->destroy(be);
+    glfwDestroyWindow(win);
+    glfwTerminate();
+    return rc;
+}
+
+static int run(int argc, char **argv)
+{
+    fly_args a = {.out_dir = "fly-frames", .width = 1280, .height = 720};
+    a.o.geomorph = true;
+    cli_heightfield_options ho = {0};
+    bool frames_given = false;
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i];
+        int h = cli_heightfield_option("fly", argc, argv, &i, &ho);
+        if (h < 0)
+            return CLI_USAGE;
+        if (h > 0)
+            continue;
+        bool more = i + 1 < argc;
+        if (cli_is_help(arg)) {
+            help(stdout);
+            return CLI_OK;
+        } else if (!strcmp(arg, "--headless"))
+            a.headless = true;
+        else if (!strcmp(arg, "--quiet"))
+            a.quiet = true;
+        else if (!strcmp(arg, "--wireframe"))
+            a.o.wireframe = true;
+        else if (!strcmp(arg, "--no-geomorph"))
+            a.o.geomorph = false;
+        else if (!strcmp(arg, "--frames") && more) {
+            if (!cli_parse_u32(argv[++i], 1, 1000000, &a.frames)) {
+                cli_error("fly", "--frames wants a count from 1 to 1000000, not '%s'", argv[i]);
+                return CLI_USAGE;
+            }
+            frames_given = true;
+        } else if ((!strcmp(arg, "--width") || !strcmp(arg, "--height")) && more) {
+            uint32_t v;
+            if (!cli_parse_u32(argv[++i], 16, 8192, &v)) {
+                cli_error("fly", "%s wants pixels from 16 to 8192, not '%s'", arg, argv[i]);
+                return CLI_USAGE;
+            }
+            *(arg[2] == 'w' ? &a.width : &a.height) = v;
+        } else if (!strcmp(arg, "--pixel-error") && more) {
+            if (!cli_parse_double(argv[++i], &a.o.pixel_error) || !(a.o.pixel_error > 0) || a.o.pixel_error > 1e4) {
+                cli_error("fly", "--pixel-error wants pixels > 0, not '%s'", argv[i]);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(arg, "--fov") && more) {
+            if (!cli_parse_double(argv[++i], &a.o.fovy_deg) || !(a.o.fovy_deg > 1 && a.o.fovy_deg < 170)) {
+                cli_error("fly", "--fov wants degrees between 1 and 170, not '%s'", argv[i]);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(arg, "--tile") && more) {
+            if (!cli_parse_u32(argv[++i], TSR_TILE_MIN, TSR_TILE_MAX, &a.o.tile_n) || (a.o.tile_n & (a.o.tile_n - 1))) {
+                cli_error("fly", "--tile wants a power of two from 2 to 128, not '%s'", argv[i]);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(arg, "--cache") && more) {
+            uint32_t mb;
+            if (!cli_parse_u32(argv[++i], 1, 1 << 20, &mb)) {
+                cli_error("fly", "--cache wants megabytes from 1, not '%s'", argv[i]);
+                return CLI_USAGE;
+            }
+            a.o.cache_bytes = (uint64_t)mb << 20;
+        } else if (!strcmp(arg, "--out") && more)
+            a.out_dir = argv[++i];
+        else if (!strcmp(arg, "--video") && more)
+            a.video = argv[++i];
+        else if (!strcmp(arg, "--path") && more)
+            a.path_file = argv[++i];
+        else if (!strcmp(arg, "--stats") && more)
+            a.stats = argv[++i];
+        else if (!strcmp(arg, "--device") && more)
+            a.device = argv[++i];
+        else if (arg[0] == '-' && arg[1]) {
+            cli_error("fly", "unknown option '%s'%s (see tessera fly --help)", arg,
+                      more ? "" : " or missing value");
+            return CLI_USAGE;
+        } else if (!a.in)
+            a.in = arg;
+        else {
+            cli_error("fly", "one input only ('%s' and '%s')", a.in, arg);
+            return CLI_USAGE;
+        }
+    }
+    if (!a.in) {
+        cli_error("fly", "no input heightfield (see tessera fly --help)");
+        return CLI_USAGE;
+    }
+    if (a.video && !a.headless) {
+        cli_error("fly", "--video needs --headless");
+        return CLI_USAGE;
+    }
+    if (a.headless && !frames_given)
+        a.frames = 120;
+    tsr_heightfield *hf = cli_load_heightfield("fly", a.in, &ho);
+    if (!hf)
+        return CLI_FAIL;
+    int rc = a.headless ? run_headless(&a, hf) : run_window(&a, hf);
+    tsr_heightfield_destroy(hf);
+    return rc;
+}
+
+const cli_command cli_cmd_fly = {"fly", "fly over a heightfield in real time (Vulkan), or render a flight", run, help};
