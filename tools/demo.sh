@@ -2,7 +2,8 @@
 # demo.sh TESSERA OUTDIR: the main job on the bundled default. Generates the
 # project's sample terrain (1025x1025, seed 1, 30 m spacing) as a 16-bit
 # PNG, converts it into a mesh within the default error bound (and a
-# printable solid), and checks the view-dependent tessellation.
+# printable solid), checks the view-dependent tessellation, and renders a
+# short headless flyover.
 set -euo pipefail
 tessera=$1 out=$2
 mkdir -p "$out"
@@ -22,9 +23,18 @@ status=0
 "$tessera" check terrain "$out/terrain.png" --dx 30 --cameras 20 > "$out/check.txt" || status=$?
 echo "  $(tail -n 1 "$out/check.txt")"
 echo
+echo "rendering a flyover (90 frames at 960x540, headless Vulkan: lavapipe where there is no GPU)..."
+if "$tessera" fly "$out/terrain.png" --dx 30 --headless --frames 90 --width 960 --height 540 --out "$out/flyover" \
+     --stats "$out/flyover.json" --quiet; then
+  echo "  frames: $(cd "$out/flyover" && pwd)/frame_00000.png ... frame_00089.png"
+else
+  echo "  the flyover failed (is a Vulkan driver installed? tools/install-deps.sh installs lavapipe)"
+  status=1
+fi
+echo
 echo "wrote:"
 for f in terrain.png terrain.glb terrain-mesh.json terrain-normals.png terrain-hillshade.png terrain-solid.stl \
-         terrain-solid.json check.txt; do
+         terrain-solid.json check.txt flyover.json; do
   printf '  %-22s %s\n' "$f" "$(du -h "$out/$f" | cut -f1)"
 done
 echo "in $(cd "$out" && pwd)"

@@ -301,7 +301,7 @@ tsr_status fly_path_auto(const fly_ctx *f, fly_path *p, tsr_error *err)
             top = f->zmax;
         p->eye[k][0] = x;
         p->eye[k][1] = y;
-        p->eye[k][2] = top + 0.12 * relief;
+        p->eye[k][2] = top + 0.2 * relief;
     }
     p->count = K;
     p->closed = true;
@@ -358,7 +358,7 @@ bool fly_path_camera(const fly_ctx *f, const fly_path *p, double s, double clear
         /* look along the path, a little down */
         target[0] = eye[0] + tan[0] / l;
         target[1] = eye[1] + tan[1] / l;
-        target[2] = eye[2] - 0.22;
+        target[2] = eye[2] - 0.3;
     }
     return fly_camera(f, eye, target, cam);
 }
