@@ -74,7 +74,9 @@ typedef struct tsr_hw_frame {
  * move, so morphing opens no crack. */
 typedef struct tsr_hw_tile_draw {
     tsr_hw_buffer samples;  /* a VERTEX buffer */
-    uint64_t samples_offset; /* byte offset of sample 0, a multiple of 4 */
+    uint64_t samples_offset; /* byte offset of the word holding sample 0, a multiple of 4 */
+    uint32_t first_sample;   /* U16: 1 when sample 0 is the word's high half (tiles of an odd
+                              * sample count pack without padding); F32: 0 */
     tsr_hw_height_format format;
     tsr_hw_buffer indices;  /* an INDEX buffer */
     uint32_t first_index, index_count; /* index_count a multiple of 3 */
@@ -146,6 +148,10 @@ struct tsr_hw_backend {
  * memory. alloc may be NULL. Destroy it with backend->destroy(backend). */
 tsr_hw_backend *tsr_hw_null_create(uint32_t width, uint32_t height, const tsr_allocator *alloc);
 
+/* Bytes a draw reads from samples_offset: (n+1)^2 samples of the format
+ * after first_sample; 0 when the format, n or first_sample is invalid. */
+uint64_t tsr_hw_draw_sample_bytes(tsr_hw_height_format format, uint32_t n, uint32_t first_sample);
+
 /* The view-projection matrix of a prepared camera (see tsr_camera in
  * tessellate/quadtree.h): column-major, for positions relative to the
  * eye, reversed infinite depth with the camera's near plane, so a world
@@ -177,6 +183,8 @@ typedef struct tsr_hw_tile {
     double spacing[2];      /* world spacing of the vertices */
     double limit[2];        /* world x, y clamp (the extent's far border); 0 or INFINITY: none */
     double z_scale;         /* world z = z_scale * sample */
+    double max_quantization; /* sample units a U16 encoding may move a sample of this tile;
+                              * 0: the renderer's max_quantization */
     float morph;
     uint8_t stitch;         /* TSR_EDGE_* bits */
     uint8_t level, parity;  /* as in tsr_hw_tile_draw */

@@ -88,18 +88,6 @@ static bool nb_begin_frame(tsr_hw_backend *self, const tsr_hw_frame *frame)
     return true;
 }
 
-/* Bytes the samples of an n x n tile occupy in a format; 0 for an unknown
- * format. */
-static uint64_t sample_bytes(tsr_hw_height_format format, uint32_t n)
-{
-    uint64_t count = (uint64_t)(n + 1) * (n + 1);
-    if (format == TSR_HW_HEIGHT_U16)
-        return (count + 1) / 2 * 4;
-    if (format == TSR_HW_HEIGHT_F32)
-        return count * 4;
-    return 0;
-}
-
 static bool nb_draw_tile(tsr_hw_backend *self, const tsr_hw_tile_draw *d)
 {
     null_backend *b = (null_backend *)self;
@@ -110,7 +98,7 @@ static bool nb_draw_tile(tsr_hw_backend *self, const tsr_hw_tile_draw *d)
     null_buffer *s = lookup(b, d->samples), *ix = lookup(b, d->indices);
     if (!s || s->kind != TSR_HW_VERTEX || !ix || ix->kind != TSR_HW_INDEX)
         return false;
-    uint64_t bytes = sample_bytes(d->format, d->n);
+    uint64_t bytes = tsr_hw_draw_sample_bytes(d->format, d->n, d->first_sample);
     if (bytes == 0 || d->samples_offset % 4 || d->samples_offset > s->size || bytes > s->size - d->samples_offset)
         return false;
     if (d->index_count % 3 || ((uint64_t)d->first_index + d->index_count) * 4 > ix->size)

@@ -64,6 +64,18 @@ void tsr_hw_view_proj(const tsr_camera *c, float m[16])
 
 uint32_t tsr_hw_encode_bound(uint32_t count) { return count * 4; } /* F32, the larger form */
 
+uint64_t tsr_hw_draw_sample_bytes(tsr_hw_height_format format, uint32_t n, uint32_t first_sample)
+{
+    if (n < TSR_TILE_MIN || n > TSR_TILE_MAX || (n & 1))
+        return 0;
+    uint64_t count = (uint64_t)(n + 1) * (n + 1);
+    if (format == TSR_HW_HEIGHT_U16 && first_sample <= 1)
+        return (count + first_sample + 1) / 2 * 4;
+    if (format == TSR_HW_HEIGHT_F32 && first_sample == 0)
+        return count * 4;
+    return 0;
+}
+
 static void put_word(void *dst, uint32_t w, uint32_t word)
 {
     memcpy((unsigned char *)dst + 4 * (size_t)w, &word, 4);
@@ -448,7 +460,8 @@ static tsr_status fetch_encode(tsr_hw_renderer *r, frame_ctx *f, const tsr_hw_ti
         return tsr_error_set(f->err, TSR_ERR_IO,
                              "hw renderer: fetching the samples of tile %" PRIu32 " (key %#" PRIx64 ") failed",
                              (uint32_t)(t - f->tiles), t->key);
-    *enc = tsr_hw_encode_samples(samples, r->samples, r->max_q, buf);
+    double q = t->max_quantization > 0 && isfinite(t->max_quantization) ? t->max_quantization : r->max_q;
+    *enc = tsr_hw_encode_samples(samples, r->samples, q, buf);
     return TSR_OK;
 }
 
@@ -485,13 +498,13 @@ static tsr_status relocate(tsr_hw_renderer *r, frame_ctx *f)
     tsr_status st = fetch_encode(r, f, t, r->reloc_fetch_buf, r->reloc_encode_buf, &enc);
     if (st != TSR_OK)
         return st;
-    if (enc.format != TSR_HW_HEIGHT_U16 || enc.bytes != e->bytes)
+    if (enc.format != TSR_HW_HEIGHT_U16 || r->samples * 2 != e->bytes)
         return tsr_error_set(f->err, TSR_ERR_VALUE,
                              "hw renderer: tile key %#" PRIx64 " fetched different samples than before (a key "
                              "must always name the same samples)",
                              t->key);
     uint32_t ns = take_half(r, to);
-    st = upload(r, f, ns, r->reloc_encode_buf, enc.bytes, t->key);
+    st = upload(r, f, ns, r->reloc_encode_buf, r->samples * 2, t->key);
     if (st != TSR_OK) {
         free_slots(r, ns, TSR_HW_HEIGHT_U16);
         return st;
@@ -544,7 +557,9 @@ static tsr_status load(tsr_hw_renderer *r, frame_ctx *f, uint32_t i, const tsr_h
     st = make_room(r, f, (uint8_t)enc.format, &slot);
     if (st != TSR_OK)
         return st;
-    st = upload(r, f, slot, r->encode_buf, enc.bytes, t->key);
+    /* U16: the samples alone, without the encoding's padding to a word */
+    uint32_t bytes = enc.format == TSR_HW_HEIGHT_U16 ? r->samples * 2 : enc.bytes;
+    st = upload(r, f, slot, r->encode_buf, bytes, t->key);
     if (st != TSR_OK) {
         free_slots(r, slot, (uint8_t)enc.format);
         return st;
@@ -554,10 +569,10 @@ static tsr_status load(tsr_hw_renderer *r, frame_ctx *f, uint32_t i, const tsr_h
     e->format = (uint8_t)enc.format;
     e->offset = enc.offset;
     e->scale = enc.scale;
-    e->bytes = enc.bytes;
+    e->bytes = bytes;
     r->resident++;
     r->resident_u16 += enc.format == TSR_HW_HEIGHT_U16;
-    r->bytes_resident += enc.bytes;
+    r->bytes_resident += bytes;
     f->st->tiles_uploaded++;
     return TSR_OK;
 }
@@ -675,7 +690,9 @@ tsr_status tsr_hw_renderer_frame(tsr_hw_renderer *r, const tsr_hw_frame *frame, 
         tsr_hw_tile_draw d;
         memset(&d, 0, sizeof d);
         d.samples = r->pool;
-        d.samples_offset = (uint64_t)e->slot * r->slot_bytes;
+        uint64_t at = (uint64_t)e->slot * r->slot_bytes;
+        d.samples_offset = at & ~(uint64_t)3;
+        d.first_sample = (uint32_t)(at & 3) / 2;
         d.format = (tsr_hw_height_format)e->format;
         d.indices = r->index_buf;
         d.first_index = r->first_index[m];
@@ -794,7 +811,9 @@ tsr_status tsr_hw_renderer_create(tsr_hw_backend *backend, const tsr_hw_renderer
                              TSR_TILE_MAX);
     if (!(max_q >= 0))
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "hw renderer: max_quantization %g is negative or NaN", max_q);
-    uint32_t samples = (n + 1) * (n + 1), slot_bytes = (samples / 2 + (samples & 1)) * 4;
+    /* a slot holds one U16 tile, unpadded (2 bytes per sample); a pair of
+     * slots, 4-byte aligned, holds an F32 tile */
+    uint32_t samples = (n + 1) * (n + 1), slot_bytes = samples * 2;
     uint64_t slots = cache / slot_bytes;
     if (slots == 0)
         return tsr_error_set(err, TSR_ERR_ARGUMENT,
@@ -842,7 +861,8 @@ tsr_status tsr_hw_renderer_create(tsr_hw_backend *backend, const tsr_hw_renderer
 
     tsr_status st = upload_patterns(r, err);
     if (st == TSR_OK) {
-        uint64_t pool_bytes = (uint64_t)r->slot_count * slot_bytes;
+        /* + 4: a U16 tile in the last slot reads whole words */
+        uint64_t pool_bytes = (uint64_t)r->slot_count * slot_bytes + 4;
         r->pool = backend->create_buffer(backend, TSR_HW_VERTEX, pool_bytes);
         if (!r->pool)
             st = tsr_error_set(err, TSR_ERR_NOMEM,

@@ -63,7 +63,7 @@ typedef struct vk_push {
     uint64_t frame, samples;
     float origin[2], spacing[2], limit[2];
     float z_base, z_step, morph;
-    uint32_t n, bits;
+    uint32_t n, bits, first;
 } vk_push;
 
 typedef struct vk_buffer {
@@ -702,8 +702,7 @@ static bool vb_draw_tile(tsr_hw_backend *self, const tsr_hw_tile_draw *d)
         return false;
     if (!(d->spacing[0] > 0) || !(d->spacing[1] > 0) || !(d->morph >= 0 && d->morph <= 1))
         return false;
-    uint64_t count = (uint64_t)(d->n + 1) * (d->n + 1);
-    uint64_t bytes = d->format == TSR_HW_HEIGHT_U16 ? (count + 1) / 2 * 4 : d->format == TSR_HW_HEIGHT_F32 ? count * 4 : 0;
+    uint64_t bytes = tsr_hw_draw_sample_bytes(d->format, d->n, d->first_sample);
     if (!bytes || d->samples_offset > sb->size || bytes > sb->size - d->samples_offset)
         return false;
     if ((uint64_t)d->first_index + d->index_count > ib->size / 4)
@@ -777,6 +776,7 @@ static void push_draw(vk_backend *b, VkCommandBuffer cb, const tsr_hw_tile_draw 
                   .z_step = d->z_step,
                   .morph = d->morph,
                   .n = d->n,
+                  .first = d->first_sample,
                   .bits = (d->format == TSR_HW_HEIGHT_U16 ? 1u : 0u) | (uint32_t)d->level << 8 |
                           (uint32_t)(d->parity & 3) << 16};
     vkCmdPushConstants(cb, b->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof pc, &pc);

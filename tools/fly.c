@@ -136,9 +136,9 @@ tsr_status fly_frame(fly_ctx *f, const tsr_camera *cam, fly_frame_stats *st, tsr
 {
     memset(st, 0, sizeof *st);
     double t0 = cli_now();
-    tsr_status s = tsr_quadtree_select(f->qt, tsr_refine_camera, (void *)cam);
-    if (s != TSR_OK)
-        return tsr_error_set(err, s, "quadtree selection failed");
+    tsr_status sel = tsr_quadtree_select(f->qt, tsr_refine_camera, (void *)cam);
+    if (sel != TSR_OK)
+        return tsr_error_set(err, sel, "quadtree selection failed");
     tsr_quadtree_apply_camera(f->qt, cam);
     uint32_t nl = tsr_quadtree_leaf_count(f->qt);
     const tsr_qleaf *L = tsr_quadtree_leaves(f->qt);
@@ -149,6 +149,7 @@ tsr_status fly_frame(fly_ctx *f, const tsr_camera *cam, fly_frame_stats *st, tsr
         f->tiles = nt;
         f->tiles_cap = nl;
     }
+    const tsr_surface *s = tsr_terrain_surface(f->terrain);
     uint32_t tn = f->o.tile_n, count = 0;
     double xmax = (tsr_heightfield_width(f->hf) - 1) * f->dx, ymax = (tsr_heightfield_height(f->hf) - 1) * f->dy;
     for (uint32_t i = 0; i < nl; i++) {
@@ -165,6 +166,10 @@ tsr_status fly_frame(fly_ctx *f, const tsr_camera *cam, fly_frame_stats *st, tsr
         t->limit[0] = xmax;
         t->limit[1] = ymax;
         t->z_scale = f->dz;
+        /* 16-bit samples may move by 2% of the node's own error: on screen
+         * at most 2% of tau on top of the cut's bound */
+        float delta = s->error(s->user, n);
+        t->max_quantization = isfinite(delta) ? 0.02 * delta / f->dz : 0;
         t->morph = f->o.geomorph ? L[i].morph : 0;
         t->stitch = L[i].stitch;
         t->level = n.level;

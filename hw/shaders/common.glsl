@@ -28,6 +28,7 @@ layout(push_constant, scalar) uniform Push {
     float morph;
     uint n;           // quads per side
     uint bits;        // bit 0: U16 format; bits 8..15: level; bits 16..17: parity
+    uint first;       // U16: sample 0 is the high half of the first word
 } pc;
 
 vec3 sky_colour(vec3 dir)

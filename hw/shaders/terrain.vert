@@ -10,14 +10,14 @@ layout(location = 3) out float v_valid;
 bool fetch(int i, int j, out float h)
 {
     uint k = uint(j) * (pc.n + 1u) + uint(i);
-    uint word = pc.samples.w[k >> 1u];
     if ((pc.bits & 1u) != 0u) {
+        k += pc.first;
+        uint word = pc.samples.w[k >> 1u];
         uint code = (k & 1u) != 0u ? word >> 16u : word & 0xFFFFu;
         h = pc.z_base + pc.z_step * float(code);
         return code != 0xFFFFu;
     }
-    word = pc.samples.w[k];
-    float s = uintBitsToFloat(word);
+    float s = uintBitsToFloat(pc.samples.w[k]);
     h = pc.z_base + pc.z_step * s;
     return !isnan(s);
 }

@@ -89,6 +89,10 @@ TEST(frames_and_draws)
     BAD((x.format = TSR_HW_HEIGHT_U16, x.samples_offset = 152), "U16 samples past the end: 152 + 52 > 200");
     BAD((x.format = TSR_HW_HEIGHT_U16, x.samples = small), "25 U16 samples take 13 words: 52 > 50 bytes");
     BAD(x.samples = small, "25 F32 samples: 100 > 50 bytes");
+    BAD(x.first_sample = 1, "F32 samples do not start at a half word");
+    BAD((x.format = TSR_HW_HEIGHT_U16, x.first_sample = 2), "first_sample beyond the first word");
+    BAD((x.format = TSR_HW_HEIGHT_U16, x.first_sample = 1, x.samples_offset = 152),
+        "U16 samples from a high half past the end: 152 + 52 > 200");
     BAD(x.index_count = 95, "not whole triangles");
     BAD((x.first_index = 57, x.index_count = 96), "indices past the end: 57 + 96 > 150");
     BAD((x.first_index = UINT32_MAX, x.index_count = 3), "first_index overflowing");
@@ -114,6 +118,9 @@ TEST(frames_and_draws)
     x.first_index = 54;     /* 54 + 96 == 150 */
     x.morph = 1;
     CHECK(b->draw_tile(b, &x));
+    x.first_sample = 1; /* 25 halves after one: still 13 words */
+    CHECK(b->draw_tile(b, &x));
+    x.first_sample = 0;
     x.n = TSR_TILE_MIN;
     x.morph = 0;
     x.index_count = 0;
@@ -122,8 +129,8 @@ TEST(frames_and_draws)
     tsr_hw_frame_stats fs;
     memset(&fs, 0xab, sizeof fs);
     CHECK(b->end_frame(b, &fs));
-    CHECK(fs.triangles == 96 && fs.gpu_ms == 0 && fs.submit_wait_ms == 0);
-    CHECK(b->stats.draws == 4 && b->stats.triangles_drawn == 96 && b->stats.frames == 1);
+    CHECK(fs.triangles == 128 && fs.gpu_ms == 0 && fs.submit_wait_ms == 0);
+    CHECK(b->stats.draws == 5 && b->stats.triangles_drawn == 128 && b->stats.frames == 1);
 
     CHECK(!b->draw_tile(b, &d)); /* the frame ended */
     CHECK(!b->end_frame(b, NULL));
@@ -135,14 +142,14 @@ TEST(frames_and_draws)
     CHECK(fs.triangles == 32);
     CHECK(b->begin_frame(b, &frame));
     CHECK(b->end_frame(b, NULL));
-    CHECK(b->stats.draws == 5 && b->stats.triangles_drawn == 128 && b->stats.frames == 3);
+    CHECK(b->stats.draws == 6 && b->stats.triangles_drawn == 160 && b->stats.frames == 3);
 
     /* a destroyed buffer cannot be drawn from */
     b->destroy_buffer(b, vb);
     CHECK(b->begin_frame(b, &frame));
     CHECK(!b->draw_tile(b, &d));
     CHECK(b->end_frame(b, NULL));
-    CHECK(b->stats.draws == 5);
+    CHECK(b->stats.draws == 6);
     b->destroy(b);
 }
 

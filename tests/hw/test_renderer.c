@@ -46,6 +46,8 @@ static uint32_t g_n; /* tile_n of the renderer under test */
 static uint32_t tile_samples(void) { return (g_n + 1) * (g_n + 1); }
 static uint32_t u16_bytes(void) { return (tile_samples() + 1) / 2 * 4; } /* two samples per 32-bit word */
 static uint32_t f32_bytes(void) { return tile_samples() * 4; }
+/* What a U16 tile uploads and occupies: its samples, without padding */
+static uint32_t u16_upload_bytes(void) { return tile_samples() * 2; }
 
 typedef struct fetcher {
     uint64_t fail_key;
@@ -190,9 +192,9 @@ static double stored_sample(const tsr_hw_tile_draw *d, uint32_t v)
         memcpy(&f, p + 4 * (size_t)v, 4);
         return f;
     }
-    uint32_t w;
-    memcpy(&w, p + 4 * (size_t)(v / 2), 4);
-    uint32_t code = (w >> (16 * (v & 1))) & 0xFFFF;
+    /* little-endian 16-bit samples, sample 0 first_sample halves in */
+    uint16_t code;
+    memcpy(&code, p + 2 * ((size_t)d->first_sample + v), 2);
     return code == 0xFFFF ? NAN : (double)code;
 }
 
@@ -224,9 +226,10 @@ static void check_draws(const tsr_hw_tile *tiles, uint32_t count, const tsr_hw_f
         bool float_tile = (t->key & FLOAT_KEY) != 0;
         if (max_q == 0)
             CHECK(d->format == (float_tile ? TSR_HW_HEIGHT_F32 : TSR_HW_HEIGHT_U16));
-        uint64_t bytes = d->format == TSR_HW_HEIGHT_U16 ? u16_bytes() : f32_bytes();
-        CHECK(d->samples_offset % 4 == 0 && R.mem[d->samples] && d->samples_offset + bytes <= R.size[d->samples]);
-        if (!R.mem[d->samples] || d->samples_offset + bytes > R.size[d->samples])
+        uint64_t bytes = tsr_hw_draw_sample_bytes(d->format, d->n, d->first_sample);
+        CHECK(bytes && d->samples_offset % 4 == 0 && R.mem[d->samples] &&
+              d->samples_offset + bytes <= R.size[d->samples]);
+        if (!bytes || !R.mem[d->samples] || d->samples_offset + bytes > R.size[d->samples])
             continue;
         uint32_t bad = 0;
         for (uint32_t j = 0; j <= g_n; j++)
@@ -247,9 +250,11 @@ static void check_draws(const tsr_hw_tile *tiles, uint32_t count, const tsr_hw_f
                 CHECK(e->samples_offset == d->samples_offset);
                 continue;
             }
-            uint64_t eb = e->format == TSR_HW_HEIGHT_U16 ? u16_bytes() : f32_bytes();
-            CHECK_MSG(e->samples_offset + eb <= d->samples_offset || d->samples_offset + bytes <= e->samples_offset,
-                      "tiles %u and %u overlap in the pool", k2, k);
+            /* the bytes each tile's samples occupy */
+            uint64_t e0 = e->samples_offset + 2 * e->first_sample, d0 = d->samples_offset + 2 * d->first_sample;
+            uint64_t eb = e->format == TSR_HW_HEIGHT_U16 ? u16_upload_bytes() : f32_bytes();
+            uint64_t db = d->format == TSR_HW_HEIGHT_U16 ? u16_upload_bytes() : f32_bytes();
+            CHECK_MSG(e0 + eb <= d0 || d0 + db <= e0, "tiles %u and %u overlap in the pool", k2, k);
         }
     }
 }
@@ -479,8 +484,8 @@ TEST(second_frame_uploads_nothing)
     tsr_status s = run_frame(r, &f, tiles, N, &fe, &st, &err);
     CHECK_MSG(s == TSR_OK, "%s", err.message);
     CHECK(st.tiles == N && st.tiles_uploaded == N && fe.calls == N && st.tiles_evicted == 0);
-    CHECK(st.bytes_uploaded == (uint64_t)N * u16_bytes() && b->stats.bytes_uploaded - up0 == st.bytes_uploaded);
-    CHECK(st.tiles_resident == N && st.tiles_u16 == N && st.bytes_resident == (uint64_t)N * u16_bytes());
+    CHECK(st.bytes_uploaded == (uint64_t)N * u16_upload_bytes() && b->stats.bytes_uploaded - up0 == st.bytes_uploaded);
+    CHECK(st.tiles_resident == N && st.tiles_u16 == N && st.bytes_resident == (uint64_t)N * u16_upload_bytes());
     CHECK(st.triangles == tri && st.device.triangles == tri);
     CHECK(st.upload_ms >= 0 && st.record_ms >= 0);
     check_draws(tiles, N, &f, 0);
@@ -521,7 +526,7 @@ TEST(moving_cut_uploads_one_tile)
         uint32_t k = (uint32_t)(rnd() % N);
         tiles[k] = make_tile(500 + step, 0, 0); /* one tile of the cut replaced */
         CHECK(run_frame(r, &f, tiles, N, &fe, &st, NULL) == TSR_OK);
-        CHECK(st.tiles_uploaded == 1 && fe.calls == 1 && st.bytes_uploaded == u16_bytes());
+        CHECK(st.tiles_uploaded == 1 && fe.calls == 1 && st.bytes_uploaded == u16_upload_bytes());
         CHECK(st.triangles == pattern_triangles(tiles, N));
         check_draws(tiles, N, &f, 0);
     }
@@ -532,7 +537,7 @@ TEST(moving_cut_uploads_one_tile)
 TEST(lru_evicts_least_recently_drawn)
 {
     tsr_hw_backend *b = make_backend();
-    tsr_hw_renderer *r = make_renderer(b, 4, 3 * 52 + 51, 0); /* three U16 tiles of 4x4 (25 samples, 13 words) */
+    tsr_hw_renderer *r = make_renderer(b, 4, 3 * 50 + 49, 0); /* three U16 tiles of 4x4 (25 samples, 50 bytes) */
     tsr_hw_tile a = make_tile(11, 0, 0), bb = make_tile(12, 0, 0), c = make_tile(13, 0, 0), d = make_tile(14, 0, 0);
     tsr_hw_frame f = make_frame(0, 0, 0);
     fetcher fe = {0};
@@ -563,7 +568,7 @@ static void lru_model_run(uint32_t keys, uint32_t budget, uint32_t max_frame, in
 {
     uint64_t salt = rnd();
     tsr_hw_backend *b = make_backend();
-    tsr_hw_renderer *r = make_renderer(b, 2, (uint64_t)budget * 20 + 19, 0); /* 9 samples: 5 words a tile */
+    tsr_hw_renderer *r = make_renderer(b, 2, (uint64_t)budget * 18 + 17, 0); /* 9 samples: 18 bytes a tile */
     tsr_hw_frame f = make_frame(3, 4, 5);
     fetcher fe = {0};
     tsr_hw_render_stats st;
@@ -630,7 +635,7 @@ TEST(lru_matches_model_many_tiles)
 TEST(frame_over_budget_fails_nomem)
 {
     tsr_hw_backend *b = make_backend();
-    tsr_hw_renderer *r = make_renderer(b, 4, 3 * 52, 0);
+    tsr_hw_renderer *r = make_renderer(b, 4, 3 * 50, 0);
     tsr_hw_tile t[4] = {make_tile(1, 0, 0), make_tile(2, 0, 0), make_tile(3, 0, 0), make_tile(4, 0, 0)};
     tsr_hw_frame f = make_frame(0, 0, 0);
     fetcher fe = {0};
@@ -666,7 +671,7 @@ TEST(frame_over_budget_fails_nomem)
 TEST(f32_tile_defragments_pool)
 {
     tsr_hw_backend *b = make_backend();
-    tsr_hw_renderer *r = make_renderer(b, 4, 4 * 52, 0);
+    tsr_hw_renderer *r = make_renderer(b, 4, 4 * 50, 0);
     tsr_hw_tile a = make_tile(1, 0, 0), bb = make_tile(2, 0, 0), c = make_tile(3, 0, 0),
                 x = make_tile(FLOAT_KEY | 9, 0, 0);
     tsr_hw_frame f = make_frame(0, 0, 0);
@@ -691,7 +696,7 @@ TEST(mixed_formats_random_frames)
 {
     tsr_hw_backend *b = make_backend();
     enum { SLOTS = 7 };
-    tsr_hw_renderer *r = make_renderer(b, 2, SLOTS * 20, 0);
+    tsr_hw_renderer *r = make_renderer(b, 2, SLOTS * 18, 0);
     tsr_hw_frame f = make_frame(-1e4, 2e4, 10);
     fetcher fe = {0};
     tsr_hw_render_stats st;
@@ -756,7 +761,7 @@ TEST(upload_bytes_are_encoded_bytes)
         t[k] = make_tile((uint64_t)k | (k % 3 == 0 ? FLOAT_KEY : 0), 0, 0);
         fetch(&probe, &t[k], s);
         tsr_hw_encoding e = tsr_hw_encode_samples(s, 17 * 17, 0, buf);
-        want += e.bytes;
+        want += e.format == TSR_HW_HEIGHT_U16 ? u16_upload_bytes() : e.bytes;
         u16 += e.format == TSR_HW_HEIGHT_U16;
         CHECK(e.bytes == (e.format == TSR_HW_HEIGHT_U16 ? u16_bytes() : f32_bytes()));
     }
@@ -782,7 +787,7 @@ TEST(quantised_float_tiles)
     tsr_hw_render_stats st;
     tsr_hw_frame f = make_frame(50, 60, 70);
     CHECK(run_frame(r, &f, t, 4, &fe, &st, NULL) == TSR_OK);
-    CHECK(st.tiles_u16 == 4 && st.bytes_uploaded == 4ull * u16_bytes());
+    CHECK(st.tiles_u16 == 4 && st.bytes_uploaded == 4ull * u16_upload_bytes());
     check_draws(t, 4, &f, max_q);
     tsr_hw_renderer_destroy(r);
     b->destroy(b);
@@ -822,7 +827,7 @@ TEST(bad_tiles_and_options_refused)
     o.tile_n = TSR_TILE_MAX + 2;
     CHECK(tsr_hw_renderer_create(b, &o, NULL, &r, &err) == TSR_ERR_ARGUMENT);
     o.tile_n = 16;
-    o.cache_bytes = 579; /* less than one 17x17 U16 tile */
+    o.cache_bytes = 577; /* less than one 17x17 U16 tile (578 bytes) */
     CHECK(tsr_hw_renderer_create(b, &o, NULL, &r, &err) == TSR_ERR_ARGUMENT);
     o.cache_bytes = 0;
     o.max_quantization = -1;
