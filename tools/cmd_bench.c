@@ -409,5 +409,5 @@ static int run(int argc, char **argv)
     return CLI_OK;
 }
 
-const cli_command cli_cmd_bench = {"bench", "benchmarks: 'bench terrain' (pyramid, selection, memory), 'bench cdt'",
+const cli_command cli_cmd_bench = {"bench", "benchmarks: 'bench terrain', 'bench cdt', 'bench mesh', 'bench fly'",
                                    run, help};
