@@ -46,7 +46,7 @@ test-asan: deps
 # $(FUZZ_BUILD)/artifacts/<target>/ and make the target fail.
 FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS ?= pslg_io triangulate heightfield
+FUZZ_TARGETS ?= pslg_io triangulate heightfield patch_io
 fuzz: deps
 	@cmake -S . -B $(FUZZ_BUILD) -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=Debug \
 	  -DCMAKE_C_FLAGS_DEBUG="-g -O1" -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" -DTSR_WERROR=ON -DTSR_SANITIZE=ON \

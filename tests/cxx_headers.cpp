@@ -1,6 +1,7 @@
 // Every public header compiles as C++ (../shared/STYLE.md item 10).
 #include "hw/hw.h"
 #include "patches/patches.h"
+#include "patches/subd.h"
 #include "terrain/terrain.h"
 #include "tessellate/tessellate.h"
 

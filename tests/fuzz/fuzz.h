@@ -18,6 +18,7 @@ extern "C" {
 int fuzz_pslg_io(const uint8_t *data, size_t size);
 int fuzz_triangulate(const uint8_t *data, size_t size);
 int fuzz_heightfield(const uint8_t *data, size_t size);
+int fuzz_patch_io(const uint8_t *data, size_t size);
 
 /* A path named name inside a private temporary folder (made on first use
  * under $TMPDIR or /tmp, removed at exit with what is in it). The returned

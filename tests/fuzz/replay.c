@@ -21,6 +21,7 @@ static const struct {
     {"pslg_io", fuzz_pslg_io},
     {"triangulate", fuzz_triangulate},
     {"heightfield", fuzz_heightfield},
+    {"patch_io", fuzz_patch_io},
 };
 
 static int cmp(const void *a, const void *b)

@@ -1,0 +1,193 @@
+/* subd.h: subdivision surfaces (Catmull-Clark and bilinear) evaluated per
+ * base face through OpenSubdiv's Bfr, behind a C interface (the bridge is
+ * patches/subd.cpp, the one C++ file of the module).
+ *
+ * Patches. Each base face of the cage is cut into patches whose domain is
+ * the unit square (u, v) in [0,1]^2, so that the restricted quadtree of
+ * tessellate/ can treat every patch alike:
+ *  - a quad is one patch, parameterised as Bfr parameterises quads: corner
+ *    (0,0) at the face's vertex 0, (1,0) at vertex 1, (1,1) at vertex 2,
+ *    (0,1) at vertex 3;
+ *  - an N-gon (N != 4) is N patches, Bfr's quad sub-faces: patch k has
+ *    corner (0,0) at vertex k, (1,0) at the midpoint of edge k (vertex k to
+ *    k+1), (1,1) at the face's centre and (0,1) at the midpoint of edge k-1.
+ *    Patch k's (u, v) is Bfr's normalised sub-face coordinate, mapped
+ *    through Bfr::Parameterization::ConvertNormalizedSubFaceToCoord.
+ * With a cage whose faces are counter-clockwise seen from outside, du x dv
+ * points outward on every patch.
+ *
+ * Patch edges are numbered 0..3 = south (v = 0), east (u = 1), north
+ * (v = 1), west (u = 0); bit (1u << e) is the TSR_EDGE_* of
+ * tessellate/quadtree.h. Along an edge its parameter t is the coordinate
+ * that varies on it (u on south and north, v on east and west), so t runs
+ * with the tile's lattice index i or j.
+ *
+ * Thread safety: a tsr_subd is read-only after creation, except for a
+ * small cache of the last face's prepared patch points that is guarded by
+ * a mutex (a call that finds it busy prepares its own copy), so every
+ * function below may be called on one tsr_subd from several threads at
+ * once; create and destroy may not overlap other calls on the same object.
+ */
+#ifndef TSR_SUBD_H
+#define TSR_SUBD_H
+
+#include "patches/patches.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* tsr_cage, the polygon cage, is declared in patches/patches.h. */
+
+typedef enum tsr_subd_scheme {
+    TSR_SUBD_CATMARK = 0, /* Catmull-Clark */
+    TSR_SUBD_BILINEAR = 1
+} tsr_subd_scheme;
+
+/* Largest face size accepted (Bfr's sub-face tiling of an N-gon keeps its
+ * width, about sqrt(N), in a byte; far below that, an N-gon of a thousand
+ * vertices is already no sensible patch), and largest rate of
+ * tsr_subd_tessellate_uniform. */
+#define TSR_SUBD_MAX_FACE_SIZE 1024u
+#define TSR_SUBD_MAX_RATE 4096u
+
+typedef struct tsr_subd tsr_subd;
+
+/* Builds the surface of a cage: OpenSubdiv's topology refiner (with the
+ * cage's creases, corners, holes, boundary interpolation, creasing method
+ * and triangle weights) and its Bfr surface factory, and finds which faces
+ * have a limit surface. The cage's uvs are not used.
+ *
+ * The cage is copied (points included); it may be freed after the call.
+ * alloc (NULL: malloc) serves the handle and Tessera's own tables;
+ * OpenSubdiv's refiner and factory use operator new, which OpenSubdiv
+ * offers no hook to change.
+ *
+ * Refused, with *out NULL and err naming the element:
+ *  - TSR_ERR_ARGUMENT: cage, out or a needed array NULL; scheme not a
+ *    tsr_subd_scheme; boundary_interp outside 0..2, fvar_interp outside
+ *    0..5, crease_method or triangle_subdiv outside 0..1;
+ *  - TSR_ERR_EMPTY: no points or no faces;
+ *  - TSR_ERR_VALUE: a non-finite coordinate; a face of fewer than 3 or
+ *    more than TSR_SUBD_MAX_FACE_SIZE vertices; a vertex index >=
+ *    num_points; a crease pair that is not an edge of the cage (or names
+ *    one vertex twice); a corner or hole index out of range; a sharpness
+ *    negative or NaN; a vertex in more than 16384 faces (OpenSubdiv's
+ *    valence limit);
+ *  - TSR_ERR_TOO_LARGE: counts beyond OpenSubdiv's int indices;
+ *  - TSR_ERR_INVALID_MESH: topology OpenSubdiv refuses;
+ *  - TSR_ERR_NOMEM.
+ * Non-manifold cages (an edge of three faces, a face listing a vertex
+ * twice, two faces running along an edge the same way) are accepted as
+ * OpenSubdiv accepts them; faces Bfr cannot evaluate get no limit surface
+ * and such edges no neighbours (tsr_subd_patch_neighbours).
+ * No exception crosses into C. Cost: O(size of the cage) plus one Bfr
+ * surface initialisation per face. */
+tsr_status tsr_subd_create(const tsr_cage *cage, tsr_subd_scheme scheme, const tsr_allocator *alloc, tsr_subd **out,
+                           tsr_error *err);
+
+/* Frees everything; NULL is allowed. */
+void tsr_subd_destroy(tsr_subd *s);
+
+/* Number of base faces (the cage's num_faces). */
+uint32_t tsr_subd_face_count(const tsr_subd *s);
+
+/* Vertices of base face `face`; 0 for a face out of range. */
+uint32_t tsr_subd_face_size(const tsr_subd *s, uint32_t face);
+
+/* Whether the face has a limit surface: false for holes, for faces
+ * touching the boundary when boundary_interp is 0, for faces Bfr cannot
+ * evaluate, and for a face out of range. */
+bool tsr_subd_face_has_limit(const tsr_subd *s, uint32_t face);
+
+/* Patches of the face: 1 for a quad, N for an N-gon, 0 out of range
+ * (whether or not the face has a limit surface). */
+uint32_t tsr_subd_face_patches(const tsr_subd *s, uint32_t face);
+
+/* One piece of the correspondence along a patch edge: the part t0 <= t <=
+ * t1 of this edge coincides with the part of edge `edge` of patch
+ * (face, sub) where its parameter runs from s0 (at t0) to s1 (at t1),
+ * linearly: the point at t is the neighbour's point at
+ * s = s0 + (t - t0) (s1 - s0) / (t1 - t0). reversed is s1 < s0. The
+ * values are exact (0, 1/2 or 1). */
+typedef struct tsr_subd_link {
+    uint32_t face, sub; /* the neighbouring patch */
+    uint32_t edge;      /* its edge, 0..3 */
+    bool reversed;
+    double t0, t1; /* 0 <= t0 < t1 <= 1, on this edge */
+    double s0, s1; /* on the neighbour's edge */
+} tsr_subd_link;
+
+/* The neighbours across edge `edge` (0..3) of patch (face, sub), written to
+ * out (room for 2, sorted by t0), returning how many:
+ *  - 1, covering t in [0,1]:
+ *    - inside an N-gon: east of patch k is north of patch k+1 (and north
+ *      of k east of k-1), not reversed (both run from the edge midpoint
+ *      to the centre);
+ *    - across a base edge between two quads: reversed exactly when both
+ *      edges are among {south, east} or both among {north, west};
+ *    - across a base edge between two N-gons: the south edge of one
+ *      sub-patch meets the west edge of the other's, not reversed;
+ *  - 2 where a quad's edge meets an N-gon: the quad's edge is split at
+ *    t = 1/2 between two sub-patches of the N-gon, each link covering its
+ *    half (and each of those sub-patch edges links back with one link
+ *    covering t in [0,1] onto s in [0,1/2] or [1/2,1] of the quad's edge);
+ *  - 0 on the boundary, where the edge is non-manifold (not exactly two
+ *    faces running along it in opposite directions), where the face across
+ *    has no limit surface, and for a patch that does not exist.
+ * Links are symmetric: the neighbour's edge links back over the same
+ * stretch. Points that correspond evaluate equal up to rounding (the
+ * limit surface is continuous across base edges; Bfr evaluates the two
+ * faces separately, so they may differ in the last bits). O(1). */
+uint32_t tsr_subd_patch_neighbours(const tsr_subd *s, uint32_t face, uint32_t sub, uint32_t edge, tsr_subd_link out[2]);
+
+/* Limit surface of patch (face, sub) at `count` parameter pairs uv (u, v
+ * interleaved, clamped to [0,1]; NaN reads as 0): positions into pos (3
+ * per point, not NULL) and, when du / dv are not NULL, the first
+ * derivatives with respect to the patch's u and v (for an N-gon's
+ * sub-patch, half of Bfr's derivatives with respect to the face's
+ * coordinates, since a sub-face spans half a unit of them). Units are the
+ * cage's. The face's Bfr surface and patch points are prepared once per
+ * call and kept for the next call on the same face. Returns
+ * TSR_ERR_ARGUMENT for a face out of range or without limit surface, a sub
+ * >= tsr_subd_face_patches or a NULL pointer with count > 0;
+ * TSR_ERR_NOMEM. */
+tsr_status tsr_subd_eval(const tsr_subd *s, uint32_t face, uint32_t sub, const double *uv, uint32_t count, double *pos,
+                         double *du, double *dv);
+
+/* Unit normal du x dv / |du x dv| at one (u, v) of patch (face, sub)
+ * (outward for an outward-oriented cage). Where du x dv vanishes or is
+ * tiny against |du| |dv| (below 1e-10 of it: a collapsed cage edge, a
+ * degenerate corner), the normal is taken at points moved towards the
+ * patch centre by 1e-7, 1e-5, then 1e-3 of the patch, the first that is
+ * well defined. TSR_ERR_VALUE (n set to 0) when none is; otherwise as
+ * tsr_subd_eval. */
+tsr_status tsr_subd_normal(const tsr_subd *s, uint32_t face, uint32_t sub, const double uv[2], double n[3]);
+
+/* A box [lo, hi] containing the limit surface of patch (face, sub) as
+ * Bfr evaluates it: the box of all the patch points Bfr prepares for the
+ * face (see subd.cpp for why it is conservative), padded by a few ulps
+ * for the rounding of evaluation. For an N-gon every sub-patch gets the
+ * whole face's box. Errors as tsr_subd_eval. */
+tsr_status tsr_subd_face_bounds(const tsr_subd *s, uint32_t face, uint32_t sub, double lo[3], double hi[3]);
+
+/* Appends a uniform tessellation of every face with a limit surface to
+ * `out` (initialised by tsr_mesh_init; existing content kept): Bfr's
+ * Tessellation at `rate` segments per base edge (1..TSR_SUBD_MAX_RATE),
+ * triangles counter-clockwise in each face's (u, v), hence seen from
+ * outside for an outward-oriented cage. Vertices are welded by the cage's
+ * topology: one vertex per cage vertex and per point of a cage edge,
+ * evaluated once by the first face that uses it, so faces sharing an edge
+ * share its vertices exactly, and a closed manifold cage gives a closed
+ * manifold mesh. (Edges that join a vertex to itself are not shared.)
+ * Normals, when the mesh has them, are those of tsr_subd_normal; uvs, when
+ * it has them, are 0. TSR_ERR_ARGUMENT for a rate out of range or NULL
+ * pointers, TSR_ERR_TOO_LARGE when the mesh would exceed 2^32 - 2
+ * vertices or triangles, TSR_ERR_NOMEM; on failure `out` keeps its
+ * previous counts. Cost: O(rate^2) evaluations per face. */
+tsr_status tsr_subd_tessellate_uniform(const tsr_subd *s, uint32_t rate, tsr_mesh *out, tsr_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
