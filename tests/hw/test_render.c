@@ -86,76 +86,83 @@ TEST(depth_matches_picking)
     if (!b)
         SKIP("no Vulkan device");
     tsr_heightfield *hf = make_terrain();
-    fly_options o = {.tile_n = 8, .pixel_error = 1.5, .fog_distance = -1};
-    fly_ctx f;
-    tsr_error err = {0};
-    CHECK(fly_init(&f, hf, b, &o, &err) == TSR_OK);
-    float *depth = malloc(W * H * sizeof *depth);
-    for (size_t vi = 0; vi < sizeof views / sizeof views[0]; vi++) {
-        fly_frame_stats fs;
-        uint8_t *rgba = render(&f, &views[vi], &fs, depth);
-        tsr_camera cam;
-        fly_camera(&f, views[vi].eye, views[vi].target, &cam);
-        uint32_t hits = 0, both = 0, mismatch = 0, far_mismatch = 0, over = 0;
-        double worst = 0;
-        for (int y = 0; y < H; y++)
-            for (int x = 0; x < W; x++) {
-                /* the ray through the pixel's centre, with unit depth */
-                double u = (x + 0.5 - W / 2.0) / cam.K, w = -(y + 0.5 - H / 2.0) / cam.K, dir[3];
-                for (int k = 0; k < 3; k++)
-                    dir[k] = cam.fwd[k] + u * cam.right[k] + w * cam.up[k];
-                double t;
-                bool cpu = tsr_terrain_pick(f.terrain, cam.eye, dir, &t);
-                float d = depth[y * W + x];
-                bool gpu = d > 0;
-                hits += gpu;
-                if (gpu != cpu) {
-                    mismatch++;
-                    /* only along a silhouette: a pixel of the other kind nearby */
-                    bool edge = false;
-                    for (int dy = -2; dy <= 2 && !edge; dy++)
-                        for (int dx = -2; dx <= 2 && !edge; dx++) {
-                            int xx = x + dx, yy = y + dy;
-                            if (xx >= 0 && yy >= 0 && xx < W && yy < H)
-                                edge = (depth[yy * W + xx] > 0) == cpu;
-                        }
-                    far_mismatch += !edge;
-                    continue;
+    /* without geomorphing the cut's bound is tau; with it, a morphing
+     * vertex lies between the tile's surface and its parent's, whose
+     * screen error is below 2 tau wherever the morph weight is not 0 */
+    for (int morph = 0; morph <= 1; morph++) {
+        fly_options o = {.tile_n = 8, .pixel_error = 1.5, .fog_distance = -1, .geomorph = morph};
+        double bound = (morph ? 2 : 1) * o.pixel_error;
+        fly_ctx f;
+        tsr_error err = {0};
+        CHECK(fly_init(&f, hf, b, &o, &err) == TSR_OK);
+        float *depth = malloc(W * H * sizeof *depth);
+        for (size_t vi = 0; vi < sizeof views / sizeof views[0]; vi++) {
+            fly_frame_stats fs;
+            uint8_t *rgba = render(&f, &views[vi], &fs, depth);
+            tsr_camera cam;
+            fly_camera(&f, views[vi].eye, views[vi].target, &cam);
+            uint32_t hits = 0, both = 0, mismatch = 0, far_mismatch = 0, over = 0;
+            double worst = 0;
+            for (int y = 0; y < H; y++)
+                for (int x = 0; x < W; x++) {
+                    /* the ray through the pixel's centre, with unit depth */
+                    double u = (x + 0.5 - W / 2.0) / cam.K, w = -(y + 0.5 - H / 2.0) / cam.K, dir[3];
+                    for (int k = 0; k < 3; k++)
+                        dir[k] = cam.fwd[k] + u * cam.right[k] + w * cam.up[k];
+                    double t;
+                    bool cpu = tsr_terrain_pick(f.terrain, cam.eye, dir, &t);
+                    float d = depth[y * W + x];
+                    bool gpu = d > 0;
+                    hits += gpu;
+                    if (gpu != cpu) {
+                        mismatch++;
+                        /* only along a silhouette: a pixel of the other kind nearby */
+                        bool edge = false;
+                        for (int dy = -2; dy <= 2 && !edge; dy++)
+                            for (int dx = -2; dx <= 2 && !edge; dx++) {
+                                int xx = x + dx, yy = y + dy;
+                                if (xx >= 0 && yy >= 0 && xx < W && yy < H)
+                                    edge = (depth[yy * W + xx] > 0) == cpu;
+                            }
+                        far_mismatch += !edge;
+                        continue;
+                    }
+                    if (!gpu)
+                        continue;
+                    both++;
+                    double dist = cam.near_dist / d, p[3], q[3];
+                    for (int k = 0; k < 3; k++)
+                        p[k] = cam.eye[k] + dist * dir[k];
+                    double gz;
+                    ground_below(f.terrain, p, &gz);
+                    if (isnan(gz))
+                        continue; /* on the border, outside by rounding */
+                    memcpy(q, p, sizeof q);
+                    q[2] = gz;
+                    double px, py, pd, qx, qy, qd;
+                    tsr_camera_project(&cam, p, &px, &py, &pd);
+                    tsr_camera_project(&cam, q, &qx, &qy, &qd);
+                    double e = hypot(px - qx, py - qy);
+                    worst = e > worst ? e : worst;
+                    /* tau, plus the rounding of a float depth buffer and a float mesh */
+                    over += e > bound * 1.05 + 0.05;
                 }
-                if (!gpu)
-                    continue;
-                both++;
-                double dist = cam.near_dist / d, p[3], q[3];
-                for (int k = 0; k < 3; k++)
-                    p[k] = cam.eye[k] + dist * dir[k];
-                double gz;
-                ground_below(f.terrain, p, &gz);
-                if (isnan(gz))
-                    continue; /* on the border, outside by rounding */
-                memcpy(q, p, sizeof q);
-                q[2] = gz;
-                double px, py, pd, qx, qy, qd;
-                tsr_camera_project(&cam, p, &px, &py, &pd);
-                tsr_camera_project(&cam, q, &qx, &qy, &qd);
-                double e = hypot(px - qx, py - qy);
-                worst = e > worst ? e : worst;
-                /* tau, plus the rounding of a float depth buffer and a float mesh */
-                over += e > o.pixel_error * 1.05 + 0.05;
-            }
-        fprintf(stderr, "view %zu: %u terrain pixels, %u checked, worst %.3f px (tau %.1f), %u silhouette "
-                        "disagreements\n",
-                vi, hits, both, worst, o.pixel_error, mismatch);
-        CHECK(hits > W * H / 5);     /* terrain on screen */
-        CHECK(hits < W * H);         /* and sky */
-        CHECK_MSG(over == 0, "%u pixels beyond tau (worst %.3f px)", over, worst);
-        CHECK_MSG(far_mismatch == 0, "%u sky/terrain disagreements away from any silhouette", far_mismatch);
-        CHECK(mismatch < W * H / 100);
-        free(rgba);
+            fprintf(stderr,
+                    "view %zu%s: %u terrain pixels, %u checked, worst %.3f px (bound %.1f), %u silhouette "
+                    "disagreements\n",
+                    vi, morph ? " geomorphed" : "", hits, both, worst, bound, mismatch);
+            CHECK(hits > W * H / 5); /* terrain on screen */
+            CHECK(hits < W * H);     /* and sky */
+            CHECK_MSG(over == 0, "%u pixels beyond tau (worst %.3f px)", over, worst);
+            CHECK_MSG(far_mismatch == 0, "%u sky/terrain disagreements away from any silhouette", far_mismatch);
+            CHECK(mismatch < W * H / 100);
+            free(rgba);
+        }
+        CHECK_MSG(b->stats.validation_messages == 0, "%llu validation messages",
+                  (unsigned long long)b->stats.validation_messages);
+        free(depth);
+        fly_free(&f);
     }
-    CHECK_MSG(b->stats.validation_messages == 0, "%llu validation messages",
-              (unsigned long long)b->stats.validation_messages);
-    free(depth);
-    fly_free(&f);
     b->destroy(b);
     tsr_heightfield_destroy(hf);
 }
