@@ -51,6 +51,22 @@ printf '# eye only\n100 100 900\n4000 600 800\n4000 4000 700\n' > "$dir/path.txt
 [ "$(ls "$dir/p" | wc -l)" -eq 3 ] || fail "--path frames"
 echo "ok --path"
 
+# --video: assembled by ffmpeg when it is installed, else a clear failure
+# that leaves the frames and no video
+if command -v ffmpeg >/dev/null; then
+  "$tessera" fly "$dir/t.png" --dx 20 --headless --frames 4 --width 64 --height 48 --out "$dir/v" \
+    --video "$dir/v.mp4" --quiet || fail "--video"
+  [ -s "$dir/v.mp4" ] || fail "--video: no file"
+  echo "ok --video"
+else
+  err=$("$tessera" fly "$dir/t.png" --dx 20 --headless --frames 2 --width 64 --height 48 --out "$dir/v" \
+        --video "$dir/v.mp4" --quiet 2>&1) && fail "--video without ffmpeg: exit 0"
+  echo "$err" | grep -q ffmpeg || fail "--video without ffmpeg: '$err'"
+  [ -e "$dir/v.mp4" ] && fail "--video without ffmpeg: left a file"
+  [ "$(ls "$dir/v" | wc -l)" -eq 2 ] || fail "--video without ffmpeg: frames missing"
+  echo "ok --video without ffmpeg: $err"
+fi
+
 # bad inputs: a message naming the problem, non-zero exit, no frames
 bad() { # name expected-message args...
   local name=$1 msg=$2; shift 2
