@@ -90,42 +90,6 @@ static void vec_free(const tsr_allocator *a, vec *v)
 
 /* ---- Whole files ------------------------------------------------------------------ */
 
-static tsr_status read_file(const char *path, const tsr_allocator *a, char **buf, size_t *len, tsr_error *err)
-{
-    *buf = NULL, *len = 0;
-    if (!path)
-        return tsr_error_set(err, TSR_ERR_ARGUMENT, "no input file given");
-    struct stat st;
-    if (stat(path, &st) != 0)
-        return tsr_error_set(err, errno == ENOENT ? TSR_ERR_NOT_FOUND : TSR_ERR_IO, "%s: %s", path, strerror(errno));
-    if (S_ISDIR(st.st_mode))
-        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: is a folder, not a file", path);
-    if (st.st_size == 0)
-        return tsr_error_set(err, TSR_ERR_EMPTY, "%s: empty file (0 bytes)", path);
-    if ((uint64_t)st.st_size > TSR_PATCH_MAX_FILE_BYTES)
-        return tsr_error_set(err, TSR_ERR_TOO_LARGE, "%s: %llu bytes, beyond the %llu this reader accepts", path,
-                             (unsigned long long)st.st_size, (unsigned long long)TSR_PATCH_MAX_FILE_BYTES);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return tsr_error_set(err, TSR_ERR_IO, "%s: %s", path, strerror(errno));
-    size_t n = (size_t)st.st_size;
-    char *b = tsr_alloc(a, n + 1);
-    if (!b) {
-        fclose(f);
-        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %zu bytes", path, n);
-    }
-    size_t got = fread(b, 1, n, f);
-    bool bad = ferror(f);
-    fclose(f);
-    if (bad || got == 0) {
-        tsr_free(a, b);
-        return tsr_error_set(err, TSR_ERR_IO, "%s: read failed", path);
-    }
-    b[got] = '\0';
-    *buf = b, *len = got;
-    return TSR_OK;
-}
-
 /* ---- Statements and tokens ------------------------------------------------------- */
 
 typedef struct token {
@@ -232,24 +196,8 @@ static bool tok_is(const token *t, const char *word)
     return t->n == strlen(word) && !memcmp(t->s, word, t->n);
 }
 
-/* A token as messages show it: printable ASCII, other bytes as \xNN. */
-static const char *shown(const token *k, char *buf, size_t cap)
-{
-    size_t o = 0;
-    for (size_t i = 0; i < k->n && o + 8 < cap; i++) {
-        unsigned char c = (unsigned char)k->s[i];
-        if (i == 24) {
-            o += (size_t)snprintf(buf + o, cap - o, "...");
-            break;
-        }
-        if (c >= 32 && c < 127 && c != '\'')
-            buf[o++] = (char)c;
-        else
-            o += (size_t)snprintf(buf + o, cap - o, "\\x%02x", c);
-    }
-    buf[o] = '\0';
-    return buf;
-}
+/* A token as messages show it. */
+static const char *shown(const token *k, char *buf, size_t cap) { return tsr_quote_bytes(k->s, k->n, buf, cap); }
 
 static tsr_status fail(const lexer *L, uint32_t line, tsr_status s, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -1130,7 +1078,7 @@ tsr_status tsr_patch_set_load(const char *path, tsr_patch_format f, const tsr_al
                              path ? path : "(null)");
     char *buf;
     size_t len;
-    tsr_status s = read_file(path, alloc, &buf, &len, err);
+    tsr_status s = tsr_read_file(path, TSR_PATCH_MAX_FILE_BYTES, alloc, &buf, &len, err);
     if (s != TSR_OK)
         return s;
     s = tsr_patch_set_parse(buf, len, path, f, alloc, out, err);
@@ -1470,7 +1418,7 @@ tsr_status tsr_cage_load(const char *path, const tsr_allocator *alloc, tsr_cage 
         memset(out, 0, sizeof *out);
     char *buf;
     size_t len;
-    tsr_status s = read_file(path, alloc, &buf, &len, err);
+    tsr_status s = tsr_read_file(path, TSR_PATCH_MAX_FILE_BYTES, alloc, &buf, &len, err);
     if (s != TSR_OK)
         return s;
     s = tsr_cage_parse(buf, len, path, alloc, out, err);

@@ -151,6 +151,22 @@ tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err);
 /* Removes tmp after a failed write. */
 void tsr_atomic_abort(const char *tmp);
 
+/* ---- Reading text inputs ----------------------------------------------- */
+
+/* Reads a whole file into a buffer from alloc (NULL: malloc) with a NUL
+ * after its *len bytes; the caller frees it with tsr_free. Refuses, with
+ * a message naming path: no path (TSR_ERR_ARGUMENT), a missing file
+ * (TSR_ERR_NOT_FOUND), a folder (TSR_ERR_ARGUMENT), an empty file
+ * (TSR_ERR_EMPTY), more than max_bytes (TSR_ERR_TOO_LARGE), a failed
+ * read (TSR_ERR_IO). */
+tsr_status tsr_read_file(const char *path, uint64_t max_bytes, const tsr_allocator *alloc, char **buf, size_t *len,
+                         tsr_error *err);
+
+/* Writes n bytes of s into buf (cap >= 8) as error messages quote them:
+ * printable ASCII as it is, other bytes and quotes as \xNN, cut with
+ * "..." after 24 bytes. Returns buf. */
+const char *tsr_quote_bytes(const char *s, size_t n, char *buf, size_t cap);
+
 /* ---- Half-edge view ---------------------------------------------------- */
 
 #define TSR_NO_TWIN UINT32_MAX        /* a boundary half-edge */

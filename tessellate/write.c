@@ -54,6 +54,63 @@ tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err)
 
 void tsr_atomic_abort(const char *tmp) { remove(tmp); }
 
+/* ---- Reading text inputs ------------------------------------------------ */
+
+tsr_status tsr_read_file(const char *path, uint64_t max_bytes, const tsr_allocator *alloc, char **buf, size_t *len,
+                         tsr_error *err)
+{
+    *buf = NULL, *len = 0;
+    if (!path)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "no input file given");
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return tsr_error_set(err, errno == ENOENT ? TSR_ERR_NOT_FOUND : TSR_ERR_IO, "%s: %s", path, strerror(errno));
+    if (S_ISDIR(st.st_mode))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: is a folder, not a file", path);
+    if (st.st_size == 0)
+        return tsr_error_set(err, TSR_ERR_EMPTY, "%s: empty file (0 bytes)", path);
+    if ((uint64_t)st.st_size > max_bytes || (uint64_t)st.st_size >= SIZE_MAX)
+        return tsr_error_set(err, TSR_ERR_TOO_LARGE, "%s: %llu bytes, beyond the %llu this reader accepts", path,
+                             (unsigned long long)st.st_size, (unsigned long long)max_bytes);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return tsr_error_set(err, TSR_ERR_IO, "%s: %s", path, strerror(errno));
+    size_t n = (size_t)st.st_size;
+    char *b = tsr_alloc(alloc, n + 1);
+    if (!b) {
+        fclose(f);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %zu bytes", path, n);
+    }
+    size_t got = fread(b, 1, n, f);
+    bool bad = ferror(f);
+    fclose(f);
+    if (bad || got == 0) {
+        tsr_free(alloc, b);
+        return tsr_error_set(err, TSR_ERR_IO, "%s: read failed", path);
+    }
+    b[got] = '\0';
+    *buf = b, *len = got;
+    return TSR_OK;
+}
+
+const char *tsr_quote_bytes(const char *s, size_t n, char *buf, size_t cap)
+{
+    size_t o = 0;
+    for (size_t i = 0; i < n && o + 8 < cap; i++) {
+        unsigned char c = (unsigned char)s[i];
+        if (i == 24) {
+            o += (size_t)snprintf(buf + o, cap - o, "...");
+            break;
+        }
+        if (c >= 32 && c < 127 && c != '\'')
+            buf[o++] = (char)c;
+        else
+            o += (size_t)snprintf(buf + o, cap - o, "\\x%02x", c);
+    }
+    buf[o] = '\0';
+    return buf;
+}
+
 /* ---- Formats ---------------------------------------------------------- */
 
 tsr_mesh_format tsr_mesh_format_from_path(const char *path)

@@ -78,42 +78,6 @@ tsr_pslg cli_pslg_view(const cli_pslg *p)
 
 /* ---- Whole files ---------------------------------------------------------- */
 
-static tsr_status read_file(const char *path, char **buf, size_t *len, tsr_error *err)
-{
-    *buf = NULL;
-    *len = 0;
-    struct stat st;
-    if (stat(path, &st) != 0)
-        return tsr_error_set(err, errno == ENOENT ? TSR_ERR_NOT_FOUND : TSR_ERR_IO, "%s: %s", path, strerror(errno));
-    if (S_ISDIR(st.st_mode))
-        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: is a folder, not a file", path);
-    if (st.st_size == 0)
-        return tsr_error_set(err, TSR_ERR_EMPTY, "%s: empty file (0 bytes)", path);
-    if ((uint64_t)st.st_size > MAX_FILE_BYTES)
-        return tsr_error_set(err, TSR_ERR_TOO_LARGE, "%s: %llu bytes, beyond the 2 GiB this reader accepts", path,
-                             (unsigned long long)st.st_size);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return tsr_error_set(err, TSR_ERR_IO, "%s: %s", path, strerror(errno));
-    size_t n = (size_t)st.st_size;
-    char *b = malloc(n + 1);
-    if (!b) {
-        fclose(f);
-        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %zu bytes", path, n);
-    }
-    size_t got = fread(b, 1, n, f);
-    bool bad = ferror(f);
-    fclose(f);
-    if (bad || got == 0) {
-        free(b);
-        return tsr_error_set(err, TSR_ERR_IO, "%s: read failed", path);
-    }
-    b[got] = '\0';
-    *buf = b;
-    *len = got;
-    return TSR_OK;
-}
-
 /* ---- Line records ------------------------------------------------------------ */
 
 typedef struct token {
@@ -166,24 +130,8 @@ static int next_record(text *t, token *tok)
     return -1;
 }
 
-/* A token as the message shows it: printable ASCII, others as \xNN. */
-static const char *shown(const token *k, char *buf, size_t cap)
-{
-    size_t o = 0;
-    for (size_t i = 0; i < k->n && o + 8 < cap; i++) {
-        unsigned char c = (unsigned char)k->s[i];
-        if (i == 24) {
-            o += (size_t)snprintf(buf + o, cap - o, "...");
-            break;
-        }
-        if (c >= 32 && c < 127 && c != '\'')
-            buf[o++] = (char)c;
-        else
-            o += (size_t)snprintf(buf + o, cap - o, "\\x%02x", c);
-    }
-    buf[o] = '\0';
-    return buf;
-}
+/* A token as the message shows it. */
+static const char *shown(const token *k, char *buf, size_t cap) { return tsr_quote_bytes(k->s, k->n, buf, cap); }
 
 /* A decimal number (no hex, no nan/inf spellings); finite. */
 static tsr_status parse_number(const text *t, const token *k, const char *what, double *v, tsr_error *err)
@@ -383,14 +331,14 @@ static tsr_status read_poly_text(const char *path, const char *buf, size_t len, 
         node_path_of(path, node, sizeof node);
         char *nb;
         size_t nl;
-        if ((s = read_file(node, &nb, &nl, err)) != TSR_OK) {
+        if ((s = tsr_read_file(node, MAX_FILE_BYTES, NULL, &nb, &nl, err)) != TSR_OK) {
             if (s == TSR_ERR_NOT_FOUND)
                 tsr_error_set(err, s, "%s:%u: 0 points, meaning they are in %s, which does not exist", path, t.line,
                               node);
             return s;
         }
         s = read_node_text(node, nb, nl, g, &base, err);
-        free(nb);
+        tsr_free(NULL, nb);
         if (s != TSR_OK)
             return s;
     }
@@ -630,7 +578,7 @@ tsr_status cli_pslg_read(const char *path, cli_pslg_format f, cli_pslg *out, tsr
                              "%s: unknown input format (use .node, .poly, .json or .txt, or --format)", path);
     char *buf;
     size_t len;
-    tsr_status s = read_file(path, &buf, &len, err);
+    tsr_status s = tsr_read_file(path, MAX_FILE_BYTES, NULL, &buf, &len, err);
     if (s != TSR_OK)
         return s;
     uint32_t base = UINT32_MAX;
@@ -640,7 +588,7 @@ tsr_status cli_pslg_read(const char *path, cli_pslg_format f, cli_pslg *out, tsr
     case CLI_PSLG_JSON: s = read_json_text(path, buf, len, out, err); break;
     default: s = read_txt_text(path, buf, len, out, err); break;
     }
-    free(buf);
+    tsr_free(NULL, buf);
     if (s != TSR_OK) {
         cli_pslg_free(out);
         return s;
