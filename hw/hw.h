@@ -152,6 +152,13 @@ tsr_hw_backend *tsr_hw_null_create(uint32_t width, uint32_t height, const tsr_al
  * after first_sample; 0 when the format, n or first_sample is invalid. */
 uint64_t tsr_hw_draw_sample_bytes(tsr_hw_height_format format, uint32_t n, uint32_t first_sample);
 
+/* The rules of a valid draw that every backend checks once it has found
+ * the draw's buffers and their kinds right: n, format and first_sample,
+ * the samples inside a samples buffer of samples_size bytes from a
+ * 4-byte aligned offset, whole triangles inside an index buffer of
+ * indices_size bytes, spacing > 0, morph in [0, 1] (NaN fails). */
+bool tsr_hw_draw_fits(const tsr_hw_tile_draw *d, uint64_t samples_size, uint64_t indices_size);
+
 /* The view-projection matrix of a prepared camera (see tsr_camera in
  * tessellate/quadtree.h): column-major, for positions relative to the
  * eye, reversed infinite depth with the camera's near plane, so a world

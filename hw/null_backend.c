@@ -93,18 +93,8 @@ static bool nb_draw_tile(tsr_hw_backend *self, const tsr_hw_tile_draw *d)
     null_backend *b = (null_backend *)self;
     if (!b->in_frame || !d)
         return false;
-    if (d->n < TSR_TILE_MIN || d->n > TSR_TILE_MAX || (d->n & 1))
-        return false;
     null_buffer *s = lookup(b, d->samples), *ix = lookup(b, d->indices);
-    if (!s || s->kind != TSR_HW_VERTEX || !ix || ix->kind != TSR_HW_INDEX)
-        return false;
-    uint64_t bytes = tsr_hw_draw_sample_bytes(d->format, d->n, d->first_sample);
-    if (bytes == 0 || d->samples_offset % 4 || d->samples_offset > s->size || bytes > s->size - d->samples_offset)
-        return false;
-    if (d->index_count % 3 || ((uint64_t)d->first_index + d->index_count) * 4 > ix->size)
-        return false;
-    /* negated comparisons so that NaN fails too */
-    if (!(d->spacing[0] > 0) || !(d->spacing[1] > 0) || !(d->morph >= 0 && d->morph <= 1))
+    if (!s || s->kind != TSR_HW_VERTEX || !ix || ix->kind != TSR_HW_INDEX || !tsr_hw_draw_fits(d, s->size, ix->size))
         return false;
     self->stats.draws++;
     self->stats.triangles_drawn += d->index_count / 3;

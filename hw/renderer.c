@@ -26,7 +26,7 @@
  * fits). So a frame fails with TSR_ERR_NOMEM exactly when its tiles need
  * more slots than the pool has. */
 #define _POSIX_C_SOURCE 200809L
-#include "hw/hw.h"
+#include "hw/hw_internal.h"
 
 #include <assert.h>
 #include <float.h>
@@ -74,6 +74,18 @@ uint64_t tsr_hw_draw_sample_bytes(tsr_hw_height_format format, uint32_t n, uint3
     if (format == TSR_HW_HEIGHT_F32 && first_sample == 0)
         return count * 4;
     return 0;
+}
+
+bool tsr_hw_draw_fits(const tsr_hw_tile_draw *d, uint64_t samples_size, uint64_t indices_size)
+{
+    uint64_t bytes = tsr_hw_draw_sample_bytes(d->format, d->n, d->first_sample);
+    if (bytes == 0 || d->samples_offset % 4 || d->samples_offset > samples_size ||
+        bytes > samples_size - d->samples_offset)
+        return false;
+    if (d->index_count % 3 || ((uint64_t)d->first_index + d->index_count) * 4 > indices_size)
+        return false;
+    /* negated comparisons so that NaN fails too */
+    return d->spacing[0] > 0 && d->spacing[1] > 0 && d->morph >= 0 && d->morph <= 1;
 }
 
 static void put_word(void *dst, uint32_t w, uint32_t word)
@@ -188,7 +200,7 @@ struct tsr_hw_renderer {
     void *encode_buf, *reloc_encode_buf;
 };
 
-static double now_ms(void)
+double tsr_hw_now_ms(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -675,11 +687,11 @@ tsr_status tsr_hw_renderer_frame(tsr_hw_renderer *r, const tsr_hw_frame *frame, 
 
     /* 2. Fetch, encode and upload the tiles entering the cache (inside
      *    the frame: the backend copies them before the frame's draws). */
-    double t0 = now_ms();
+    double t0 = tsr_hw_now_ms();
     for (uint32_t k = 0; k < count && status == TSR_OK; k++)
         if (r->e[r->tile_entry[k]].format == FMT_PENDING)
             status = load(r, &f, r->tile_entry[k], &tiles[k]);
-    double t1 = now_ms();
+    double t1 = tsr_hw_now_ms();
     st.upload_ms = t1 - t0;
 
     /* 3. Record one draw per tile. */
@@ -722,7 +734,7 @@ tsr_status tsr_hw_renderer_frame(tsr_hw_renderer *r, const tsr_hw_frame *frame, 
                                    r->be->name, k, t->key);
         st.triangles += d.index_count / 3;
     }
-    st.record_ms = now_ms() - t1;
+    st.record_ms = tsr_hw_now_ms() - t1;
 
     if (status != TSR_OK) {
         drop_pending(r, count);

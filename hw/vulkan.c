@@ -15,7 +15,7 @@
  * overlay, and the readback (offscreen) or a blit to the swapchain
  * (window). Depth is reversed with an infinite far plane (see hw.h). */
 #define _POSIX_C_SOURCE 200809L
-#include "hw/hw.h"
+#include "hw/hw_internal.h"
 
 #include <ctype.h>
 #include <stdio.h>
@@ -144,13 +144,6 @@ typedef struct vk_backend {
 } vk_backend;
 
 static const tsr_allocator *alloc_of(vk_backend *b) { return b->alloc.realloc ? &b->alloc : NULL; }
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
 
 static const char *vk_result_str(VkResult r)
 {
@@ -696,16 +689,7 @@ static bool vb_draw_tile(tsr_hw_backend *self, const tsr_hw_tile_draw *d)
     if (!b->in_frame || !d)
         return false;
     vk_buffer *sb = lookup(b, d->samples), *ib = lookup(b, d->indices);
-    if (!sb || !ib || sb->kind != TSR_HW_VERTEX || ib->kind != TSR_HW_INDEX)
-        return false;
-    if (d->n < TSR_TILE_MIN || d->n > TSR_TILE_MAX || (d->n & 1) || d->index_count % 3 || d->samples_offset % 4)
-        return false;
-    if (!(d->spacing[0] > 0) || !(d->spacing[1] > 0) || !(d->morph >= 0 && d->morph <= 1))
-        return false;
-    uint64_t bytes = tsr_hw_draw_sample_bytes(d->format, d->n, d->first_sample);
-    if (!bytes || d->samples_offset > sb->size || bytes > sb->size - d->samples_offset)
-        return false;
-    if ((uint64_t)d->first_index + d->index_count > ib->size / 4)
+    if (!sb || !ib || sb->kind != TSR_HW_VERTEX || ib->kind != TSR_HW_INDEX || !tsr_hw_draw_fits(d, sb->size, ib->size))
         return false;
     if (b->ndraws == b->capdraws) {
         uint32_t cap = b->capdraws ? b->capdraws * 2 : 1024;
@@ -935,7 +919,7 @@ offscreen_only:;
     s->submitted = true;
     self->stats.frames++;
 
-    double t0 = now_ms();
+    double t0 = tsr_hw_now_ms();
     tsr_hw_frame_stats st = {.triangles = b->frame_tris};
     if (present) {
         VkPresentInfoKHR pi = {.sType = VK_STRUCTURE_TYPE_PRESENT_INFO_KHR,
@@ -954,7 +938,7 @@ offscreen_only:;
         s->submitted = false;
         b->readback_valid = !b->window;
     }
-    st.submit_wait_ms = now_ms() - t0;
+    st.submit_wait_ms = tsr_hw_now_ms() - t0;
     if (!s->submitted) {
         if (b->has_stats) {
             uint64_t prims = 0;
