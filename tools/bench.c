@@ -28,3 +28,9 @@ tsr_allocator bench_counting_allocator(bench_counting *c)
 {
     return (tsr_allocator){counting_realloc, c};
 }
+
+int bench_cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}

@@ -14,6 +14,9 @@ typedef struct bench_counting {
  * the maximum in c->peak (c must outlive every block). */
 tsr_allocator bench_counting_allocator(bench_counting *c);
 
+/* qsort's comparison of doubles, ascending. */
+int bench_cmp_double(const void *a, const void *b);
+
 /* `tessera bench mesh` (bench_mesh.c); argv[1] is "mesh". */
 int cli_bench_mesh(int argc, char **argv);
 

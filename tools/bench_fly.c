@@ -35,12 +35,6 @@ typedef struct series {
     uint32_t n;
 } series;
 
-static int cmp_d(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 static void summary(const series *s, double *mean, double *p95)
 {
     double sum = 0;
@@ -49,7 +43,7 @@ static void summary(const series *s, double *mean, double *p95)
     *mean = s->n ? sum / s->n : 0;
     double *c = malloc((s->n ? s->n : 1) * sizeof *c);
     memcpy(c, s->v, s->n * sizeof *c);
-    qsort(c, s->n, sizeof *c, cmp_d);
+    qsort(c, s->n, sizeof *c, bench_cmp_double);
     *p95 = s->n ? c[(uint32_t)floor(0.95 * (s->n - 1))] : 0;
     free(c);
 }

@@ -28,12 +28,6 @@ static void help(FILE *f)
                "  -h, --help        this help\n");
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 static void random_points(double *xy, uint32_t m, uint64_t s)
 {
     for (uint32_t i = 0; i < 2 * m; i++) {
@@ -130,7 +124,7 @@ static int run_cdt(int argc, char **argv)
         double q0 = cli_now();
         if (copy) {
             memcpy(copy, xy, 2 * (size_t)m * sizeof *copy);
-            qsort(copy, m, 2 * sizeof *copy, cmp_double); /* by x: the first double of each point */
+            qsort(copy, m, 2 * sizeof *copy, bench_cmp_double); /* by x: the first double of each point */
         }
         double qsecs = cli_now() - q0;
         free(copy);
@@ -377,9 +371,9 @@ static int run(int argc, char **argv)
             vert_s += cli_now() - b;
         }
     }
-    qsort(sel, frames, sizeof *sel, cmp_double);
-    qsort(tiles, frames, sizeof *tiles, cmp_double);
-    qsort(tris, frames, sizeof *tris, cmp_double);
+    qsort(sel, frames, sizeof *sel, bench_cmp_double);
+    qsort(tiles, frames, sizeof *tiles, bench_cmp_double);
+    qsort(tris, frames, sizeof *tris, bench_cmp_double);
     double extra = (double)tsr_terrain_extra_bytes(t);
     printf("tessera bench terrain: %ux%u samples (%.2f GiB float32), tile %u, levels %u, 1920x1080, 60 deg, tau %g px, "
            "%u-frame flight\n\n",
