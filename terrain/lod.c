@@ -479,7 +479,7 @@ tsr_status tsr_terrain_create(const tsr_heightfield *hf, const tsr_terrain_optio
     t->tile_log2 = 0;
     while ((1u << t->tile_log2) < n)
         t->tile_log2++;
-    t->surface = (tsr_surface){t, n, levels, ex, ey, surf_evaluate, surf_bounds, surf_error};
+    t->surface = (tsr_surface){t, n, levels, ex, ey, surf_evaluate, surf_bounds, surf_error, false};
     t->mip_levels = t->tile_log2 + levels;
 
     /* per-node errors; the two deepest levels are filled during the

@@ -379,7 +379,10 @@ static bool box_to_camera(const tsr_camera *c, const float lo[3], const float hi
  * corners. The usual K delta / z omits the factor, which reaches
  * sqrt(1 + tan_x^2 + tan_y^2) (1.54 at the corner of a 60-degree 16:9
  * view) when vertical displacements are seen obliquely near the edges,
- * and is as small as |xi| near the centre of a top-down view. */
+ * and is as small as |xi| near the centre of a top-down view. For a
+ * displacement d in any direction (error_isotropic), |(d_r - xi d_f,
+ * d_u - eta d_f)| <= |d| sqrt(1 + xi^2 + eta^2), the largest singular
+ * value of that linear map, again largest at a corner of the rectangle. */
 double tsr_camera_node_error(const tsr_camera *c, const tsr_surface *s, tsr_qnode node)
 {
     float lo[3], hi[3];
@@ -417,7 +420,9 @@ double tsr_camera_node_error(const tsr_camera *c, const tsr_surface *s, tsr_qnod
     double zr = c->right[2], zu = c->up[2], zf = c->fwd[2], factor = 0;
     for (int k = 0; k < 4; k++) {
         double xi = k & 1 ? xi1 : xi0, eta = k & 2 ? eta1 : eta0;
-        double a = zr - xi * zf, b = zu - eta * zf, m = sqrt(a * a + b * b);
+        /* isotropic: the largest singular value of [[1, 0, -xi], [0, 1, -eta]] */
+        double a = zr - xi * zf, b = zu - eta * zf,
+               m = s->error_isotropic ? sqrt(1 + xi * xi + eta * eta) : sqrt(a * a + b * b);
         factor = m > factor ? m : factor;
     }
     double z = fmin > c->near_dist ? fmin : c->near_dist;

@@ -85,6 +85,10 @@ typedef struct tsr_surface {
     bool (*evaluate)(void *user, uint32_t i, uint32_t j, float pos[3], float normal[3]);
     void (*bounds)(void *user, tsr_qnode node, float lo[3], float hi[3]);
     float (*error)(void *user, tsr_qnode node);
+    /* false: error() bounds a vertical displacement (a terrain); true: a
+     * displacement in any direction (a parametric patch), which
+     * tsr_camera_node_error projects with its worst obliquity. */
+    bool error_isotropic;
 } tsr_surface;
 
 /* Smallest levels such that tile_n << levels covers both extents. */
@@ -164,7 +168,8 @@ bool tsr_camera_prepare(tsr_camera *c);
 void tsr_camera_project(const tsr_camera *c, const double p[3], double *sx, double *sy, double *depth);
 
 /* The conservative screen-space error of a node's tile, in pixels, for a
- * vertical displacement of at most error(node): 0 when the node's bounds
+ * displacement of at most error(node), vertical or in any direction as
+ * s->error_isotropic says: 0 when the node's bounds
  * are outside the view frustum or behind the near plane. See quadtree.c
  * for why it bounds the projected error of every counted sample. */
 double tsr_camera_node_error(const tsr_camera *c, const tsr_surface *s, tsr_qnode node);

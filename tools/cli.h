@@ -63,6 +63,6 @@ double cli_now(void);
 tsr_status cli_write_text(const char *path, const char *text, tsr_error *err);
 
 extern const cli_command cli_cmd_info, cli_cmd_generate, cli_cmd_mesh, cli_cmd_check, cli_cmd_bench,
-    cli_cmd_triangulate, cli_cmd_fly;
+    cli_cmd_triangulate, cli_cmd_fly, cli_cmd_patch;
 
 #endif

@@ -10,7 +10,7 @@
 
 static const cli_command *const commands[] = {&cli_cmd_info,        &cli_cmd_generate, &cli_cmd_mesh,
                                               &cli_cmd_triangulate, &cli_cmd_check,    &cli_cmd_bench,
-                                              &cli_cmd_fly};
+                                              &cli_cmd_fly, &cli_cmd_patch};
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 
 static void usage(FILE *f)

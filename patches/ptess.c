@@ -1,0 +1,1513 @@
+/* ptess.c: the patch tessellator of ptess.h. One restricted quadtree per
+ * piece; linked edges made to agree by exchanging per-segment leaf sizes
+ * until nothing changes; vertices welded through the links; trimmed
+ * sources triangulated in (u, v) by tsr_triangulate.
+ *
+ * Units along an edge. A piece of quadtree depth L has a lattice of
+ * Z = tile_n << L points per side; its edge is cut into 2^L *segments* of
+ * tile_n lattice units, the span of a deepest node. A leaf of level l
+ * covers 2^(L-l) segments of each edge it touches; its "span log" is
+ * L - l. Links are isometric in lattice units: an N-gon's sub-patches
+ * have depth L - 1, so a quad's half edge (Z/2 of its units) meets a
+ * sub-patch's whole edge (Z/2 of its own). */
+#define _POSIX_C_SOURCE 200809L
+#include "patches/ptess.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+enum { KIND_BEZIER = 0, KIND_SUBD = 1 };
+
+typedef struct plink {
+    uint32_t piece;
+    uint8_t edge;
+    uint8_t reversed;
+    uint8_t t0, t1; /* halves (0, 1, 2 = 0, 1/2, 1) on this edge */
+    uint8_t s0, s1; /* on the neighbour's edge, s0 at t0 */
+} plink;
+
+typedef struct piece {
+    uint32_t source;
+    uint8_t kind;
+    uint8_t collapsed; /* bit e: edge e collapsed to a point */
+    uint8_t mirrored;
+    uint8_t levels;    /* quadtree depth */
+    uint8_t nlinks[4];
+    plink link[4][2];
+    tsr_patch bez;     /* KIND_BEZIER: the piece over [0,1]^2 */
+    uint32_t face, sub;
+    double rect[4];    /* in the source's (u, v) */
+    double centre[3];
+    double lo[3], hi[3];
+} piece;
+
+typedef struct psource {
+    uint32_t patch, sub;
+    double domain[4];
+    uint32_t first_piece, pu, pv;
+    bool trimmed;
+} psource;
+
+struct tsr_pmodel {
+    tsr_allocator alloc;
+    const tsr_patch_set *set;
+    const tsr_subd *subd;
+    uint32_t npieces, nsources;
+    piece *pieces;
+    psource *sources;
+    double *values; /* control points and weights of the pieces */
+    double lo[3], hi[3];
+    uint32_t links, collapsed, mirrored, trimmed;
+};
+
+static const tsr_allocator *ma(const tsr_pmodel *m) { return m->alloc.realloc ? &m->alloc : NULL; }
+
+/* ---- model ---------------------------------------------------------------- */
+
+static tsr_pmodel *model_new(const tsr_allocator *alloc)
+{
+    tsr_pmodel *m = tsr_alloc(alloc, sizeof *m);
+    if (!m)
+        return NULL;
+    memset(m, 0, sizeof *m);
+    if (alloc)
+        m->alloc = *alloc;
+    for (int c = 0; c < 3; c++) {
+        m->lo[c] = INFINITY;
+        m->hi[c] = -INFINITY;
+    }
+    return m;
+}
+
+void tsr_pmodel_destroy(tsr_pmodel *m)
+{
+    if (!m)
+        return;
+    const tsr_allocator *a = ma(m);
+    tsr_free(a, m->pieces);
+    tsr_free(a, m->sources);
+    tsr_free(a, m->values);
+    tsr_allocator copy = m->alloc;
+    tsr_free(copy.realloc ? &copy : NULL, m);
+}
+
+static void box_add(double lo[3], double hi[3], const double p[3])
+{
+    for (int c = 0; c < 3; c++) {
+        lo[c] = p[c] < lo[c] ? p[c] : lo[c];
+        hi[c] = p[c] > hi[c] ? p[c] : hi[c];
+    }
+}
+
+static double model_diag(const tsr_pmodel *m)
+{
+    double d = 0;
+    for (int c = 0; c < 3; c++)
+        d += (m->hi[c] - m->lo[c]) * (m->hi[c] - m->lo[c]);
+    return sqrt(d);
+}
+
+static void add_link(tsr_pmodel *m, uint32_t p, int e, uint32_t q, int f, bool rev, int t0, int t1, int s0, int s1)
+{
+    piece *pp = &m->pieces[p];
+    if (pp->nlinks[e] >= 2)
+        return;
+    pp->link[e][pp->nlinks[e]++] = (plink){q, (uint8_t)f, rev, (uint8_t)t0, (uint8_t)t1, (uint8_t)s0, (uint8_t)s1};
+    m->links++;
+}
+
+/* Edge direction along the counter-clockwise boundary of (s, t). */
+static int edge_dir(int e) { return e < 2 ? 1 : -1; }
+
+/* Orients pieces consistently through their links (breadth first from
+ * each unvisited piece, which keeps its own orientation). */
+static tsr_status orient(tsr_pmodel *m)
+{
+    const tsr_allocator *a = ma(m);
+    uint32_t *queue = tsr_alloc(a, (size_t)m->npieces * sizeof *queue);
+    uint8_t *seen = tsr_alloc(a, m->npieces);
+    if (!queue || !seen) {
+        tsr_free(a, queue);
+        tsr_free(a, seen);
+        return TSR_ERR_NOMEM;
+    }
+    memset(seen, 0, m->npieces);
+    for (uint32_t start = 0; start < m->npieces; start++) {
+        if (seen[start])
+            continue;
+        uint32_t head = 0, tail = 0;
+        queue[tail++] = start;
+        seen[start] = 1;
+        while (head < tail) {
+            uint32_t p = queue[head++];
+            piece *pp = &m->pieces[p];
+            for (int e = 0; e < 4; e++)
+                for (int k = 0; k < pp->nlinks[e]; k++) {
+                    const plink *l = &pp->link[e][k];
+                    int sign = edge_dir(e) * edge_dir(l->edge) * (l->reversed ? -1 : 1);
+                    uint8_t want = sign < 0 ? pp->mirrored : !pp->mirrored;
+                    if (!seen[l->piece]) {
+                        seen[l->piece] = 1;
+                        m->pieces[l->piece].mirrored = want;
+                        queue[tail++] = l->piece;
+                    }
+                }
+        }
+    }
+    m->mirrored = 0;
+    for (uint32_t p = 0; p < m->npieces; p++)
+        m->mirrored += m->pieces[p].mirrored;
+    tsr_free(a, queue);
+    tsr_free(a, seen);
+    return TSR_OK;
+}
+
+/* ---- Bézier pieces of a patch set ------------------------------------------ */
+
+/* Control point k (0..count-1) along edge e of a Bézier piece. */
+static uint32_t edge_ctrl_index(const tsr_patch *b, int e, uint32_t k)
+{
+    uint32_t nu = (uint32_t)b->degree_u + 1, nv = (uint32_t)b->degree_v + 1;
+    switch (e) {
+    case 0: return k;
+    case 1: return k * nu + (nu - 1);
+    case 2: return (nv - 1) * nu + k;
+    default: return k * nu;
+    }
+}
+
+static uint32_t edge_ctrl_count(const tsr_patch *b, int e) { return (uint32_t)(e & 1 ? b->degree_v : b->degree_u) + 1; }
+
+static double dist3(const double *a, const double *b)
+{
+    double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
+    return sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+}
+
+typedef struct edge_rec {
+    uint32_t piece;
+    int edge;
+    double key; /* x of the midpoint of the end points */
+} edge_rec;
+
+static int cmp_edge_rec(const void *a, const void *b)
+{
+    double x = ((const edge_rec *)a)->key, y = ((const edge_rec *)b)->key;
+    return x < y ? -1 : x > y;
+}
+
+/* Whether edge e of piece p and edge f of piece q coincide (same control
+ * rows and weights up to a common factor), and in which direction. */
+static bool edges_match(const piece *p, int e, const piece *q, int f, double tol, bool *rev)
+{
+    uint32_t n = edge_ctrl_count(&p->bez, e);
+    if (n != edge_ctrl_count(&q->bez, f) || (p->bez.weights == NULL) != (q->bez.weights == NULL))
+        return false;
+    for (int dir = 0; dir < 2; dir++) {
+        bool ok = true;
+        double ratio = 0;
+        for (uint32_t k = 0; k < n && ok; k++) {
+            uint32_t i = edge_ctrl_index(&p->bez, e, k), j = edge_ctrl_index(&q->bez, f, dir ? n - 1 - k : k);
+            ok = dist3(p->bez.ctrl + 3 * i, q->bez.ctrl + 3 * j) <= tol;
+            if (ok && p->bez.weights) {
+                double r = p->bez.weights[i] / q->bez.weights[j];
+                if (k == 0)
+                    ratio = r;
+                else
+                    ok = fabs(r - ratio) <= 1e-9 * ratio;
+            }
+        }
+        if (ok) {
+            *rev = dir == 1;
+            return true;
+        }
+    }
+    return false;
+}
+
+static bool edge_collapsed(const piece *p, int e, double tol)
+{
+    uint32_t n = edge_ctrl_count(&p->bez, e);
+    const double *c0 = p->bez.ctrl + 3 * edge_ctrl_index(&p->bez, e, 0);
+    for (uint32_t k = 1; k < n; k++)
+        if (dist3(c0, p->bez.ctrl + 3 * edge_ctrl_index(&p->bez, e, k)) > tol)
+            return false;
+    return true;
+}
+
+static tsr_status link_set_edges(tsr_pmodel *m)
+{
+    double tol = 1e-9 * model_diag(m);
+    const tsr_allocator *a = ma(m);
+    /* collapsed edges first; they take no links */
+    for (uint32_t p = 0; p < m->npieces; p++)
+        for (int e = 0; e < 4; e++)
+            if (edge_collapsed(&m->pieces[p], e, tol)) {
+                m->pieces[p].collapsed |= (uint8_t)(1u << e);
+                m->collapsed++;
+            }
+    /* candidate edges: on the border of their source, not collapsed */
+    edge_rec *rec = tsr_alloc(a, (size_t)m->npieces * 4 * sizeof *rec);
+    uint8_t *used = tsr_alloc(a, (size_t)m->npieces * 4);
+    if (!rec || !used) {
+        tsr_free(a, rec);
+        tsr_free(a, used);
+        return TSR_ERR_NOMEM;
+    }
+    uint32_t n = 0;
+    for (uint32_t p = 0; p < m->npieces; p++) {
+        const piece *pp = &m->pieces[p];
+        for (int e = 0; e < 4; e++) {
+            if (pp->nlinks[e] || (pp->collapsed >> e & 1))
+                continue;
+            const double *a0 = pp->bez.ctrl + 3 * edge_ctrl_index(&pp->bez, e, 0),
+                         *a1 = pp->bez.ctrl + 3 * edge_ctrl_index(&pp->bez, e, edge_ctrl_count(&pp->bez, e) - 1);
+            rec[n++] = (edge_rec){p, e, 0.5 * (a0[0] + a1[0])};
+        }
+    }
+    qsort(rec, n, sizeof *rec, cmp_edge_rec);
+    memset(used, 0, (size_t)m->npieces * 4);
+    for (uint32_t i = 0; i < n; i++) {
+        /* an edge links only when exactly one other edge matches it */
+        uint32_t found = UINT32_MAX, matches = 0;
+        bool rev = false;
+        for (uint32_t j = i + 1; j < n && rec[j].key - rec[i].key <= tol; j++) {
+            bool r;
+            if (edges_match(&m->pieces[rec[i].piece], rec[i].edge, &m->pieces[rec[j].piece], rec[j].edge, tol, &r)) {
+                matches++;
+                found = j;
+                rev = r;
+            }
+        }
+        for (uint32_t j = i; j-- > 0 && rec[i].key - rec[j].key <= tol;) {
+            bool r;
+            if (edges_match(&m->pieces[rec[i].piece], rec[i].edge, &m->pieces[rec[j].piece], rec[j].edge, tol, &r))
+                matches++;
+        }
+        if (matches != 1 || found == UINT32_MAX)
+            continue;
+        uint32_t p = rec[i].piece, q = rec[found].piece;
+        int e = rec[i].edge, f = rec[found].edge;
+        if (used[4 * p + e] || used[4 * q + f] || (p == q && e == f))
+            continue;
+        used[4 * p + e] = used[4 * q + f] = 1;
+        add_link(m, p, e, q, f, rev, 0, 2, rev ? 2 : 0, rev ? 0 : 2);
+        add_link(m, q, f, p, e, rev, 0, 2, rev ? 2 : 0, rev ? 0 : 2);
+    }
+    tsr_free(a, rec);
+    tsr_free(a, used);
+    return TSR_OK;
+}
+
+tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err)
+{
+    if (!out)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "patch model: no output");
+    *out = NULL;
+    if (!set)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "patch model: no patch set");
+    if (set->num_patches == 0)
+        return tsr_error_set(err, TSR_ERR_EMPTY, "patch model: the set has no patch");
+    tsr_pmodel *m = model_new(alloc);
+    if (!m)
+        return tsr_error_set(err, TSR_ERR_NOMEM, "patch model: out of memory");
+    m->set = set;
+    const tsr_allocator *a = ma(m);
+    /* count pieces and values */
+    uint64_t npieces = 0, nvalues = 0;
+    for (uint32_t i = 0; i < set->num_patches; i++) {
+        uint32_t c = 0;
+        if (tsr_patch_to_bezier(&set->patches[i], NULL, 0, NULL, NULL, &c) != TSR_OK) {
+            tsr_pmodel_destroy(m);
+            return tsr_error_set(err, TSR_ERR_ARGUMENT, "patch model: patch %u is invalid", i);
+        }
+        uint64_t per = (uint64_t)(set->patches[i].degree_u + 1) * (uint64_t)(set->patches[i].degree_v + 1);
+        npieces += c;
+        nvalues += (uint64_t)c * per * 4;
+    }
+    if (npieces >= (1u << 24)) {
+        tsr_pmodel_destroy(m);
+        return tsr_error_set(err, TSR_ERR_TOO_LARGE, "patch model: %llu Bézier pieces, more than 2^24",
+                             (unsigned long long)npieces);
+    }
+    m->npieces = (uint32_t)npieces;
+    m->nsources = set->num_patches;
+    m->pieces = tsr_alloc(a, (size_t)npieces * sizeof *m->pieces);
+    m->sources = tsr_alloc(a, (size_t)m->nsources * sizeof *m->sources);
+    m->values = tsr_alloc(a, (size_t)nvalues * sizeof *m->values);
+    tsr_patch *tmp = tsr_alloc(a, (size_t)npieces * sizeof *tmp);
+    if (!m->pieces || !m->sources || !m->values || !tmp) {
+        tsr_free(a, tmp);
+        tsr_pmodel_destroy(m);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "patch model: out of memory");
+    }
+    memset(m->pieces, 0, (size_t)npieces * sizeof *m->pieces);
+    double *v = m->values;
+    uint32_t next = 0;
+    for (uint32_t i = 0; i < set->num_patches; i++) {
+        const tsr_patch *p = &set->patches[i];
+        uint32_t per = (uint32_t)(p->degree_u + 1) * (uint32_t)(p->degree_v + 1), c = 0;
+        tsr_patch_to_bezier(p, NULL, 0, NULL, NULL, &c);
+        double *ctrl = v, *w = p->weights ? v + 3 * (size_t)per * c : NULL;
+        tsr_patch_to_bezier(p, tmp, c, ctrl, w, &c);
+        v += (size_t)per * c * (p->weights ? 4 : 3);
+        psource *s = &m->sources[i];
+        memset(s, 0, sizeof *s);
+        s->patch = i;
+        tsr_patch_domain(p, s->domain);
+        s->first_piece = next;
+        s->pu = tsr_patch_spans(p, 0, NULL, 0);
+        s->pv = tsr_patch_spans(p, 1, NULL, 0);
+        s->trimmed = set->first_loop && set->first_loop[i + 1] > set->first_loop[i];
+        m->trimmed += s->trimmed;
+        for (uint32_t k = 0; k < c; k++) {
+            piece *pc = &m->pieces[next + k];
+            pc->source = i;
+            pc->kind = KIND_BEZIER;
+            pc->bez = tmp[k];
+            tsr_patch_domain(&tmp[k], pc->rect);
+            pc->bez.u0 = pc->bez.v0 = 0;
+            pc->bez.u1 = pc->bez.v1 = 1;
+            for (int q = 0; q < 3; q++) {
+                pc->lo[q] = INFINITY;
+                pc->hi[q] = -INFINITY;
+            }
+            for (uint32_t j = 0; j < per; j++)
+                box_add(pc->lo, pc->hi, pc->bez.ctrl + 3 * j);
+            for (int q = 0; q < 3; q++)
+                pc->centre[q] = 0.5 * (pc->lo[q] + pc->hi[q]);
+            box_add(m->lo, m->hi, pc->lo);
+            box_add(m->lo, m->hi, pc->hi);
+        }
+        /* links between the pieces of one patch */
+        for (uint32_t b = 0; b < s->pv; b++)
+            for (uint32_t a2 = 0; a2 < s->pu; a2++) {
+                uint32_t k = next + b * s->pu + a2;
+                if (a2 + 1 < s->pu) {
+                    add_link(m, k, 1, k + 1, 3, false, 0, 2, 0, 2);
+                    add_link(m, k + 1, 3, k, 1, false, 0, 2, 0, 2);
+                }
+                if (b + 1 < s->pv) {
+                    add_link(m, k, 2, k + s->pu, 0, false, 0, 2, 0, 2);
+                    add_link(m, k + s->pu, 0, k, 2, false, 0, 2, 0, 2);
+                }
+            }
+        next += c;
+    }
+    tsr_free(a, tmp);
+    tsr_status st = link_set_edges(m);
+    if (st == TSR_OK)
+        st = orient(m);
+    if (st != TSR_OK) {
+        tsr_pmodel_destroy(m);
+        return tsr_error_set(err, st, "patch model: out of memory");
+    }
+    *out = m;
+    return TSR_OK;
+}
+
+/* ---- subdivision surfaces --------------------------------------------------- */
+
+static int half_of(double x) { return x <= 0.25 ? 0 : x <= 0.75 ? 1 : 2; }
+
+tsr_status tsr_pmodel_from_subd(const tsr_subd *subd, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err)
+{
+    if (!out)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "patch model: no output");
+    *out = NULL;
+    if (!subd)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "patch model: no subdivision surface");
+    uint32_t nf = tsr_subd_face_count(subd);
+    uint64_t n = 0;
+    for (uint32_t f = 0; f < nf; f++)
+        if (tsr_subd_face_has_limit(subd, f))
+            n += tsr_subd_face_patches(subd, f);
+    if (n == 0)
+        return tsr_error_set(err, TSR_ERR_EMPTY, "patch model: no face has a limit surface");
+    if (n >= (1u << 24))
+        return tsr_error_set(err, TSR_ERR_TOO_LARGE, "patch model: %llu patches, more than 2^24",
+                             (unsigned long long)n);
+    tsr_pmodel *m = model_new(alloc);
+    if (!m)
+        return tsr_error_set(err, TSR_ERR_NOMEM, "patch model: out of memory");
+    const tsr_allocator *a = ma(m);
+    m->subd = subd;
+    m->npieces = m->nsources = (uint32_t)n;
+    m->pieces = tsr_alloc(a, (size_t)n * sizeof *m->pieces);
+    m->sources = tsr_alloc(a, (size_t)n * sizeof *m->sources);
+    uint32_t *first = tsr_alloc(a, ((size_t)nf + 1) * sizeof *first);
+    if (!m->pieces || !m->sources || !first) {
+        tsr_free(a, first);
+        tsr_pmodel_destroy(m);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "patch model: out of memory");
+    }
+    memset(m->pieces, 0, (size_t)n * sizeof *m->pieces);
+    uint32_t k = 0;
+    for (uint32_t f = 0; f < nf; f++) {
+        first[f] = k;
+        if (!tsr_subd_face_has_limit(subd, f))
+            continue;
+        uint32_t np = tsr_subd_face_patches(subd, f);
+        for (uint32_t s = 0; s < np; s++, k++) {
+            piece *pc = &m->pieces[k];
+            pc->source = k;
+            pc->kind = KIND_SUBD;
+            pc->face = f;
+            pc->sub = s;
+            pc->rect[1] = pc->rect[3] = 1;
+            pc->levels = np != 1; /* marks N-gon sub-patches (one level less deep) */
+            tsr_subd_face_bounds(subd, f, s, pc->lo, pc->hi);
+            for (int q = 0; q < 3; q++)
+                pc->centre[q] = 0.5 * (pc->lo[q] + pc->hi[q]);
+            box_add(m->lo, m->hi, pc->lo);
+            box_add(m->lo, m->hi, pc->hi);
+            psource *src = &m->sources[k];
+            memset(src, 0, sizeof *src);
+            src->patch = f;
+            src->sub = s;
+            src->domain[1] = src->domain[3] = 1;
+            src->first_piece = k;
+            src->pu = src->pv = 1;
+        }
+    }
+    first[nf] = k;
+    for (uint32_t p = 0; p < m->npieces; p++) {
+        piece *pc = &m->pieces[p];
+        for (int e = 0; e < 4; e++) {
+            tsr_subd_link l[2];
+            uint32_t c = tsr_subd_patch_neighbours(subd, pc->face, pc->sub, (uint32_t)e, l);
+            for (uint32_t i = 0; i < c; i++) {
+                if (!tsr_subd_face_has_limit(subd, l[i].face))
+                    continue;
+                add_link(m, p, e, first[l[i].face] + l[i].sub, (int)l[i].edge, l[i].reversed, half_of(l[i].t0),
+                         half_of(l[i].t1), half_of(l[i].s0), half_of(l[i].s1));
+            }
+        }
+    }
+    tsr_free(a, first);
+    tsr_status st = orient(m);
+    if (st != TSR_OK) {
+        tsr_pmodel_destroy(m);
+        return tsr_error_set(err, st, "patch model: out of memory");
+    }
+    *out = m;
+    return TSR_OK;
+}
+
+/* ---- queries ------------------------------------------------------------------ */
+
+void tsr_pmodel_get_info(const tsr_pmodel *m, tsr_pmodel_info *info)
+{
+    memset(info, 0, sizeof *info);
+    if (!m)
+        return;
+    info->sources = m->nsources;
+    info->pieces = m->npieces;
+    info->links = m->links;
+    info->collapsed_edges = m->collapsed;
+    info->mirrored = m->mirrored;
+    info->trimmed_sources = m->trimmed;
+    memcpy(info->lo, m->lo, sizeof info->lo);
+    memcpy(info->hi, m->hi, sizeof info->hi);
+}
+
+bool tsr_pmodel_source_info(const tsr_pmodel *m, uint32_t src, tsr_psource_info *info)
+{
+    if (!m || !info || src >= m->nsources)
+        return false;
+    const psource *s = &m->sources[src];
+    info->patch = s->patch;
+    info->sub = s->sub;
+    memcpy(info->domain, s->domain, sizeof info->domain);
+    info->first_piece = s->first_piece;
+    info->pieces_u = s->pu;
+    info->pieces_v = s->pv;
+    info->trimmed = s->trimmed;
+    info->mirrored = m->pieces[s->first_piece].mirrored != 0;
+    return true;
+}
+
+static tsr_status subd_point(const tsr_subd *s, uint32_t face, uint32_t sub, double u, double v, double pos[3],
+                             double normal[3])
+{
+    double uv[2] = {u, v}, du[3], dv[3];
+    tsr_status st = tsr_subd_eval(s, face, sub, uv, 1, pos, normal ? du : NULL, normal ? dv : NULL);
+    if (st != TSR_OK || !normal)
+        return st;
+    double n[3] = {du[1] * dv[2] - du[2] * dv[1], du[2] * dv[0] - du[0] * dv[2], du[0] * dv[1] - du[1] * dv[0]};
+    double ln = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), lu = sqrt(du[0] * du[0] + du[1] * du[1] + du[2] * du[2]),
+           lv = sqrt(dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]);
+    if (ln > 1e-10 * lu * lv && ln > 0) {
+        for (int c = 0; c < 3; c++)
+            normal[c] = n[c] / ln;
+        return TSR_OK;
+    }
+    if (tsr_subd_normal(s, face, sub, uv, normal) != TSR_OK) {
+        normal[0] = normal[1] = 0;
+        normal[2] = 1;
+    }
+    return TSR_OK;
+}
+
+tsr_status tsr_pmodel_eval(const tsr_pmodel *m, uint32_t src, double u, double v, double pos[3], double normal[3])
+{
+    if (!m || src >= m->nsources || !pos)
+        return TSR_ERR_ARGUMENT;
+    const psource *s = &m->sources[src];
+    tsr_status st;
+    if (m->set)
+        st = tsr_patch_eval(&m->set->patches[s->patch], u, v, pos, NULL, NULL, normal);
+    else
+        st = subd_point(m->subd, s->patch, s->sub, u, v, pos, normal);
+    if (st == TSR_OK && normal && m->pieces[s->first_piece].mirrored)
+        for (int c = 0; c < 3; c++)
+            normal[c] = -normal[c];
+    return st;
+}
+
+/* ---- error bounds --------------------------------------------------------- */
+
+/* The bound of ptess.h for a Bézier net over its own [0,1]^2, tiles of N
+ * quads: second-derivative bounds per coordinate (through the quotient
+ * rule when rational, coordinates taken from c), then the interpolation
+ * bound of the worst triangle shape (interior, stitched along s or t). */
+static double bezier_delta(int du, int dv, const double *P, const double *W, const double c[3], double N)
+{
+    int nu = du + 1, nv = dv + 1;
+    double Ass[3] = {0}, Ast[3] = {0}, Att[3] = {0};
+#define Q(i, j, k) ((W ? W[(j) * nu + (i)] : 1.0) * (P[3 * ((j) * nu + (i)) + (k)] - c[k]))
+#define WW(i, j) (W ? W[(j) * nu + (i)] : 1.0)
+    double qss[3] = {0}, qtt[3] = {0}, qst[3] = {0}, qs[3] = {0}, qt[3] = {0}, A[3] = {0};
+    double wmin = INFINITY, ws = 0, wt = 0, wss = 0, wtt = 0, wst = 0;
+    for (int j = 0; j < nv; j++)
+        for (int i = 0; i < nu; i++) {
+            double w = WW(i, j);
+            wmin = w < wmin ? w : wmin;
+            for (int k = 0; k < 3; k++) {
+                double d = fabs(P[3 * (j * nu + i) + k] - c[k]);
+                A[k] = d > A[k] ? d : A[k];
+            }
+            if (i + 1 < nu) {
+                ws = fmax(ws, fabs(WW(i + 1, j) - w));
+                for (int k = 0; k < 3; k++)
+                    qs[k] = fmax(qs[k], fabs(Q(i + 1, j, k) - Q(i, j, k)));
+            }
+            if (j + 1 < nv) {
+                wt = fmax(wt, fabs(WW(i, j + 1) - w));
+                for (int k = 0; k < 3; k++)
+                    qt[k] = fmax(qt[k], fabs(Q(i, j + 1, k) - Q(i, j, k)));
+            }
+            if (i + 2 < nu) {
+                wss = fmax(wss, fabs(WW(i + 2, j) - 2 * WW(i + 1, j) + w));
+                for (int k = 0; k < 3; k++)
+                    qss[k] = fmax(qss[k], fabs(Q(i + 2, j, k) - 2 * Q(i + 1, j, k) + Q(i, j, k)));
+            }
+            if (j + 2 < nv) {
+                wtt = fmax(wtt, fabs(WW(i, j + 2) - 2 * WW(i, j + 1) + w));
+                for (int k = 0; k < 3; k++)
+                    qtt[k] = fmax(qtt[k], fabs(Q(i, j + 2, k) - 2 * Q(i, j + 1, k) + Q(i, j, k)));
+            }
+            if (i + 1 < nu && j + 1 < nv) {
+                wst = fmax(wst, fabs(WW(i + 1, j + 1) - WW(i + 1, j) - WW(i, j + 1) + w));
+                for (int k = 0; k < 3; k++)
+                    qst[k] = fmax(qst[k], fabs(Q(i + 1, j + 1, k) - Q(i + 1, j, k) - Q(i, j + 1, k) + Q(i, j, k)));
+            }
+        }
+#undef Q
+#undef WW
+    double fu = du, fv = dv, fuu = du * (du - 1.0), fvv = dv * (dv - 1.0), fuv = fu * fv;
+    double sum = 0;
+    for (int k = 0; k < 3; k++) {
+        if (!W) {
+            Ass[k] = fuu * qss[k];
+            Att[k] = fvv * qtt[k];
+            Ast[k] = fuv * qst[k];
+        } else {
+            double Bs = (fu * qs[k] + fu * ws * A[k]) / wmin, Bt = (fv * qt[k] + fv * wt * A[k]) / wmin;
+            Ass[k] = (fuu * qss[k] + 2 * fu * ws * Bs + fuu * wss * A[k]) / wmin;
+            Att[k] = (fvv * qtt[k] + 2 * fv * wt * Bt + fvv * wtt * A[k]) / wmin;
+            Ast[k] = (fuv * qst[k] + fuv * wst * A[k] + fu * ws * Bt + fv * wt * Bs) / wmin;
+        }
+        double h2 = 1.0 / (N * N), a = h2 * Ass[k], b = h2 * Ast[k], cc = h2 * Att[k];
+        double e = fmax(a + 2 * b + cc, fmax(4 * a + 4 * b + cc, a + 4 * b + 4 * cc)) / 8;
+        sum += e * e;
+    }
+    return sqrt(sum) * (1 + 1e-12) + 1e-300;
+}
+
+/* ---- tessellation context ----------------------------------------------- */
+
+typedef struct pctx {
+    const tsr_pmodel *m;
+    const tsr_ptess_options *opt;
+    uint32_t piece;
+    uint32_t N;
+    double tol; /* max_error or pixel_error, times the piece's scale */
+    uint8_t *req[4]; /* per edge segment: largest span log allowed */
+    uint8_t *act[4]; /* per edge segment: span log of the leaf there */
+    tsr_surface surf;
+    tsr_quadtree *qt;
+    /* the last node asked about */
+    uint64_t cache_key;
+    float lo[3], hi[3], delta;
+    uint64_t *evaluations;
+    double *scratch; /* subd tile positions */
+    double *uv;
+} pctx;
+
+static void node_rect(const pctx *c, tsr_qnode n, double r[4])
+{
+    double w = 1.0 / (double)(1u << n.level);
+    r[0] = n.x * w;
+    r[1] = (n.x + 1) * w;
+    r[2] = n.y * w;
+    r[3] = (n.y + 1) * w;
+    (void)c;
+}
+
+static void node_info(pctx *c, tsr_qnode n)
+{
+    uint64_t key = tsr_qnode_key(n) + 1;
+    if (key == c->cache_key)
+        return;
+    c->cache_key = key;
+    const piece *p = &c->m->pieces[c->piece];
+    double r[4];
+    node_rect(c, n, r);
+    if (p->kind == KIND_BEZIER) {
+        double ctrl[3 * TSR_BEZIER_MAX_POINTS], w[TSR_BEZIER_MAX_POINTS];
+        tsr_patch sub;
+        if (n.level == 0) {
+            sub = p->bez;
+        } else if (tsr_patch_bezier_piece(&p->bez, r[0], r[1], r[2], r[3], ctrl, p->bez.weights ? w : NULL, &sub) !=
+                   TSR_OK) {
+            c->delta = INFINITY;
+            for (int k = 0; k < 3; k++) {
+                c->lo[k] = (float)p->lo[k];
+                c->hi[k] = (float)p->hi[k];
+            }
+            return;
+        }
+        uint32_t cnt = (uint32_t)(sub.degree_u + 1) * (uint32_t)(sub.degree_v + 1);
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (uint32_t i = 0; i < cnt; i++)
+            box_add(lo, hi, sub.ctrl + 3 * i);
+        for (int k = 0; k < 3; k++) {
+            c->lo[k] = nextafterf((float)lo[k], -INFINITY);
+            c->hi[k] = nextafterf((float)hi[k], INFINITY);
+        }
+        c->delta = (float)bezier_delta(sub.degree_u, sub.degree_v, sub.ctrl, sub.weights, p->centre, c->N);
+        c->delta = nextafterf(c->delta, INFINITY);
+        return;
+    }
+    /* subd: the tile's vertices, second differences, an estimate */
+    uint32_t N = c->N, row = N + 1;
+    for (uint32_t j = 0; j <= N; j++)
+        for (uint32_t i = 0; i <= N; i++) {
+            c->uv[2 * (j * row + i)] = r[0] + (r[1] - r[0]) * i / N;
+            c->uv[2 * (j * row + i) + 1] = r[2] + (r[3] - r[2]) * j / N;
+        }
+    double *P = c->scratch;
+    if (tsr_subd_eval(c->m->subd, p->face, p->sub, c->uv, row * row, P, NULL, NULL) != TSR_OK) {
+        c->delta = INFINITY;
+        for (int k = 0; k < 3; k++) {
+            c->lo[k] = (float)p->lo[k];
+            c->hi[k] = (float)p->hi[k];
+        }
+        return;
+    }
+    *c->evaluations += row * row;
+    double a[3] = {0}, b[3] = {0}, cc[3] = {0}, lo[3] = {INFINITY, INFINITY, INFINITY},
+           hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t j = 0; j <= N; j++)
+        for (uint32_t i = 0; i <= N; i++) {
+            const double *p0 = P + 3 * (j * row + i);
+            box_add(lo, hi, p0);
+            for (int k = 0; k < 3; k++) {
+                if (i + 2 <= N)
+                    a[k] = fmax(a[k], fabs(p0[6 + k] - 2 * p0[3 + k] + p0[k]));
+                if (j + 2 <= N)
+                    cc[k] = fmax(cc[k], fabs(p0[6 * row + k] - 2 * p0[3 * row + k] + p0[k]));
+                if (i + 1 <= N && j + 1 <= N)
+                    b[k] = fmax(b[k], fabs(p0[3 * row + 3 + k] - p0[3 * row + k] - p0[3 + k] + p0[k]));
+            }
+        }
+    double sum = 0;
+    for (int k = 0; k < 3; k++) {
+        double e = fmax(a[k] + 2 * b[k] + cc[k], fmax(4 * a[k] + 4 * b[k] + cc[k], a[k] + 4 * b[k] + 4 * cc[k])) / 8;
+        sum += e * e;
+    }
+    double d = 1.5 * sqrt(sum);
+    c->delta = (float)d;
+    for (int k = 0; k < 3; k++) {
+        double l = lo[k] - 2 * d, h = hi[k] + 2 * d;
+        l = l < p->lo[k] ? p->lo[k] : l;
+        h = h > p->hi[k] ? p->hi[k] : h;
+        if (l > h)
+            l = h = 0.5 * (lo[k] + hi[k]);
+        c->lo[k] = nextafterf((float)l, -INFINITY);
+        c->hi[k] = nextafterf((float)h, INFINITY);
+    }
+}
+
+static bool surf_evaluate(void *user, uint32_t i, uint32_t j, float pos[3], float normal[3])
+{
+    (void)user, (void)i, (void)j, (void)pos, (void)normal;
+    return false; /* the tessellator evaluates vertices itself */
+}
+
+static void surf_bounds(void *user, tsr_qnode n, float lo[3], float hi[3])
+{
+    pctx *c = user;
+    node_info(c, n);
+    memcpy(lo, c->lo, sizeof c->lo);
+    memcpy(hi, c->hi, sizeof c->hi);
+}
+
+static float surf_error(void *user, tsr_qnode n)
+{
+    pctx *c = user;
+    node_info(c, n);
+    return c->delta;
+}
+
+/* Segment range [k0, k1) of edge e covered by node n, or false. */
+static bool node_edge_range(const pctx *c, tsr_qnode n, int e, uint32_t *k0, uint32_t *k1)
+{
+    uint32_t L = c->surf.levels, side = 1u << n.level, span = 1u << (L - n.level);
+    bool on = e == 0 ? n.y == 0 : e == 1 ? n.x == side - 1 : e == 2 ? n.y == side - 1 : n.x == 0;
+    if (!on)
+        return false;
+    uint32_t pos = (e & 1) ? n.y : n.x;
+    *k0 = pos * span;
+    *k1 = *k0 + span;
+    return true;
+}
+
+static bool refine(void *user, const tsr_surface *s, tsr_qnode n)
+{
+    pctx *c = user;
+    uint32_t sl = s->levels - n.level;
+    for (int e = 0; e < 4; e++) {
+        uint32_t k0, k1;
+        if (!c->req[e] || !node_edge_range(c, n, e, &k0, &k1))
+            continue;
+        for (uint32_t k = k0; k < k1; k++)
+            if (c->req[e][k] < sl)
+                return true;
+    }
+    if (c->opt->camera)
+        return tsr_camera_node_error(c->opt->camera, s, n) > c->tol;
+    return s->error(s->user, n) > c->tol;
+}
+
+/* Fills act[] from the current leaves. */
+static void collect_spans(pctx *c)
+{
+    uint32_t nl = tsr_quadtree_leaf_count(c->qt);
+    const tsr_qleaf *lv = tsr_quadtree_leaves(c->qt);
+    for (uint32_t i = 0; i < nl; i++)
+        for (int e = 0; e < 4; e++) {
+            uint32_t k0, k1;
+            if (c->act[e] && node_edge_range(c, lv[i].node, e, &k0, &k1))
+                memset(c->act[e] + k0, (int)(c->surf.levels - lv[i].node.level), k1 - k0);
+        }
+}
+
+/* ---- vertex welding ------------------------------------------------------------ */
+
+typedef struct vmap {
+    uint64_t *keys; /* key + 1, 0 empty */
+    uint32_t *vals;
+    size_t mask, count;
+} vmap;
+
+static uint64_t mix64(uint64_t k)
+{
+    k ^= k >> 33;
+    k *= 0xff51afd7ed558ccdull;
+    k ^= k >> 33;
+    k *= 0xc4ceb9fe1a85ec53ull;
+    k ^= k >> 33;
+    return k;
+}
+
+static uint32_t *vmap_slot(vmap *m, uint64_t key, bool *found, const tsr_allocator *a)
+{
+    if (2 * (m->count + 1) > m->mask + 1 || !m->keys) {
+        size_t cap = m->keys ? 2 * (m->mask + 1) : 1024;
+        uint64_t *nk = tsr_alloc(a, cap * sizeof *nk);
+        uint32_t *nv = tsr_alloc(a, cap * sizeof *nv);
+        if (!nk || !nv) {
+            tsr_free(a, nk);
+            tsr_free(a, nv);
+            return NULL;
+        }
+        memset(nk, 0, cap * sizeof *nk);
+        for (size_t i = 0; m->keys && i <= m->mask; i++)
+            if (m->keys[i]) {
+                size_t h = mix64(m->keys[i]) & (cap - 1);
+                while (nk[h])
+                    h = (h + 1) & (cap - 1);
+                nk[h] = m->keys[i];
+                nv[h] = m->vals[i];
+            }
+        tsr_free(a, m->keys);
+        tsr_free(a, m->vals);
+        m->keys = nk;
+        m->vals = nv;
+        m->mask = cap - 1;
+    }
+    size_t h = mix64(key + 1) & m->mask;
+    while (m->keys[h]) {
+        if (m->keys[h] == key + 1) {
+            *found = true;
+            return &m->vals[h];
+        }
+        h = (h + 1) & m->mask;
+    }
+    m->keys[h] = key + 1;
+    m->count++;
+    *found = false;
+    return &m->vals[h];
+}
+
+typedef struct lpoint {
+    uint32_t piece, i, j;
+} lpoint;
+
+static uint64_t lkey(lpoint p) { return (uint64_t)p.piece << 40 | (uint64_t)p.j << 20 | p.i; }
+
+static uint32_t lattice_size(const pctx *ctx, uint32_t piece) { return ctx[piece].N << ctx[piece].surf.levels; }
+
+static lpoint edge_point(const pctx *ctx, uint32_t piece, int e, uint32_t T)
+{
+    uint32_t Z = lattice_size(ctx, piece);
+    switch (e) {
+    case 0: return (lpoint){piece, T, 0};
+    case 1: return (lpoint){piece, Z, T};
+    case 2: return (lpoint){piece, T, Z};
+    default: return (lpoint){piece, 0, T};
+    }
+}
+
+typedef struct canon_buf {
+    lpoint *p;
+    uint32_t n, cap;
+} canon_buf;
+
+static bool canon_push(canon_buf *b, lpoint q, const tsr_allocator *a)
+{
+    for (uint32_t i = 0; i < b->n; i++)
+        if (b->p[i].piece == q.piece && b->p[i].i == q.i && b->p[i].j == q.j)
+            return true;
+    if (b->n == b->cap) {
+        uint32_t cap = b->cap ? 2 * b->cap : 32;
+        lpoint *np = tsr_realloc(a, b->p, cap * sizeof *np);
+        if (!np)
+            return false;
+        b->p = np;
+        b->cap = cap;
+    }
+    b->p[b->n++] = q;
+    return true;
+}
+
+/* The canonical lattice point of (piece, i, j): the smallest key among all
+ * the points the links and collapsed edges make equal to it. */
+static bool canonical(const tsr_pmodel *m, const pctx *ctx, lpoint start, canon_buf *b, const tsr_allocator *a,
+                      lpoint *out)
+{
+    uint32_t Z = lattice_size(ctx, start.piece);
+    if (start.i > 0 && start.i < Z && start.j > 0 && start.j < Z) {
+        *out = start;
+        return true;
+    }
+    /* a point on a collapsed edge stands for the edge's first corner */
+    const piece *ps = &m->pieces[start.piece];
+    for (int e = 0; e < 4; e++) {
+        bool on = e == 0 ? start.j == 0 : e == 1 ? start.i == Z : e == 2 ? start.j == Z : start.i == 0;
+        if (on && (ps->collapsed >> e & 1)) {
+            start = edge_point(ctx, start.piece, e, 0);
+            break;
+        }
+    }
+    b->n = 0;
+    if (!canon_push(b, start, a))
+        return false;
+    for (uint32_t h = 0; h < b->n; h++) {
+        lpoint q = b->p[h];
+        const piece *pq = &m->pieces[q.piece];
+        uint32_t Zq = lattice_size(ctx, q.piece);
+        for (int e = 0; e < 4; e++) {
+            bool on = e == 0 ? q.j == 0 : e == 1 ? q.i == Zq : e == 2 ? q.j == Zq : q.i == 0;
+            if (!on)
+                continue;
+            uint32_t T = (e & 1) ? q.j : q.i;
+            if (pq->collapsed >> e & 1) {
+                if (!canon_push(b, edge_point(ctx, q.piece, e, 0), a) || !canon_push(b, edge_point(ctx, q.piece, e, Zq), a))
+                    return false;
+                continue;
+            }
+            for (int k = 0; k < pq->nlinks[e]; k++) {
+                const plink *l = &pq->link[e][k];
+                uint32_t t0 = l->t0 * Zq / 2, t1 = l->t1 * Zq / 2;
+                if (T < t0 || T > t1)
+                    continue;
+                uint32_t Zn = lattice_size(ctx, l->piece), s0 = l->s0 * Zn / 2;
+                uint32_t S = l->reversed ? s0 - (T - t0) : s0 + (T - t0);
+                if (!canon_push(b, edge_point(ctx, l->piece, l->edge, S), a))
+                    return false;
+            }
+        }
+    }
+    lpoint best = b->p[0];
+    for (uint32_t h = 1; h < b->n; h++)
+        if (lkey(b->p[h]) < lkey(best))
+            best = b->p[h];
+    *out = best;
+    return true;
+}
+
+/* ---- run ------------------------------------------------------------------- */
+
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+typedef struct builder {
+    const tsr_pmodel *m;
+    const tsr_ptess_options *opt;
+    pctx *ctx;
+    tsr_ptess_result *out;
+    const tsr_allocator *a;
+    vmap map;
+    canon_buf cb;
+    uint32_t tri_cap;
+    uint8_t *used; /* per stitch mask, per tile vertex: used by the pattern */
+} builder;
+
+/* Mesh vertex of lattice point q (evaluated at its canonical point). */
+static uint32_t vertex_of(builder *b, lpoint q)
+{
+    lpoint c;
+    if (!canonical(b->m, b->ctx, q, &b->cb, b->a, &c))
+        return UINT32_MAX;
+    bool found;
+    uint32_t *slot = vmap_slot(&b->map, lkey(c), &found, b->a);
+    if (!slot)
+        return UINT32_MAX;
+    if (found)
+        return *slot;
+    const piece *p = &b->m->pieces[c.piece];
+    uint32_t Z = lattice_size(b->ctx, c.piece);
+    double s = (double)c.i / Z, t = (double)c.j / Z, pos[3], nr[3] = {0, 0, 1};
+    bool want_n = b->opt->normals;
+    if (p->kind == KIND_BEZIER)
+        tsr_patch_eval(&p->bez, s, t, pos, NULL, NULL, want_n ? nr : NULL);
+    else
+        subd_point(b->m->subd, p->face, p->sub, s, t, pos, want_n ? nr : NULL);
+    b->out->evaluations++;
+    if (p->mirrored)
+        for (int k = 0; k < 3; k++)
+            nr[k] = -nr[k];
+    float fp[3] = {(float)pos[0], (float)pos[1], (float)pos[2]}, fn[3] = {(float)nr[0], (float)nr[1], (float)nr[2]};
+    uint32_t v = tsr_mesh_add_vertex(&b->out->mesh, fp, want_n ? fn : NULL, NULL);
+    *slot = v;
+    return v;
+}
+
+static bool add_tri(builder *b, uint32_t source, const uint32_t v[3], const double uv[6])
+{
+    tsr_ptess_result *r = b->out;
+    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
+        return true;
+    if (r->mesh.triangle_count >= b->tri_cap) {
+        uint32_t cap = b->tri_cap ? 2 * b->tri_cap : 4096;
+        uint32_t *ns = tsr_realloc(b->a, r->tri_source, (size_t)cap * sizeof *ns);
+        if (!ns)
+            return false;
+        r->tri_source = ns;
+        double *nu = tsr_realloc(b->a, r->tri_uv, (size_t)cap * 6 * sizeof *nu);
+        if (!nu)
+            return false;
+        r->tri_uv = nu;
+        b->tri_cap = cap;
+    }
+    uint32_t k = r->mesh.triangle_count;
+    if (!tsr_mesh_add_triangle(&r->mesh, v[0], v[1], v[2]))
+        return false;
+    r->tri_source[k] = source;
+    memcpy(r->tri_uv + 6 * (size_t)k, uv, 6 * sizeof *uv);
+    return true;
+}
+
+static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *pat, uint32_t *local)
+{
+    pctx *c = &b->ctx[pi];
+    const piece *p = &b->m->pieces[pi];
+    uint32_t N = c->N, row = N + 1, Z = lattice_size(b->ctx, pi);
+    uint32_t nl = tsr_quadtree_leaf_count(c->qt);
+    const tsr_qleaf *lv = tsr_quadtree_leaves(c->qt);
+    for (uint32_t li = 0; li < nl; li++) {
+        tsr_qnode n = lv[li].node;
+        uint32_t w = N << (c->surf.levels - n.level), step = w / N, x0 = n.x * w, y0 = n.y * w;
+        unsigned mask = lv[li].stitch & 15;
+        const uint8_t *used = b->used + (size_t)mask * row * row;
+        for (uint32_t j = 0; j <= N; j++)
+            for (uint32_t i = 0; i <= N; i++) {
+                if (!used[j * row + i])
+                    continue;
+                uint32_t v = vertex_of(b, (lpoint){pi, x0 + i * step, y0 + j * step});
+                if (v == UINT32_MAX)
+                    return TSR_ERR_NOMEM;
+                local[j * row + i] = v;
+            }
+        const uint32_t *tri = pat->tri[mask];
+        for (uint32_t t = 0; t < pat->count[mask]; t++) {
+            uint32_t idx[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
+            if (p->mirrored) {
+                uint32_t tmp = idx[1];
+                idx[1] = idx[2];
+                idx[2] = tmp;
+            }
+            uint32_t v[3];
+            double uv[6];
+            for (int k = 0; k < 3; k++) {
+                v[k] = local[idx[k]];
+                uint32_t li2 = idx[k] % row, lj = idx[k] / row;
+                double s = (double)(x0 + li2 * step) / Z, tt = (double)(y0 + lj * step) / Z;
+                uv[2 * k] = p->rect[0] + s * (p->rect[1] - p->rect[0]);
+                uv[2 * k + 1] = p->rect[2] + tt * (p->rect[3] - p->rect[2]);
+                if (s == 1)
+                    uv[2 * k] = p->rect[1];
+                if (tt == 1)
+                    uv[2 * k + 1] = p->rect[3];
+            }
+            if (!add_tri(b, p->source, v, uv))
+                return TSR_ERR_NOMEM;
+        }
+    }
+    return TSR_OK;
+}
+
+/* Trimmed source: lattice points of its pieces' leaves plus the sampled
+ * trim loops, triangulated in (u, v) with the loops as constraints
+ * (even-odd), lifted. */
+static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr_error *err)
+{
+    const tsr_pmodel *m = b->m;
+    const psource *s = &m->sources[src];
+    const tsr_allocator *a = b->a;
+    size_t np = 0, cap = 1024, nseg = 0, segcap = 1024;
+    double *xy = tsr_alloc(a, cap * 2 * sizeof *xy);
+    uint64_t *key = tsr_alloc(a, cap * sizeof *key); /* canonical lattice key + 1, 0 for trim points */
+    uint32_t *seg = tsr_alloc(a, segcap * 2 * sizeof *seg);
+    tsr_status st = (xy && key && seg) ? TSR_OK : TSR_ERR_NOMEM;
+    vmap seen = {0};
+#define GROW(ptr, n, c, per)                                                                                          \
+    if (st == TSR_OK && (n) + 1 > (c)) {                                                                              \
+        size_t nc = 2 * (c);                                                                                          \
+        void *q = tsr_realloc(a, (ptr), nc * (per) * sizeof *(ptr));                                                  \
+        if (!q)                                                                                                       \
+            st = TSR_ERR_NOMEM;                                                                                       \
+        else {                                                                                                        \
+            (ptr) = q;                                                                                                \
+        }                                                                                                             \
+    }
+    for (uint32_t k = 0; k < s->pu * s->pv && st == TSR_OK; k++) {
+        uint32_t pi = s->first_piece + k;
+        pctx *c = &b->ctx[pi];
+        const piece *p = &m->pieces[pi];
+        uint32_t N = c->N, Z = lattice_size(b->ctx, pi);
+        uint32_t nl = tsr_quadtree_leaf_count(c->qt);
+        const tsr_qleaf *lv = tsr_quadtree_leaves(c->qt);
+        for (uint32_t li = 0; li < nl && st == TSR_OK; li++) {
+            tsr_qnode n = lv[li].node;
+            uint32_t w = N << (c->surf.levels - n.level), step = w / N;
+            for (uint32_t j = 0; j <= N && st == TSR_OK; j++)
+                for (uint32_t i = 0; i <= N && st == TSR_OK; i++) {
+                    lpoint q = {pi, n.x * w + i * step, n.y * w + j * step}, cq;
+                    if (!canonical(m, b->ctx, q, &b->cb, a, &cq)) {
+                        st = TSR_ERR_NOMEM;
+                        break;
+                    }
+                    bool found;
+                    uint32_t *slot = vmap_slot(&seen, lkey(cq), &found, a);
+                    if (!slot) {
+                        st = TSR_ERR_NOMEM;
+                        break;
+                    }
+                    if (found)
+                        continue;
+                    *slot = (uint32_t)np;
+                    GROW(xy, np, cap, 2)
+                    GROW(key, np, cap, 1)
+                    if (st != TSR_OK)
+                        break;
+                    if (np + 1 > cap)
+                        cap *= 2;
+                    double ss = (double)q.i / Z, tt = (double)q.j / Z;
+                    xy[2 * np] = ss == 1 ? p->rect[1] : p->rect[0] + ss * (p->rect[1] - p->rect[0]);
+                    xy[2 * np + 1] = tt == 1 ? p->rect[3] : p->rect[2] + tt * (p->rect[3] - p->rect[2]);
+                    key[np] = lkey(cq) + 1;
+                    np++;
+                }
+        }
+    }
+    tsr_free(a, seen.keys);
+    tsr_free(a, seen.vals);
+    /* the trim loops */
+    const tsr_patch_set *set = m->set;
+    for (uint32_t l = set->first_loop[s->patch]; l < set->first_loop[s->patch + 1] && st == TSR_OK; l++) {
+        uint32_t cnt = 0;
+        if (tsr_trim_loop_sample(set, l, trim_tol_uv, NULL, 0, &cnt) != TSR_OK || cnt < 3)
+            continue;
+        double *pts = tsr_alloc(a, (size_t)cnt * 2 * sizeof *pts);
+        if (!pts) {
+            st = TSR_ERR_NOMEM;
+            break;
+        }
+        tsr_trim_loop_sample(set, l, trim_tol_uv, pts, cnt, &cnt);
+        size_t base = np;
+        for (uint32_t k = 0; k < cnt && st == TSR_OK; k++) {
+            GROW(xy, np, cap, 2)
+            GROW(key, np, cap, 1)
+            if (st != TSR_OK)
+                break;
+            if (np + 1 > cap)
+                cap *= 2;
+            double u = pts[2 * k], v = pts[2 * k + 1];
+            u = u < s->domain[0] ? s->domain[0] : u > s->domain[1] ? s->domain[1] : u;
+            v = v < s->domain[2] ? s->domain[2] : v > s->domain[3] ? s->domain[3] : v;
+            xy[2 * np] = u;
+            xy[2 * np + 1] = v;
+            key[np] = 0;
+            np++;
+            GROW(seg, nseg, segcap, 2)
+            if (st != TSR_OK)
+                break;
+            if (nseg + 1 > segcap)
+                segcap *= 2;
+            seg[2 * nseg] = (uint32_t)(base + k);
+            seg[2 * nseg + 1] = (uint32_t)(base + (k + 1) % cnt);
+            nseg++;
+        }
+        tsr_free(a, pts);
+    }
+#undef GROW
+    tsr_triangulation tr = {0};
+    if (st == TSR_OK) {
+        tsr_pslg in = {xy, (uint32_t)np, seg, (uint32_t)nseg, NULL, 0};
+        tsr_tri_options to = {0};
+        to.region = nseg ? TSR_REGION_EVEN_ODD : TSR_REGION_HULL;
+        tsr_error e2 = {0};
+        st = tsr_triangulate(&in, &to, &tr, a, &e2);
+        if (st != TSR_OK)
+            tsr_error_set(err, st, "patch %u: triangulating the trimmed domain: %s", s->patch, e2.message);
+    }
+    /* lift: output vertex -> mesh vertex */
+    uint32_t *mv = st == TSR_OK ? tsr_alloc(a, ((size_t)tr.nv + 1) * sizeof *mv) : NULL;
+    if (st == TSR_OK && !mv)
+        st = TSR_ERR_NOMEM;
+    if (st == TSR_OK) {
+        for (uint32_t i = 0; i < tr.nv; i++)
+            mv[i] = UINT32_MAX;
+        bool mirrored = m->pieces[s->first_piece].mirrored;
+        uint32_t *inv_key = tsr_alloc(a, ((size_t)tr.nv + 1) * sizeof *inv_key);
+        if (!inv_key)
+            st = TSR_ERR_NOMEM;
+        for (uint32_t i = 0; inv_key && i < tr.nv; i++)
+            inv_key[i] = UINT32_MAX;
+        for (size_t i = 0; inv_key && i < np; i++)
+            if (key[i])
+                inv_key[tr.vertex_of_input[i]] = (uint32_t)i;
+        for (uint32_t t = 0; t < tr.nt && st == TSR_OK; t++) {
+            uint32_t v[3];
+            double uv[6];
+            for (int k = 0; k < 3 && st == TSR_OK; k++) {
+                uint32_t o = tr.tri[3 * t + (mirrored && k ? 3 - k : k)];
+                uv[2 * k] = tr.xy[2 * o];
+                uv[2 * k + 1] = tr.xy[2 * o + 1];
+                if (mv[o] >= UINT32_MAX - 1) {
+                    if (inv_key[o] != UINT32_MAX) {
+                        uint64_t kk = key[inv_key[o]] - 1;
+                        lpoint q = {(uint32_t)(kk >> 40), (uint32_t)(kk & 0xFFFFF), (uint32_t)((kk >> 20) & 0xFFFFF)};
+                        mv[o] = vertex_of(b, q);
+                    } else {
+                        double pos[3], nr[3] = {0, 0, 1};
+                        tsr_pmodel_eval(m, src, uv[2 * k], uv[2 * k + 1], pos, b->opt->normals ? nr : NULL);
+                        b->out->evaluations++;
+                        float fp[3] = {(float)pos[0], (float)pos[1], (float)pos[2]},
+                              fn[3] = {(float)nr[0], (float)nr[1], (float)nr[2]};
+                        mv[o] = tsr_mesh_add_vertex(&b->out->mesh, fp, b->opt->normals ? fn : NULL, NULL);
+                    }
+                    if (mv[o] == UINT32_MAX)
+                        st = TSR_ERR_NOMEM;
+                }
+                v[k] = mv[o];
+            }
+            if (st == TSR_OK && !add_tri(b, src, v, uv))
+                st = TSR_ERR_NOMEM;
+        }
+        tsr_free(a, inv_key);
+    }
+    tsr_free(a, mv);
+    tsr_triangulation_free(&tr);
+    tsr_free(a, xy);
+    tsr_free(a, key);
+    tsr_free(a, seg);
+    return st;
+}
+
+void tsr_ptess_result_free(tsr_ptess_result *r)
+{
+    if (!r)
+        return;
+    const tsr_allocator *a = r->alloc.realloc ? &r->alloc : NULL;
+    tsr_mesh_free(&r->mesh);
+    tsr_free(a, r->tri_source);
+    tsr_free(a, r->tri_uv);
+    memset(r, 0, sizeof *r);
+}
+
+tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, const tsr_allocator *alloc,
+                         tsr_ptess_result *out, tsr_error *err)
+{
+    if (!out)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "tessellate patches: no output");
+    memset(out, 0, sizeof *out);
+    if (alloc)
+        out->alloc = *alloc;
+    if (!m || !opt_in)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "tessellate patches: no model or no options");
+    tsr_ptess_options opt = *opt_in;
+    if (!opt.tile_n)
+        opt.tile_n = 4;
+    if (!opt.max_level)
+        opt.max_level = 10;
+    if (opt.tile_n < TSR_TILE_MIN || opt.tile_n > TSR_TILE_MAX || (opt.tile_n & 1))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "tessellate patches: tile size %u is not even in %u..%u",
+                             opt.tile_n, TSR_TILE_MIN, TSR_TILE_MAX);
+    if (opt.max_level < 1 || opt.max_level > 12)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "tessellate patches: max level %u is outside 1..12",
+                             opt.max_level);
+    if (!opt.camera && !(opt.max_error > 0 && isfinite(opt.max_error)))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "tessellate patches: max error %g is not a positive number",
+                             opt.max_error);
+    if (opt.camera && !(opt.camera->pixel_error > 0 && isfinite(opt.camera->pixel_error)))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "tessellate patches: pixel error %g is not a positive number",
+                             opt.camera->pixel_error);
+    if (opt.piece_scale)
+        for (uint32_t p = 0; p < m->npieces; p++)
+            if (!(opt.piece_scale[p] > 0 && opt.piece_scale[p] <= 1))
+                return tsr_error_set(err, TSR_ERR_ARGUMENT, "tessellate patches: piece scale %g of piece %u is "
+                                                            "outside (0, 1]",
+                                     opt.piece_scale[p], p);
+    if (m->subd && opt.max_level < 2)
+        opt.max_level = 2; /* N-gon sub-patches need a level less than quads */
+    double t_start = now_s();
+    const tsr_allocator *a = alloc;
+    tsr_mesh_init(&out->mesh, opt.normals ? TSR_MESH_NORMALS : 0, alloc);
+    pctx *ctx = tsr_alloc(a, (size_t)m->npieces * sizeof *ctx);
+    uint32_t row = opt.tile_n + 1;
+    double *scratch = tsr_alloc(a, (size_t)row * row * 5 * sizeof *scratch);
+    uint64_t evals = 0;
+    tsr_status st = ctx && scratch ? TSR_OK : TSR_ERR_NOMEM;
+    if (ctx)
+        memset(ctx, 0, (size_t)m->npieces * sizeof *ctx);
+    for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
+        pctx *c = &ctx[p];
+        const piece *pc = &m->pieces[p];
+        c->m = m;
+        c->opt = &opt;
+        c->piece = p;
+        c->N = opt.tile_n;
+        double scale = opt.piece_scale ? opt.piece_scale[p] : 1;
+        c->tol = (opt.camera ? opt.camera->pixel_error : opt.max_error) * scale;
+        c->scratch = scratch;
+        c->uv = scratch + 3 * (size_t)row * row;
+        c->evaluations = &evals;
+        uint32_t L = opt.max_level - (pc->kind == KIND_SUBD && pc->levels ? 1 : 0);
+        c->surf = (tsr_surface){c, opt.tile_n, L, opt.tile_n << L, opt.tile_n << L, surf_evaluate, surf_bounds,
+                                surf_error, true};
+        c->qt = tsr_quadtree_create(&c->surf, a);
+        if (!c->qt) {
+            st = TSR_ERR_NOMEM;
+            break;
+        }
+        for (int e = 0; e < 4; e++) {
+            if (!pc->nlinks[e])
+                continue;
+            c->req[e] = tsr_alloc(a, (size_t)1 << L);
+            c->act[e] = tsr_alloc(a, (size_t)1 << L);
+            if (!c->req[e] || !c->act[e]) {
+                st = TSR_ERR_NOMEM;
+                break;
+            }
+            memset(c->req[e], (int)L, (size_t)1 << L);
+        }
+    }
+    /* select, then make linked edges agree */
+    uint8_t *dirty = st == TSR_OK ? tsr_alloc(a, m->npieces) : NULL;
+    if (st == TSR_OK && !dirty)
+        st = TSR_ERR_NOMEM;
+    if (dirty)
+        memset(dirty, 1, m->npieces);
+    bool changed = true;
+    while (st == TSR_OK && changed) {
+        out->passes++;
+        for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
+            if (!dirty[p])
+                continue;
+            ctx[p].cache_key = 0;
+            st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
+            collect_spans(&ctx[p]);
+            dirty[p] = 0;
+        }
+        changed = false;
+        for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
+            const piece *pc = &m->pieces[p];
+            uint32_t M = 1u << ctx[p].surf.levels;
+            for (int e = 0; e < 4; e++)
+                for (int k = 0; k < pc->nlinks[e]; k++) {
+                    const plink *l = &pc->link[e][k];
+                    pctx *q = &ctx[l->piece];
+                    if (!q->req[l->edge])
+                        continue;
+                    uint32_t Mq = 1u << q->surf.levels, k0 = l->t0 * M / 2, k1 = l->t1 * M / 2,
+                             s0 = l->s0 * Mq / 2;
+                    for (uint32_t g = k0; g < k1; g++) {
+                        uint32_t d = g - k0, h = l->reversed ? s0 - 1 - d : s0 + d;
+                        if (h >= Mq)
+                            continue;
+                        uint8_t want = ctx[p].act[e][g];
+                        if (q->req[l->edge][h] > want) {
+                            q->req[l->edge][h] = want;
+                            if (q->act[l->edge][h] > want) {
+                                dirty[l->piece] = 1;
+                                changed = true;
+                            }
+                        }
+                    }
+                }
+        }
+    }
+    tsr_free(a, dirty);
+    /* assemble */
+    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL};
+    tsr_tile_patterns pat;
+    bool pat_ok = false;
+    uint32_t *local = NULL;
+    if (st == TSR_OK) {
+        st = tsr_tile_patterns_init(&pat, opt.tile_n, a);
+        pat_ok = st == TSR_OK;
+        local = tsr_alloc(a, (size_t)row * row * sizeof *local);
+        b.used = tsr_alloc(a, (size_t)16 * row * row);
+        if (st == TSR_OK && (!local || !b.used))
+            st = TSR_ERR_NOMEM;
+        if (st == TSR_OK) {
+            memset(b.used, 0, (size_t)16 * row * row);
+            for (unsigned mk = 0; mk < 16; mk++)
+                for (uint32_t t = 0; t < 3 * pat.count[mk]; t++)
+                    b.used[(size_t)mk * row * row + pat.tri[mk][t]] = 1;
+        }
+    }
+    double bound = 0;
+    for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
+        out->leaves += tsr_quadtree_leaf_count(ctx[p].qt);
+        if (m->pieces[p].kind == KIND_BEZIER) {
+            const tsr_qleaf *lv = tsr_quadtree_leaves(ctx[p].qt);
+            for (uint32_t i = 0; i < tsr_quadtree_leaf_count(ctx[p].qt); i++) {
+                double d = surf_error(&ctx[p], lv[i].node);
+                bound = d > bound ? d : bound;
+            }
+        }
+        if (m->sources[m->pieces[p].source].trimmed)
+            continue;
+        st = emit_piece(&b, p, &pat, local);
+    }
+    /* trimmed sources: the loops sampled finely enough in (u, v) */
+    for (uint32_t s = 0; s < m->nsources && st == TSR_OK; s++) {
+        if (!m->sources[s].trimmed)
+            continue;
+        const psource *src = &m->sources[s];
+        /* |dS| <= G |d(u,v)|: G from the pieces' derivative bounds; the loop
+         * is within tol_uv of the curve in (u, v), so within G tol_uv on
+         * the surface */
+        double G = 0;
+        for (uint32_t k = 0; k < src->pu * src->pv; k++) {
+            const piece *pc = &m->pieces[src->first_piece + k];
+            double ext = 0;
+            for (int c = 0; c < 3; c++)
+                ext += (pc->hi[c] - pc->lo[c]) * (pc->hi[c] - pc->lo[c]);
+            double wspan = fmin(pc->rect[1] - pc->rect[0], pc->rect[3] - pc->rect[2]);
+            int deg = pc->bez.degree_u > pc->bez.degree_v ? pc->bez.degree_u : pc->bez.degree_v;
+            double wratio = 1;
+            if (pc->bez.weights) {
+                double wmin = INFINITY, wmax = 0;
+                for (uint32_t i = 0; i < (uint32_t)(pc->bez.degree_u + 1) * (uint32_t)(pc->bez.degree_v + 1); i++) {
+                    wmin = fmin(wmin, pc->bez.weights[i]);
+                    wmax = fmax(wmax, pc->bez.weights[i]);
+                }
+                wratio = wmax / wmin;
+            }
+            double g = deg * sqrt(ext) * wratio * wratio / wspan;
+            G = g > G ? g : G;
+        }
+        double tol3 = opt.camera ? 0 : opt.max_error;
+        if (opt.camera) {
+            /* the pixel error at the nearest point of the source's box */
+            double dmin = INFINITY;
+            for (uint32_t k = 0; k < src->pu * src->pv; k++) {
+                const piece *pc = &m->pieces[src->first_piece + k];
+                double d2 = 0;
+                for (int c = 0; c < 3; c++) {
+                    double x = opt.camera->eye[c], dd = x < pc->lo[c] ? pc->lo[c] - x : x > pc->hi[c] ? x - pc->hi[c] : 0;
+                    d2 += dd * dd;
+                }
+                dmin = fmin(dmin, sqrt(d2));
+            }
+            dmin = fmax(dmin, opt.camera->near_dist);
+            tol3 = opt.camera->pixel_error * dmin / (opt.camera->K * 1.75);
+        }
+        double tol_uv = 0.5 * tol3 / (G > 0 ? G : 1);
+        double dom = fmax(src->domain[1] - src->domain[0], src->domain[3] - src->domain[2]);
+        tol_uv = fmax(tol_uv, 1e-9 * dom);
+        st = emit_trimmed(&b, s, tol_uv, err);
+        if (st != TSR_OK && st != TSR_ERR_NOMEM)
+            goto done;
+    }
+    if (st == TSR_OK && (out->mesh.vertex_count >= UINT32_MAX - 2 || out->mesh.triangle_count >= UINT32_MAX - 2))
+        st = TSR_ERR_TOO_LARGE;
+    out->bound = bound;
+    out->evaluations += (uint32_t)(evals > UINT32_MAX ? UINT32_MAX : evals);
+    if (st == TSR_ERR_NOMEM)
+        tsr_error_set(err, st, "tessellate patches: out of memory");
+    else if (st == TSR_ERR_TOO_LARGE)
+        tsr_error_set(err, st, "tessellate patches: the mesh would pass 2^32 - 2 vertices or triangles");
+done:
+    tsr_free(a, local);
+    tsr_free(a, b.used);
+    if (pat_ok)
+        tsr_tile_patterns_free(&pat);
+    tsr_free(a, b.map.keys);
+    tsr_free(a, b.map.vals);
+    tsr_free(a, b.cb.p);
+    for (uint32_t p = 0; ctx && p < m->npieces; p++) {
+        tsr_quadtree_destroy(ctx[p].qt);
+        for (int e = 0; e < 4; e++) {
+            tsr_free(a, ctx[p].req[e]);
+            tsr_free(a, ctx[p].act[e]);
+        }
+    }
+    tsr_free(a, ctx);
+    tsr_free(a, scratch);
+    out->seconds = now_s() - t_start;
+    return st;
+}

@@ -1,0 +1,206 @@
+/* ptess.h: adaptive, crack-free tessellation of a set of patches on the
+ * restricted quadtree of tessellate/, and its independent measurement.
+ *
+ * The model. A tsr_pmodel is a list of *pieces*: surfaces over the unit
+ * square (s, t) in [0,1]^2, each one quadtree. A piece belongs to a
+ * *source*, the unit the user knows:
+ *  - from a tsr_patch_set, a source is a patch of the set and its
+ *    pieces are its Bézier pieces (tsr_patch_to_bezier), piece (a, b)
+ *    covering the source's rectangle rect = {u0, u1, v0, v1} of the
+ *    patch's own (u, v) parameters: u = u0 + s (u1 - u0), v likewise;
+ *  - from a tsr_subd, a source is a patch (face, sub) of subd.h, with one
+ *    piece over the whole [0,1]^2 (rect {0, 1, 0, 1}).
+ *
+ * Links. Piece edges are numbered as in subd.h: 0 south (t = 0), 1 east
+ * (s = 1), 2 north (t = 1), 3 west (s = 0), the parameter along an edge
+ * running with s (south, north) or t (east, west). Two pieces are linked
+ * along an edge where they share it:
+ *  - pieces of one B-spline patch, by construction;
+ *  - pieces of different patches of a set when their boundary rows of
+ *    control points (and weights) coincide, forwards or reversed, within
+ *    1e-9 of the model's size (the .bpt teapot: body, lid, handle, spout
+ *    rings); partial overlaps are not linked;
+ *  - subd patches as tsr_subd_patch_neighbours says (a quad edge meeting
+ *    an N-gon links each half to one sub-patch).
+ * A piece edge whose control points all coincide (within the same
+ * tolerance: the teapot's lid top and bottom centre) is *collapsed*: all
+ * its points are one vertex. Pieces are oriented consistently through
+ * their links (a piece whose (s, t) orientation disagrees with the first
+ * piece of its connected part is *mirrored*: its triangles are emitted
+ * reversed and its normals negated), so the welded mesh is oriented.
+ *
+ * The tessellation. Every piece has a quadtree of tiles of tile_n quads
+ * with max_level levels (lattice size tile_n << max_level); a node's error
+ * delta is:
+ *  - for a Bézier piece (polynomial or rational), a bound that holds: the
+ *    node's Bézier sub-patch (blossoming) gives bounds of the second
+ *    derivatives (control-net differences; for rational pieces through
+ *    the quotient rule with the smallest weight), and linear
+ *    interpolation on the tile's triangles, stitched or not, is within
+ *    (h_s^2 M_ss + 2 h_s h_t M_st + h_t^2 M_tt) / 8 per coordinate of the
+ *    surface (h doubled along a stitched edge), so no point of the tile
+ *    lies farther than delta from S at the same (s, t); bounds are the box
+ *    of the sub-patch's control points (convex hull);
+ *  - for a subd piece, an estimate: the same formula with the second
+ *    derivatives that Bfr evaluates at the tile's vertices, times 1.5;
+ *    bounds are the face's box (tsr_subd_face_bounds). Not a proof: the
+ *    measurement (tsr_ptess_measure) is the arbiter, and the tool
+ *    re-tessellates pieces it finds beyond the bound (piece_scale).
+ * Refinement splits while delta > max_error (view-independent) or while
+ * the screen error of delta exceeds the camera's pixel_error (any
+ * direction of displacement, tsr_surface.error_isotropic). Then linked
+ * edges are made to agree: along a shared edge both pieces' leaves get
+ * the finer level of the two, repeated until nothing changes, so both
+ * sides sample the edge at the same parameters (a quad's edge next to an
+ * N-gon is one level finer than the sub-patches, whose depth is
+ * max_level - 1). Vertices are welded by this correspondence (evaluated
+ * once, by the lowest piece that owns the point), collapsed edges become
+ * one vertex, and triangles with a repeated vertex are dropped, so a
+ * closed model gives a closed, oriented, conforming mesh.
+ *
+ * Trimmed sources (patches with trim loops) are meshed differently: the
+ * lattice points of their pieces' leaves that lie inside the trimmed
+ * region and the trim loops, sampled so that the loop lies within
+ * max_error of the true curve on the surface (for a camera: within the
+ * pixel error at the camera's nearest distance), are triangulated in the
+ * source's (u, v) by tsr_triangulate with the loops as constraints and
+ * the part outside removed, then lifted. Their error is measured, not
+ * bounded; edges across trim curves are not matched with neighbours.
+ */
+#ifndef TSR_PTESS_H
+#define TSR_PTESS_H
+
+#include "patches/patches.h"
+#include "patches/subd.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct tsr_pmodel tsr_pmodel;
+
+/* Builds the model of a patch set (which must outlive the model: trim
+ * loops are read from it). TSR_ERR_ARGUMENT for NULL pointers,
+ * TSR_ERR_EMPTY for a set without patches, TSR_ERR_TOO_LARGE beyond
+ * 2^24 pieces, TSR_ERR_NOMEM. */
+tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err);
+
+/* Builds the model of a subdivision surface (which must outlive the
+ * model): one source per patch (face, sub) of every face with a limit
+ * surface, numbered face by face. Errors as above (TSR_ERR_EMPTY when no
+ * face has a limit surface). */
+tsr_status tsr_pmodel_from_subd(const tsr_subd *subd, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err);
+
+void tsr_pmodel_destroy(tsr_pmodel *m);
+
+typedef struct tsr_pmodel_info {
+    uint32_t sources, pieces;
+    uint32_t links;           /* linked piece edges (each side counted) */
+    uint32_t collapsed_edges; /* piece edges collapsed to a point */
+    uint32_t mirrored;        /* pieces flipped to agree with their neighbours */
+    uint32_t trimmed_sources;
+    double lo[3], hi[3]; /* box of the model */
+} tsr_pmodel_info;
+
+void tsr_pmodel_get_info(const tsr_pmodel *m, tsr_pmodel_info *info);
+
+/* What a source is: for a set, patch = its index and sub = 0; for a subd,
+ * (face, sub). domain: the source's (u, v) parameter range {u0, u1, v0,
+ * v1}. first_piece, pieces_u, pieces_v: its pieces are first_piece + b *
+ * pieces_u + a. false for src out of range. */
+typedef struct tsr_psource_info {
+    uint32_t patch, sub;
+    double domain[4];
+    uint32_t first_piece, pieces_u, pieces_v;
+    bool trimmed, mirrored;
+} tsr_psource_info;
+
+bool tsr_pmodel_source_info(const tsr_pmodel *m, uint32_t src, tsr_psource_info *info);
+
+/* The true surface of source src at (u, v) of its domain (clamped onto
+ * it): position and, when normal is not NULL, the unit normal as the mesh
+ * orients it (negated for a mirrored source). Evaluated by the source
+ * itself (tsr_patch_eval or tsr_subd_eval), independently of the pieces;
+ * the oracle of tsr_ptess_measure. TSR_ERR_ARGUMENT for src out of range. */
+tsr_status tsr_pmodel_eval(const tsr_pmodel *m, uint32_t src, double u, double v, double pos[3], double normal[3]);
+
+/* Options of tsr_ptess_run. Zero-initialised fields take the defaults. */
+typedef struct tsr_ptess_options {
+    /* View-independent: the largest distance allowed between S(u, v) and
+     * the mesh's point at the same (u, v), in model units. Used when
+     * camera is NULL; must then be positive. */
+    double max_error;
+    /* View-dependent: a prepared camera (tsr_camera_prepare) whose
+     * pixel_error is the screen error allowed. */
+    const tsr_camera *camera;
+    uint32_t tile_n;    /* quads per tile side, even, 2..TSR_TILE_MAX; 0: 4 */
+    uint32_t max_level; /* quadtree depth per piece, 1..12; 0: 10 */
+    bool normals;       /* per-vertex normals of the true surface */
+    /* Optional per-piece factor (0 < f <= 1) on the tolerance (max_error
+     * or pixel_error), for re-tessellating pieces that measured beyond it;
+     * NULL: all 1. */
+    const double *piece_scale;
+} tsr_ptess_options;
+
+/* The tessellation. The mesh is welded; triangle k lies on source
+ * tri_source[k] and its corners have parameters tri_uv[6k .. 6k+5] (u, v
+ * of each corner, in that source's domain), so the mesh's point at any
+ * (u, v) of a source is found by interpolation in its triangles. */
+typedef struct tsr_ptess_result {
+    tsr_mesh mesh;
+    uint32_t *tri_source;
+    double *tri_uv;
+    uint32_t leaves;        /* tiles over all pieces */
+    uint32_t passes;        /* rounds of making linked edges agree */
+    uint32_t evaluations;   /* surface points evaluated (vertices of the mesh and error estimates) */
+    double bound;           /* largest delta over the leaves of Bézier pieces, model units */
+    double seconds;
+    tsr_allocator alloc;
+} tsr_ptess_result;
+
+/* Tessellates m into *out (zeroed first; free with tsr_ptess_result_free
+ * also after a failure). TSR_ERR_ARGUMENT (err says which) for NULL
+ * pointers, a non-positive or non-finite max_error without camera, a
+ * tile_n or max_level out of range, a piece_scale outside (0, 1];
+ * TSR_ERR_TOO_LARGE when the mesh would pass 2^32 - 2 vertices or
+ * triangles; TSR_ERR_NOMEM. A trimmed source whose triangulation fails
+ * gives that error naming the patch. */
+tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt, const tsr_allocator *alloc,
+                         tsr_ptess_result *out, tsr_error *err);
+
+void tsr_ptess_result_free(tsr_ptess_result *r);
+
+/* ---- Measurement (the independent oracle) -------------------------------- */
+
+/* What tsr_ptess_measure found. error: the largest distance between
+ * S(u, v) (tsr_pmodel_eval) and the mesh's point at the same (u, v) (the
+ * welded positions of the mesh, interpolated linearly in the triangle of
+ * that source containing (u, v)), in model units, or in pixels between
+ * their projections when a camera is given (samples with both points
+ * beyond the near plane and one inside the viewport). */
+typedef struct tsr_ptess_measure_result {
+    double max_error, rms_error;
+    uint64_t samples;          /* samples measured */
+    uint64_t uncovered;        /* samples of untrimmed sources in no triangle: gaps (must be 0) */
+    uint64_t trimmed_out;      /* samples of trimmed sources in no triangle (outside the trimmed region) */
+    uint32_t worst_source;
+    double worst_uv[2];
+    double *source_error;      /* per source max error (num sources), or NULL when not asked */
+} tsr_ptess_measure_result;
+
+/* Measures r against m at a grid of per_side x per_side samples over every
+ * piece (cell centres and corners alike: (k / (per_side - 1)) of the
+ * piece, k = 0..per_side-1) plus the midpoint of every triangle edge.
+ * camera: NULL for model units. per_source_error: when true, fills
+ * out->source_error (allocated with alloc; caller frees with tsr_free).
+ * Independent of how r was built: it reads only the mesh, tri_source,
+ * tri_uv and tsr_pmodel_eval. TSR_ERR_ARGUMENT for NULL pointers or
+ * per_side < 2, TSR_ERR_NOMEM. */
+tsr_status tsr_ptess_measure(const tsr_pmodel *m, const tsr_ptess_result *r, uint32_t per_side,
+                             const tsr_camera *camera, bool per_source_error, const tsr_allocator *alloc,
+                             tsr_ptess_measure_result *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,246 @@
+/* cmd_patch.c: `tessera patch IN -o OUT`: Bézier, B-spline, NURBS and
+ * Catmull-Clark surfaces to a crack-free mesh within a stated error
+ * (model units, or pixels for a camera), measured after building. */
+#include "camera.h"
+#include "patch_cli.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void help(FILE *f)
+{
+    fprintf(f,
+            "usage: tessera patch IN -o OUT [options]\n\n"
+            "Tessellates the surfaces of IN into a welded, crack-free triangle mesh, adaptively on one\n"
+            "restricted quadtree per patch. IN is a Bézier patch file (.bpt), an OBJ with free-form\n"
+            "surfaces (cstype bezier|bspline|rat bspline, surf, parm, trim, hole) or a polygon OBJ, read\n"
+            "as a subdivision cage (Catmull-Clark; OpenSubdiv's crease, corner and hole tags). OUT's\n"
+            "extension picks the format: .obj, .ply, .stl or .glb.\n\n"
+            "The error is the distance between the true surface S(u,v) and the mesh's point at the same\n"
+            "(u,v). After building, it is measured on 64 x 64 samples per patch plus every edge midpoint;\n"
+            "patches that measure beyond the tolerance are tessellated again, finer, so the figure\n"
+            "printed is a measurement, and it holds.\n\n"
+            "options:\n"
+            "  -o, --output OUT      output mesh (required)\n"
+            "  --max-error E         largest distance allowed, model units (default 1e-3 of the model's\n"
+            "                        bounding-box diagonal)\n"
+            "  --pixel-error T       view-dependent instead: the screen error allowed, pixels (needs --camera)\n"
+            "  --camera EX,EY,EZ,TX,TY,TZ  the eye and the point it looks at (+z up)\n"
+            "  --width W, --height H viewport in pixels (default 1920 x 1080)\n"
+            "  --fov DEG             vertical field of view (default 60)\n"
+            "  --near D              near plane distance (default 1e-3 of the model's diagonal)\n"
+            "  --tile N              quads per tile side, even, 2..128 (default 4)\n"
+            "  --max-level L         quadtree depth per patch, 1..12 (default 10)\n"
+            "  --scheme S            catmark or bilinear, for a polygon cage (default: bilinear when the\n"
+            "                        file name starts with \"bilinear\", else catmark)\n"
+            "  --normals             per-vertex normals of the true surface\n"
+            "  --no-verify           skip the measurement (and the re-tessellation it may ask for)\n"
+            "  --stats FILE.json     patches, pieces, triangles, vertices, measured max_error and\n"
+            "                        rms_error, bound, seconds, and the options used\n"
+            "  --quiet               print nothing on success\n"
+            "  -h, --help            this help\n");
+}
+
+static int write_stats(const char *path, const char *in, const cli_patch_model *pm, const tsr_ptess_result *r,
+                       const tsr_ptess_measure_result *meas, bool verified, const tsr_ptess_options *opt,
+                       uint32_t tightened, double secs)
+{
+    tsr_pmodel_info info;
+    tsr_pmodel_get_info(pm->model, &info);
+    cJSON *j = cJSON_CreateObject();
+    cJSON_AddStringToObject(j, "input", in);
+    cJSON_AddStringToObject(j, "kind", pm->is_subd ? "subdivision" : "patches");
+    cJSON_AddNumberToObject(j, "patches", info.sources);
+    cJSON_AddNumberToObject(j, "pieces", info.pieces);
+    cJSON_AddNumberToObject(j, "triangles", r->mesh.triangle_count);
+    cJSON_AddNumberToObject(j, "vertices", r->mesh.vertex_count);
+    cJSON_AddNumberToObject(j, "tiles", r->leaves);
+    if (verified) {
+        cJSON_AddNumberToObject(j, "max_error", meas->max_error);
+        cJSON_AddNumberToObject(j, "rms_error", meas->rms_error);
+        cJSON_AddNumberToObject(j, "samples", (double)meas->samples);
+        cJSON_AddNumberToObject(j, "uncovered_samples", (double)meas->uncovered);
+        cJSON_AddNumberToObject(j, "tightened_patches", tightened);
+    }
+    cJSON_AddStringToObject(j, "error_units", opt->camera ? "pixels" : "model");
+    if (opt->camera)
+        cJSON_AddNumberToObject(j, "pixel_error", opt->camera->pixel_error);
+    else
+        cJSON_AddNumberToObject(j, "requested_max_error", opt->max_error);
+    cJSON_AddNumberToObject(j, "bound", r->bound);
+    cJSON_AddNumberToObject(j, "tile", opt->tile_n);
+    cJSON_AddNumberToObject(j, "seconds", secs);
+    cJSON_AddNumberToObject(j, "tessellate_seconds", r->seconds);
+    char *txt = cJSON_Print(j);
+    cJSON_Delete(j);
+    tsr_error err = {0};
+    tsr_status st = txt ? cli_write_text(path, txt, &err) : TSR_ERR_NOMEM;
+    free(txt);
+    if (st != TSR_OK) {
+        cli_error("patch", "%s", txt ? err.message : "out of memory");
+        return CLI_FAIL;
+    }
+    return CLI_OK;
+}
+
+static int run(int argc, char **argv)
+{
+    const char *in = NULL, *out = NULL, *stats = NULL, *cam_arg = NULL, *scheme = NULL;
+    double max_error = 0, near = 0;
+    view_options v = {60, 1920, 1080, 0, 0};
+    uint32_t tile = 4, max_level = 10;
+    bool normals = false, quiet = false, verify = true;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        bool has_value = i + 1 < argc;
+        double d;
+        if (cli_is_help(a)) {
+            help(stdout);
+            return CLI_OK;
+        } else if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && has_value)
+            out = argv[++i];
+        else if (!strcmp(a, "--stats") && has_value)
+            stats = argv[++i];
+        else if (!strcmp(a, "--camera") && has_value)
+            cam_arg = argv[++i];
+        else if (!strcmp(a, "--scheme") && has_value) {
+            scheme = argv[++i];
+            if (strcmp(scheme, "catmark") && strcmp(scheme, "bilinear")) {
+                cli_error("patch", "--scheme %s: use catmark or bilinear", scheme);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(a, "--normals"))
+            normals = true;
+        else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
+            quiet = true;
+        else if (!strcmp(a, "--no-verify"))
+            verify = false;
+        else if ((!strcmp(a, "--tile") || !strcmp(a, "--max-level")) && has_value) {
+            uint32_t u;
+            bool tile_opt = !strcmp(a, "--tile");
+            if (!cli_parse_u32(argv[++i], tile_opt ? 2 : 1, tile_opt ? 128 : 12, &u) || (tile_opt && (u & 1))) {
+                cli_error("patch", "%s %s: %s", a, argv[i],
+                          tile_opt ? "must be an even number in 2..128" : "must be a whole number in 1..12");
+                return CLI_USAGE;
+            }
+            *(tile_opt ? &tile : &max_level) = u;
+        } else if ((!strcmp(a, "--max-error") || !strcmp(a, "--pixel-error") || !strcmp(a, "--width") ||
+                    !strcmp(a, "--height") || !strcmp(a, "--fov") || !strcmp(a, "--near")) &&
+                   has_value) {
+            if (!cli_parse_double(argv[++i], &d) || !(d > 0) || (!strcmp(a, "--fov") && d >= 179)) {
+                cli_error("patch", "%s %s: must be a positive number%s", a, argv[i],
+                          !strcmp(a, "--fov") ? " below 179" : "");
+                return CLI_USAGE;
+            }
+            *(!strcmp(a, "--max-error")     ? &max_error
+              : !strcmp(a, "--pixel-error") ? &v.pixel_error
+              : !strcmp(a, "--width")       ? &v.width
+              : !strcmp(a, "--height")      ? &v.height
+              : !strcmp(a, "--fov")         ? &v.fovy_deg
+                                            : &near) = d;
+        } else if (a[0] == '-' && a[1] != '\0') {
+            cli_error("patch", "%s '%s' (see tessera patch --help)", has_value ? "unknown option" : "missing value for",
+                      a);
+            return CLI_USAGE;
+        } else if (in) {
+            cli_error("patch", "one input at a time ('%s' and '%s' given)", in, a);
+            return CLI_USAGE;
+        } else
+            in = a;
+    }
+    if (!in) {
+        cli_error("patch", "no input file (see tessera patch --help)");
+        return CLI_USAGE;
+    }
+    if (!out) {
+        cli_error("patch", "no output: give -o OUT (.obj, .ply, .stl or .glb)");
+        return CLI_USAGE;
+    }
+    if (tsr_mesh_format_from_path(out) == TSR_FORMAT_UNKNOWN) {
+        cli_error("patch", "%s: unknown mesh format (use .obj, .ply, .stl or .glb)", out);
+        return CLI_USAGE;
+    }
+    if ((v.pixel_error > 0) != (cam_arg != NULL)) {
+        cli_error("patch", "--pixel-error and --camera go together");
+        return CLI_USAGE;
+    }
+    if (cam_arg && max_error > 0) {
+        cli_error("patch", "give either --max-error or --pixel-error with --camera, not both");
+        return CLI_USAGE;
+    }
+    double t0 = cli_now();
+    cli_patch_model pm;
+    if (!cli_patch_model_load("patch", in, scheme, &pm))
+        return CLI_FAIL;
+    tsr_camera cam;
+    tsr_ptess_options opt = {0};
+    opt.tile_n = tile;
+    opt.max_level = max_level;
+    opt.normals = normals;
+    if (cam_arg) {
+        v.near_dist = near > 0 ? near : 1e-3 * pm.diag;
+        if (!parse_camera(cam_arg, &v, &cam)) {
+            cli_error("patch", "--camera %s: expected EX,EY,EZ,TX,TY,TZ with eye != target, not looking straight "
+                      "up or down", cam_arg);
+            cli_patch_model_free(&pm);
+            return CLI_USAGE;
+        }
+        opt.camera = &cam;
+    } else
+        opt.max_error = max_error > 0 ? max_error : 1e-3 * pm.diag;
+    tsr_ptess_result r;
+    tsr_ptess_measure_result meas;
+    uint32_t tightened = 0;
+    tsr_error err = {0};
+    tsr_status st;
+    if (verify)
+        st = cli_patch_tessellate(pm.model, &opt, 64, 6, &r, &meas, &tightened, &err);
+    else {
+        memset(&meas, 0, sizeof meas);
+        st = tsr_ptess_run(pm.model, &opt, NULL, &r, &err);
+    }
+    int rc = CLI_OK;
+    if (st != TSR_OK) {
+        cli_error("patch", "%s: %s", in, err.message);
+        rc = CLI_FAIL;
+    }
+    double tol = opt.camera ? v.pixel_error : opt.max_error;
+    if (rc == CLI_OK && verify && (meas.max_error > tol || meas.uncovered)) {
+        cli_error("patch", "%s: measured error %.6g is above %.6g%s even after re-tessellating %u patches finer",
+                  in, meas.max_error, tol, meas.uncovered ? " (or the mesh has gaps)" : "", tightened);
+        rc = CLI_FAIL;
+    }
+    if (rc == CLI_OK && r.mesh.triangle_count == 0) {
+        cli_error("patch", "%s: the tessellation has no triangle", in);
+        rc = CLI_FAIL;
+    }
+    if (rc == CLI_OK && tsr_mesh_write(&r.mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
+        cli_error("patch", "%s", err.message);
+        rc = CLI_FAIL;
+    }
+    double secs = cli_now() - t0;
+    if (rc == CLI_OK && stats)
+        rc = write_stats(stats, in, &pm, &r, &meas, verify, &opt, tightened, secs);
+    if (rc == CLI_OK && !quiet) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(pm.model, &info);
+        if (verify)
+            fprintf(stderr,
+                    "tessera patch: %s: %u patches, %u triangles, %u vertices; max error %.4g %s (asked %.4g, "
+                    "measured at %llu samples%s), %.2f s\n",
+                    in, info.sources, r.mesh.triangle_count, r.mesh.vertex_count, meas.max_error,
+                    opt.camera ? "px" : "units", tol, (unsigned long long)meas.samples,
+                    tightened ? ", some patches re-tessellated" : "", secs);
+        else
+            fprintf(stderr, "tessera patch: %s: %u patches, %u triangles, %u vertices, not measured, %.2f s\n", in,
+                    info.sources, r.mesh.triangle_count, r.mesh.vertex_count, secs);
+    }
+    tsr_ptess_result_free(&r);
+    cli_patch_model_free(&pm);
+    return rc;
+}
+
+const cli_command cli_cmd_patch = {"patch", "Bézier, NURBS and subdivision surfaces to a crack-free mesh within an error",
+                                   run, help};

@@ -1,0 +1,142 @@
+/* patch_cli.c: see patch_cli.h. */
+#include "patch_cli.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static bool ends_with_ci(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    if (n < k)
+        return false;
+    for (size_t i = 0; i < k; i++) {
+        char a = s[n - k + i], b = suffix[i];
+        if (a >= 'A' && a <= 'Z')
+            a = (char)(a - 'A' + 'a');
+        if (a != b)
+            return false;
+    }
+    return true;
+}
+
+bool cli_patch_model_load(const char *cmd, const char *path, const char *scheme, cli_patch_model *out)
+{
+    memset(out, 0, sizeof *out);
+    tsr_error err = {0};
+    tsr_status st;
+    if (ends_with_ci(path, ".bpt")) {
+        st = tsr_patch_set_load(path, TSR_PATCH_FORMAT_BPT, NULL, &out->set, &err);
+    } else if (ends_with_ci(path, ".obj")) {
+        st = tsr_patch_set_load(path, TSR_PATCH_FORMAT_OBJ, NULL, &out->set, &err);
+        if (st == TSR_ERR_EMPTY) {
+            /* no free-form surface: a polygon cage? */
+            tsr_error cerr = {0};
+            tsr_status cs = tsr_cage_load(path, NULL, &out->cage, &cerr);
+            if (cs == TSR_OK) {
+                const char *base = strrchr(path, '/');
+                base = base ? base + 1 : path;
+                bool bilinear = scheme ? !strcmp(scheme, "bilinear") : !strncmp(base, "bilinear", 8);
+                cs = tsr_subd_create(&out->cage, bilinear ? TSR_SUBD_BILINEAR : TSR_SUBD_CATMARK, NULL, &out->subd,
+                                     &cerr);
+                if (cs != TSR_OK) {
+                    cli_error(cmd, "%s: %s", path, cerr.message);
+                    tsr_cage_free(&out->cage);
+                    return false;
+                }
+                out->is_subd = true;
+                st = TSR_OK;
+            } else if (cs != TSR_ERR_EMPTY) {
+                cli_error(cmd, "%s", cerr.message);
+                return false;
+            } else {
+                cli_error(cmd, "%s: no free-form surface and no polygon face", path);
+                return false;
+            }
+        }
+    } else {
+        cli_error(cmd, "%s: unknown patch format (use .bpt, or .obj with free-form surfaces or polygons)", path);
+        return false;
+    }
+    if (st != TSR_OK) {
+        cli_error(cmd, "%s", err.message);
+        return false;
+    }
+    st = out->is_subd ? tsr_pmodel_from_subd(out->subd, NULL, &out->model, &err)
+                      : tsr_pmodel_from_set(&out->set, NULL, &out->model, &err);
+    if (st != TSR_OK) {
+        cli_error(cmd, "%s: %s", path, err.message);
+        cli_patch_model_free(out);
+        return false;
+    }
+    tsr_pmodel_info info;
+    tsr_pmodel_get_info(out->model, &info);
+    double d = 0;
+    for (int c = 0; c < 3; c++)
+        d += (info.hi[c] - info.lo[c]) * (info.hi[c] - info.lo[c]);
+    out->diag = sqrt(d);
+    return true;
+}
+
+void cli_patch_model_free(cli_patch_model *m)
+{
+    tsr_pmodel_destroy(m->model);
+    tsr_subd_destroy(m->subd);
+    tsr_cage_free(&m->cage);
+    tsr_patch_set_free(&m->set);
+    memset(m, 0, sizeof *m);
+}
+
+tsr_status cli_patch_tessellate(const tsr_pmodel *m, const tsr_ptess_options *opt_in, uint32_t per_side, uint32_t rounds,
+                                tsr_ptess_result *r, tsr_ptess_measure_result *meas, uint32_t *tightened,
+                                tsr_error *err)
+{
+    tsr_pmodel_info info;
+    tsr_pmodel_get_info(m, &info);
+    tsr_ptess_options opt = *opt_in;
+    double *scale = NULL;
+    double tol = opt.camera ? opt.camera->pixel_error : opt.max_error;
+    *tightened = 0;
+    memset(meas, 0, sizeof *meas);
+    memset(r, 0, sizeof *r);
+    tsr_status st = TSR_OK;
+    for (uint32_t round = 0;; round++) {
+        tsr_ptess_result_free(r);
+        st = tsr_ptess_run(m, &opt, NULL, r, err);
+        if (st != TSR_OK)
+            break;
+        tsr_free(NULL, meas->source_error);
+        st = tsr_ptess_measure(m, r, per_side, opt.camera, true, NULL, meas);
+        if (st != TSR_OK) {
+            tsr_error_set(err, st, "measuring the tessellation: %s", tsr_status_str(st));
+            break;
+        }
+        if (meas->max_error <= tol || round == rounds)
+            break;
+        if (!scale) {
+            scale = malloc((size_t)info.pieces * sizeof *scale);
+            if (!scale) {
+                st = tsr_error_set(err, TSR_ERR_NOMEM, "out of memory");
+                break;
+            }
+            for (uint32_t p = 0; p < info.pieces; p++)
+                scale[p] = 1;
+            opt.piece_scale = scale;
+        }
+        for (uint32_t s = 0; s < info.sources; s++) {
+            if (!(meas->source_error[s] > tol))
+                continue;
+            tsr_psource_info si;
+            tsr_pmodel_source_info(m, s, &si);
+            for (uint32_t k = 0; k < si.pieces_u * si.pieces_v; k++) {
+                double f = scale[si.first_piece + k] * 0.5 * fmax(0.1, fmin(1.0, tol / meas->source_error[s]));
+                scale[si.first_piece + k] = f > 0 ? f : 1e-6;
+            }
+            (*tightened)++;
+        }
+    }
+    tsr_free(NULL, meas->source_error);
+    meas->source_error = NULL;
+    free(scale);
+    return st;
+}

@@ -1,0 +1,38 @@
+/* patch_cli.h: what the patch commands (patch, check patches, bench patch)
+ * share: loading a model from a .bpt, a free-form OBJ or a polygon OBJ
+ * cage, and the tessellate-measure-tighten loop that makes the stated
+ * bound hold on the measurement. */
+#ifndef TSR_TOOLS_PATCH_CLI_H
+#define TSR_TOOLS_PATCH_CLI_H
+
+#include "cli.h"
+#include "patches/ptess.h"
+
+typedef struct cli_patch_model {
+    tsr_patch_set set;   /* when loaded from .bpt or free-form OBJ */
+    tsr_cage cage;       /* when loaded from a polygon OBJ */
+    tsr_subd *subd;
+    tsr_pmodel *model;
+    bool is_subd;
+    double diag;         /* model box diagonal */
+} cli_patch_model;
+
+/* Loads path: .bpt, or .obj with free-form surfaces (cstype/surf), else
+ * .obj polygons as a subdivision cage (scheme: "catmark", "bilinear", or
+ * NULL: bilinear when the file name starts with "bilinear", else
+ * catmark). Prints "tessera CMD: message" naming the file and returns
+ * false on failure (nothing to free then). */
+bool cli_patch_model_load(const char *cmd, const char *path, const char *scheme, cli_patch_model *out);
+void cli_patch_model_free(cli_patch_model *m);
+
+/* Tessellates with opt, measures (tsr_ptess_measure, per_side samples per
+ * piece, with opt->camera when set), and where a source measures beyond
+ * the tolerance (max_error, or the camera's pixel_error) re-tessellates
+ * with its pieces' tolerance halved, up to `rounds` times. The result is
+ * in *r and its measurement in *meas (source_error freed). Returns the
+ * status of the last run; *tightened counts the sources tightened. */
+tsr_status cli_patch_tessellate(const tsr_pmodel *m, const tsr_ptess_options *opt, uint32_t per_side, uint32_t rounds,
+                                tsr_ptess_result *r, tsr_ptess_measure_result *meas, uint32_t *tightened,
+                                tsr_error *err);
+
+#endif
