@@ -19,6 +19,9 @@
 #include <time.h>
 
 enum { KIND_BEZIER = 0, KIND_SUBD = 1 };
+#ifndef SUBD_MARGIN
+#define SUBD_MARGIN 1.0
+#endif
 
 typedef struct plink {
     uint32_t piece;
@@ -637,6 +640,83 @@ static double bezier_delta(int du, int dv, const double *P, const double *W, con
     return sqrt(sum) * (1 + 1e-12) + 1e-300;
 }
 
+/* Bernstein polynomials of degree d at t (d + 1 values). */
+static void bernstein(int d, double t, double *B)
+{
+    double s = 1 - t;
+    B[0] = 1;
+    for (int k = 1; k <= d; k++) {
+        double saved = 0;
+        for (int i = 0; i < k; i++) {
+            double tmp = B[i];
+            B[i] = saved + s * tmp;
+            saved = t * tmp;
+        }
+        B[k] = saved;
+    }
+}
+
+/* The Bézier net of a piece restricted to [r0, r1] x [r2, r3] of its
+ * [0,1]^2 (de Casteljau twice per row and column, in homogeneous
+ * coordinates when rational): out 3 per point, wout per point when W. */
+static void split_1d(double *h, int d, int stride, double a, double b)
+{
+    /* h: d+1 homogeneous points (4 doubles each) at stride (in points);
+     * keep the part over [a, b] */
+    double tmp[TSR_PATCH_MAX_DEGREE + 1][4];
+    for (int i = 0; i <= d; i++)
+        memcpy(tmp[i], h + 4 * i * stride, sizeof tmp[i]);
+    if (b < 1) { /* left part over [0, b]: first point of each level */
+        double out[TSR_PATCH_MAX_DEGREE + 1][4];
+        memcpy(out[0], tmp[0], sizeof out[0]);
+        for (int k = 1; k <= d; k++) {
+            for (int i = 0; i <= d - k; i++)
+                for (int c = 0; c < 4; c++)
+                    tmp[i][c] = (1 - b) * tmp[i][c] + b * tmp[i + 1][c];
+            memcpy(out[k], tmp[0], sizeof out[k]);
+        }
+        memcpy(tmp, out, sizeof out);
+    }
+    if (a > 0) { /* right part over [a/b, 1] of that: last point of each level */
+        double t = a / b, out[TSR_PATCH_MAX_DEGREE + 1][4];
+        memcpy(out[d], tmp[d], sizeof out[d]);
+        for (int k = 1; k <= d; k++) {
+            for (int i = 0; i <= d - k; i++)
+                for (int c = 0; c < 4; c++)
+                    tmp[i][c] = (1 - t) * tmp[i][c] + t * tmp[i + 1][c];
+            memcpy(out[d - k], tmp[d - k], sizeof out[d - k]);
+        }
+        memcpy(tmp, out, sizeof out);
+    }
+    for (int i = 0; i <= d; i++)
+        memcpy(h + 4 * i * stride, tmp[i], sizeof tmp[i]);
+}
+
+static void bez_interval(const tsr_patch *p, const double r[4], double *out, double *wout)
+{
+    int du = p->degree_u, dv = p->degree_v, nu = du + 1, nv = dv + 1;
+    double h[4 * TSR_BEZIER_MAX_POINTS];
+    for (int k = 0; k < nu * nv; k++) {
+        double w = p->weights ? p->weights[k] : 1;
+        h[4 * k] = w * p->ctrl[3 * k];
+        h[4 * k + 1] = w * p->ctrl[3 * k + 1];
+        h[4 * k + 2] = w * p->ctrl[3 * k + 2];
+        h[4 * k + 3] = w;
+    }
+    for (int j = 0; j < nv; j++)
+        split_1d(h + 4 * j * nu, du, 1, r[0], r[1]);
+    for (int i = 0; i < nu; i++)
+        split_1d(h + 4 * i, dv, nu, r[2], r[3]);
+    for (int k = 0; k < nu * nv; k++) {
+        double w = h[4 * k + 3];
+        out[3 * k] = h[4 * k] / w;
+        out[3 * k + 1] = h[4 * k + 1] / w;
+        out[3 * k + 2] = h[4 * k + 2] / w;
+        if (wout)
+            wout[k] = w;
+    }
+}
+
 /* ---- tessellation context ----------------------------------------------- */
 
 typedef struct pctx {
@@ -653,6 +733,7 @@ typedef struct pctx {
     uint64_t cache_key;
     float lo[3], hi[3], delta;
     uint64_t *evaluations;
+    double accepted; /* largest delta of a node the refinement kept */
     double *scratch; /* subd tile positions */
     double *uv;
 } pctx;
@@ -678,17 +759,11 @@ static void node_info(pctx *c, tsr_qnode n)
     node_rect(c, n, r);
     if (p->kind == KIND_BEZIER) {
         double ctrl[3 * TSR_BEZIER_MAX_POINTS], w[TSR_BEZIER_MAX_POINTS];
-        tsr_patch sub;
-        if (n.level == 0) {
-            sub = p->bez;
-        } else if (tsr_patch_bezier_piece(&p->bez, r[0], r[1], r[2], r[3], ctrl, p->bez.weights ? w : NULL, &sub) !=
-                   TSR_OK) {
-            c->delta = INFINITY;
-            for (int k = 0; k < 3; k++) {
-                c->lo[k] = (float)p->lo[k];
-                c->hi[k] = (float)p->hi[k];
-            }
-            return;
+        tsr_patch sub = p->bez;
+        if (n.level > 0) {
+            bez_interval(&p->bez, r, ctrl, p->bez.weights ? w : NULL);
+            sub.ctrl = ctrl;
+            sub.weights = p->bez.weights ? w : NULL;
         }
         uint32_t cnt = (uint32_t)(sub.degree_u + 1) * (uint32_t)(sub.degree_v + 1);
         double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -736,10 +811,10 @@ static void node_info(pctx *c, tsr_qnode n)
         }
     double sum = 0;
     for (int k = 0; k < 3; k++) {
-        double e = fmax(a[k] + 2 * b[k] + cc[k], fmax(4 * a[k] + 4 * b[k] + cc[k], a[k] + 4 * b[k] + 4 * cc[k])) / 8;
+        double e = (a[k] + 2 * b[k] + cc[k]) / 8;
         sum += e * e;
     }
-    double d = 1.5 * sqrt(sum);
+    double d = SUBD_MARGIN * sqrt(sum);
     c->delta = (float)d;
     for (int k = 0; k < 3; k++) {
         double l = lo[k] - 2 * d, h = hi[k] + 2 * d;
@@ -798,9 +873,11 @@ static bool refine(void *user, const tsr_surface *s, tsr_qnode n)
             if (c->req[e][k] < sl)
                 return true;
     }
-    if (c->opt->camera)
-        return tsr_camera_node_error(c->opt->camera, s, n) > c->tol;
-    return s->error(s->user, n) > c->tol;
+    double d = s->error(s->user, n);
+    bool split = c->opt->camera ? tsr_camera_node_error(c->opt->camera, s, n) > c->tol : d > c->tol;
+    if (!split && d > c->accepted)
+        c->accepted = d;
+    return split;
 }
 
 /* Fills act[] from the current leaves. */
@@ -832,6 +909,27 @@ static uint64_t mix64(uint64_t k)
     k *= 0xc4ceb9fe1a85ec53ull;
     k ^= k >> 33;
     return k;
+}
+
+/* Empty map with room for n keys without growing. */
+static bool vmap_init(vmap *m, size_t n, const tsr_allocator *a)
+{
+    size_t cap = 1024;
+    while (cap < 2 * n + 2)
+        cap *= 2;
+    m->keys = tsr_alloc(a, cap * sizeof *m->keys);
+    m->vals = tsr_alloc(a, cap * sizeof *m->vals);
+    if (!m->keys || !m->vals) {
+        tsr_free(a, m->keys);
+        tsr_free(a, m->vals);
+        m->keys = NULL;
+        m->vals = NULL;
+        return false;
+    }
+    memset(m->keys, 0, cap * sizeof *m->keys);
+    m->mask = cap - 1;
+    m->count = 0;
+    return true;
 }
 
 static uint32_t *vmap_slot(vmap *m, uint64_t key, bool *found, const tsr_allocator *a)
@@ -990,10 +1088,25 @@ typedef struct builder {
     canon_buf cb;
     uint32_t tri_cap;
     uint8_t *used; /* per stitch mask, per tile vertex: used by the pattern */
+    double *tile_pos; /* 3 (N+1)^2 */
+    double *tile_uv;  /* 2 (N+1)^2 */
+    double *tile_tmp; /* 3 (N+1)^2, and 2 (N+1) (MAX_DEGREE+1) Bernstein values */
 } builder;
 
-/* Mesh vertex of lattice point q (evaluated at its canonical point). */
-static uint32_t vertex_of(builder *b, lpoint q)
+static uint32_t new_vertex(builder *b, const piece *p, const double pos[3], const double *nrm)
+{
+    double nr[3] = {0, 0, 1};
+    if (nrm)
+        for (int k = 0; k < 3; k++)
+            nr[k] = p->mirrored ? -nrm[k] : nrm[k];
+    float fp[3] = {(float)pos[0], (float)pos[1], (float)pos[2]}, fn[3] = {(float)nr[0], (float)nr[1], (float)nr[2]};
+    return tsr_mesh_add_vertex(&b->out->mesh, fp, b->opt->normals ? fn : NULL, NULL);
+}
+
+/* Mesh vertex of lattice point q: evaluated once, at its canonical point
+ * (pre: q's own position when the canonical point is q itself and pre is
+ * not NULL, which spares the evaluation). */
+static uint32_t vertex_of(builder *b, lpoint q, const double *pre)
 {
     lpoint c;
     if (!canonical(b->m, b->ctx, q, &b->cb, b->a, &c))
@@ -1005,21 +1118,111 @@ static uint32_t vertex_of(builder *b, lpoint q)
     if (found)
         return *slot;
     const piece *p = &b->m->pieces[c.piece];
-    uint32_t Z = lattice_size(b->ctx, c.piece);
-    double s = (double)c.i / Z, t = (double)c.j / Z, pos[3], nr[3] = {0, 0, 1};
     bool want_n = b->opt->normals;
-    if (p->kind == KIND_BEZIER)
-        tsr_patch_eval(&p->bez, s, t, pos, NULL, NULL, want_n ? nr : NULL);
-    else
-        subd_point(b->m->subd, p->face, p->sub, s, t, pos, want_n ? nr : NULL);
-    b->out->evaluations++;
-    if (p->mirrored)
-        for (int k = 0; k < 3; k++)
-            nr[k] = -nr[k];
-    float fp[3] = {(float)pos[0], (float)pos[1], (float)pos[2]}, fn[3] = {(float)nr[0], (float)nr[1], (float)nr[2]};
-    uint32_t v = tsr_mesh_add_vertex(&b->out->mesh, fp, want_n ? fn : NULL, NULL);
-    *slot = v;
-    return v;
+    double pos[3], nr[3] = {0, 0, 1};
+    if (pre && !want_n && c.piece == q.piece && c.i == q.i && c.j == q.j) {
+        memcpy(pos, pre, sizeof pos);
+    } else {
+        uint32_t Z = lattice_size(b->ctx, c.piece);
+        double s = (double)c.i / Z, t = (double)c.j / Z;
+        if (p->kind == KIND_BEZIER)
+            tsr_patch_eval(&p->bez, s, t, pos, NULL, NULL, want_n ? nr : NULL);
+        else
+            subd_point(b->m->subd, p->face, p->sub, s, t, pos, want_n ? nr : NULL);
+        b->out->evaluations++;
+    }
+    *slot = new_vertex(b, p, pos, want_n ? nr : NULL);
+    return *slot;
+}
+
+/* Positions of a leaf's tile vertices (those used set in used) into P
+ * (3 per vertex, (N+1)^2): a tensor-product evaluation for a Bézier piece
+ * (the Bernstein values of the tile's columns and rows, then per vertex
+ * one (du+1)(dv+1) sum), one batched call for a subdivision face. */
+static bool tile_positions(builder *b, const piece *p, double r[4], uint32_t N, const uint8_t *used, double *P)
+{
+    uint32_t row = N + 1;
+    if (p->kind == KIND_SUBD) {
+        uint32_t n = 0;
+        double *uv = b->tile_uv;
+        for (uint32_t j = 0; j <= N; j++)
+            for (uint32_t i = 0; i <= N; i++)
+                if (used[j * row + i]) {
+                    uv[2 * n] = r[0] + (r[1] - r[0]) * i / N;
+                    uv[2 * n + 1] = r[2] + (r[3] - r[2]) * j / N;
+                    n++;
+                }
+        if (tsr_subd_eval(b->m->subd, p->face, p->sub, uv, n, b->tile_tmp, NULL, NULL) != TSR_OK)
+            return false;
+        b->out->evaluations += n;
+        n = 0;
+        for (uint32_t k = 0; k < row * row; k++)
+            if (used[k]) {
+                memcpy(P + 3 * k, b->tile_tmp + 3 * n, 3 * sizeof *P);
+                n++;
+            }
+        return true;
+    }
+    int du = p->bez.degree_u, dv = p->bez.degree_v;
+    double *Bu = b->tile_tmp, *Bv = Bu + (size_t)row * (TSR_PATCH_MAX_DEGREE + 1);
+    for (uint32_t i = 0; i <= N; i++) {
+        double s = r[0] + (r[1] - r[0]) * i / N;
+        if (i == N)
+            s = r[1];
+        bernstein(du, s, Bu + (size_t)i * (TSR_PATCH_MAX_DEGREE + 1));
+    }
+    for (uint32_t j = 0; j <= N; j++) {
+        double t = r[2] + (r[3] - r[2]) * j / N;
+        if (j == N)
+            t = r[3];
+        bernstein(dv, t, Bv + (size_t)j * (TSR_PATCH_MAX_DEGREE + 1));
+    }
+    const double *C = p->bez.ctrl, *W = p->bez.weights;
+    int nu = du + 1;
+    for (uint32_t j = 0; j <= N; j++) {
+        /* the column sums Q_a = sum_b Bv_b w_ab P_ab (homogeneous) */
+        double Q[TSR_PATCH_MAX_DEGREE + 1][4];
+        const double *bv = Bv + (size_t)j * (TSR_PATCH_MAX_DEGREE + 1);
+        for (int a2 = 0; a2 < nu; a2++) {
+            double q0 = 0, q1 = 0, q2 = 0, q3 = 0;
+            for (int b2 = 0; b2 <= dv; b2++) {
+                double w = W ? W[b2 * nu + a2] : 1, f = bv[b2] * w;
+                const double *c = C + 3 * (b2 * nu + a2);
+                q0 += f * c[0];
+                q1 += f * c[1];
+                q2 += f * c[2];
+                q3 += f;
+            }
+            Q[a2][0] = q0;
+            Q[a2][1] = q1;
+            Q[a2][2] = q2;
+            Q[a2][3] = q3;
+        }
+        for (uint32_t i = 0; i <= N; i++) {
+            if (!used[j * row + i])
+                continue;
+            const double *bu = Bu + (size_t)i * (TSR_PATCH_MAX_DEGREE + 1);
+            double x = 0, y = 0, z = 0, w = 0;
+            for (int a2 = 0; a2 < nu; a2++) {
+                x += bu[a2] * Q[a2][0];
+                y += bu[a2] * Q[a2][1];
+                z += bu[a2] * Q[a2][2];
+                w += bu[a2] * Q[a2][3];
+            }
+            double *o = P + 3 * (j * row + i);
+            if (W) {
+                o[0] = x / w;
+                o[1] = y / w;
+                o[2] = z / w;
+            } else {
+                o[0] = x;
+                o[1] = y;
+                o[2] = z;
+            }
+        }
+    }
+    b->out->evaluations += row * row;
+    return true;
 }
 
 static bool add_tri(builder *b, uint32_t source, const uint32_t v[3], const double uv[6])
@@ -1059,11 +1262,19 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
         uint32_t w = N << (c->surf.levels - n.level), step = w / N, x0 = n.x * w, y0 = n.y * w;
         unsigned mask = lv[li].stitch & 15;
         const uint8_t *used = b->used + (size_t)mask * row * row;
+        double r[4];
+        node_rect(c, n, r);
+        bool pre = !b->opt->normals && tile_positions(b, p, r, N, used, b->tile_pos);
         for (uint32_t j = 0; j <= N; j++)
             for (uint32_t i = 0; i <= N; i++) {
                 if (!used[j * row + i])
                     continue;
-                uint32_t v = vertex_of(b, (lpoint){pi, x0 + i * step, y0 + j * step});
+                const double *pp = pre ? b->tile_pos + 3 * (j * row + i) : NULL;
+                uint32_t v;
+                if (pre && i > 0 && j > 0 && i < N && j < N)
+                    v = new_vertex(b, p, pp, NULL); /* inside the tile: no other tile has it */
+                else
+                    v = vertex_of(b, (lpoint){pi, x0 + i * step, y0 + j * step}, pp);
                 if (v == UINT32_MAX)
                     return TSR_ERR_NOMEM;
                 local[j * row + i] = v;
@@ -1238,7 +1449,7 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
                     if (inv_key[o] != UINT32_MAX) {
                         uint64_t kk = key[inv_key[o]] - 1;
                         lpoint q = {(uint32_t)(kk >> 40), (uint32_t)(kk & 0xFFFFF), (uint32_t)((kk >> 20) & 0xFFFFF)};
-                        mv[o] = vertex_of(b, q);
+                        mv[o] = vertex_of(b, q, NULL);
                     } else {
                         double pos[3], nr[3] = {0, 0, 1};
                         tsr_pmodel_eval(m, src, uv[2 * k], uv[2 * k + 1], pos, b->opt->normals ? nr : NULL);
@@ -1366,6 +1577,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
             if (!dirty[p])
                 continue;
             ctx[p].cache_key = 0;
+            ctx[p].accepted = 0;
             st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
             collect_spans(&ctx[p]);
             dirty[p] = 0;
@@ -1400,7 +1612,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
     }
     tsr_free(a, dirty);
     /* assemble */
-    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL};
+    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL};
     tsr_tile_patterns pat;
     bool pat_ok = false;
     uint32_t *local = NULL;
@@ -1409,7 +1621,10 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         pat_ok = st == TSR_OK;
         local = tsr_alloc(a, (size_t)row * row * sizeof *local);
         b.used = tsr_alloc(a, (size_t)16 * row * row);
-        if (st == TSR_OK && (!local || !b.used))
+        b.tile_pos = tsr_alloc(a, (size_t)3 * row * row * sizeof(double));
+        b.tile_uv = tsr_alloc(a, (size_t)2 * row * row * sizeof(double));
+        b.tile_tmp = tsr_alloc(a, ((size_t)3 * row * row + 2 * (size_t)row * (TSR_PATCH_MAX_DEGREE + 1)) * sizeof(double));
+        if (st == TSR_OK && (!local || !b.used || !b.tile_pos || !b.tile_uv || !b.tile_tmp))
             st = TSR_ERR_NOMEM;
         if (st == TSR_OK) {
             memset(b.used, 0, (size_t)16 * row * row);
@@ -1418,12 +1633,46 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
                     b.used[(size_t)mk * row * row + pat.tri[mk][t]] = 1;
         }
     }
+    /* room for everything at once: triangles exactly, vertices at most */
+    uint64_t want_t = 0, want_v = 0, used_n[16] = {0};
+    for (unsigned mk = 0; st == TSR_OK && mk < 16; mk++)
+        for (uint32_t k = 0; k < row * row; k++)
+            used_n[mk] += b.used[(size_t)mk * row * row + k];
+    for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
+        if (m->sources[m->pieces[p].source].trimmed)
+            continue;
+        const tsr_qleaf *lv = tsr_quadtree_leaves(ctx[p].qt);
+        for (uint32_t i = 0; i < tsr_quadtree_leaf_count(ctx[p].qt); i++) {
+            want_t += pat.count[lv[i].stitch & 15];
+            want_v += used_n[lv[i].stitch & 15];
+        }
+    }
+    if (st == TSR_OK && (want_t >= UINT32_MAX - 2 || want_v >= ((uint64_t)1 << 33)))
+        st = TSR_ERR_TOO_LARGE;
+    if (st == TSR_OK && want_t) {
+        uint32_t vres = want_v >= UINT32_MAX - 2 ? UINT32_MAX - 2 : (uint32_t)(want_v / 2 + 16);
+        st = tsr_mesh_reserve(&out->mesh, vres, (uint32_t)want_t);
+        out->tri_source = st == TSR_OK ? tsr_alloc(a, (size_t)want_t * sizeof *out->tri_source) : NULL;
+        out->tri_uv = out->tri_source ? tsr_alloc(a, (size_t)want_t * 6 * sizeof *out->tri_uv) : NULL;
+        if (st == TSR_OK && !out->tri_uv)
+            st = TSR_ERR_NOMEM;
+        b.tri_cap = (uint32_t)want_t;
+        /* tile-border vertices go through the map: 4N of (N+1)^2 */
+        size_t border = (size_t)(want_v * 4 * opt.tile_n / ((uint64_t)row * row)) + 64;
+        if (st == TSR_OK && !vmap_init(&b.map, border, a))
+            st = TSR_ERR_NOMEM;
+    }
     double bound = 0;
     for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
         out->leaves += tsr_quadtree_leaf_count(ctx[p].qt);
         if (m->pieces[p].kind == KIND_BEZIER) {
+            /* leaves are kept nodes, their descendants (balancing), or at
+             * the deepest level, which the refinement never asks about */
             const tsr_qleaf *lv = tsr_quadtree_leaves(ctx[p].qt);
+            bound = ctx[p].accepted > bound ? ctx[p].accepted : bound;
             for (uint32_t i = 0; i < tsr_quadtree_leaf_count(ctx[p].qt); i++) {
+                if (lv[i].node.level < ctx[p].surf.levels)
+                    continue;
                 double d = surf_error(&ctx[p], lv[i].node);
                 bound = d > bound ? d : bound;
             }
@@ -1494,6 +1743,9 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
 done:
     tsr_free(a, local);
     tsr_free(a, b.used);
+    tsr_free(a, b.tile_pos);
+    tsr_free(a, b.tile_uv);
+    tsr_free(a, b.tile_tmp);
     if (pat_ok)
         tsr_tile_patterns_free(&pat);
     tsr_free(a, b.map.keys);

@@ -41,11 +41,15 @@
  *    surface (h doubled along a stitched edge), so no point of the tile
  *    lies farther than delta from S at the same (s, t); bounds are the box
  *    of the sub-patch's control points (convex hull);
- *  - for a subd piece, an estimate: the same formula with the second
- *    derivatives that Bfr evaluates at the tile's vertices, times 1.5;
- *    bounds are the face's box (tsr_subd_face_bounds). Not a proof: the
- *    measurement (tsr_ptess_measure) is the arbiter, and the tool
- *    re-tessellates pieces it finds beyond the bound (piece_scale).
+ *  - for a subd piece, an estimate: the interior-triangle term of the
+ *    same formula, with the second differences of the tile's vertices
+ *    (evaluated by Bfr) for h^2 M; bounds are the box of those vertices
+ *    padded by twice the estimate, within the face's box
+ *    (tsr_subd_face_bounds). Not a proof (on OpenSubdiv's 81 Catmull-
+ *    Clark shapes it measures up to 1.7x beyond the tolerance on 8): the
+ *    measurement (tsr_ptess_measure) is the arbiter, and `tessera patch`
+ *    re-tessellates the pieces it finds beyond the tolerance
+ *    (piece_scale) until they hold.
  * Refinement splits while delta > max_error (view-independent) or while
  * the screen error of delta exceeds the camera's pixel_error (any
  * direction of displacement, tsr_surface.error_isotropic). Then linked
@@ -153,7 +157,8 @@ typedef struct tsr_ptess_result {
     uint32_t leaves;        /* tiles over all pieces */
     uint32_t passes;        /* rounds of making linked edges agree */
     uint32_t evaluations;   /* surface points evaluated (vertices of the mesh and error estimates) */
-    double bound;           /* largest delta over the leaves of Bézier pieces, model units */
+    double bound;           /* a bound of delta over the leaves of Bézier pieces, model units:
+                               the largest delta the refinement accepted, or of a deepest leaf */
     double seconds;
     tsr_allocator alloc;
 } tsr_ptess_result;

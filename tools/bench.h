@@ -23,4 +23,7 @@ int cli_bench_mesh(int argc, char **argv);
 /* `tessera bench fly` (bench_fly.c); argv[1] is "fly". */
 int cli_bench_fly(int argc, char **argv);
 
+/* `tessera bench patch` (bench_patch.c); argv[1] is "patch". */
+int cli_bench_patch(int argc, char **argv);
+
 #endif

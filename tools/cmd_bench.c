@@ -15,7 +15,9 @@ static void help(FILE *f)
     fprintf(f, "usage: tessera bench terrain [options]\n"
                "       tessera bench cdt [--points N] [--grid S]   (Delaunay kernel; see tessera bench cdt --help)\n"
                "       tessera bench mesh [options]   (heightmap to mesh; see tessera bench mesh --help)\n"
-               "       tessera bench fly [options]    (the flyover's frame times; see tessera bench fly --help)\n\n"
+               "       tessera bench fly [options]    (the flyover's frame times; see tessera bench fly --help)\n"
+               "       tessera bench patch [options]  (patch tessellation against OpenSubdiv; see tessera bench patch "
+               "--help)\n\n"
                "Benchmarks terrain level of detail on a generated heightfield (fast midpoint displacement)\n"
                "or on a file, and prints a table.\n\n"
                "options:\n"
@@ -208,9 +210,12 @@ static int run(int argc, char **argv)
         return cli_bench_mesh(argc, argv);
     if (argc >= 2 && !strcmp(argv[1], "fly"))
         return cli_bench_fly(argc, argv);
+    if (argc >= 2 && !strcmp(argv[1], "patch"))
+        return cli_bench_patch(argc, argv);
     if (argc < 2 || (strcmp(argv[1], "terrain") && !cli_is_help(argv[1]))) {
         cli_error("bench",
-                  "what to benchmark? 'tessera bench terrain', 'cdt', 'mesh' or 'fly' (see tessera bench --help)");
+                  "what to benchmark? 'tessera bench terrain', 'cdt', 'mesh', 'fly' or 'patch' (see tessera bench "
+                  "--help)");
         return CLI_USAGE;
     }
     cli_heightfield_options o = {0};
@@ -403,5 +408,5 @@ static int run(int argc, char **argv)
     return CLI_OK;
 }
 
-const cli_command cli_cmd_bench = {"bench", "benchmarks: 'bench terrain', 'bench cdt', 'bench mesh', 'bench fly'",
-                                   run, help};
+const cli_command cli_cmd_bench = {
+    "bench", "benchmarks: 'bench terrain', 'bench cdt', 'bench mesh', 'bench fly', 'bench patch'", run, help};

@@ -2,8 +2,9 @@
 # demo.sh TESSERA OUTDIR: the main job on the bundled default. Generates the
 # project's sample terrain (1025x1025, seed 1, 30 m spacing) as a 16-bit
 # PNG, converts it into a mesh within the default error bound (and a
-# printable solid), checks the view-dependent tessellation, and renders a
-# short headless flyover.
+# printable solid), checks the view-dependent tessellation, renders a
+# short headless flyover, and tessellates the Utah teapot (from the shared
+# data folder, TSR_DATA or ../shared/data, when it is there) to a .glb.
 set -euo pipefail
 tessera=$1 out=$2
 mkdir -p "$out"
@@ -32,9 +33,19 @@ else
   status=1
 fi
 echo
+data=${TSR_DATA:-../shared/data}
+teapot=""
+if [ -f "$data/patches/teapot.bpt" ]; then
+  echo "tessellating the Utah teapot (32 bicubic patches) within 1e-3 of its size, crack-free..."
+  "$tessera" patch "$data/patches/teapot.bpt" --normals -o "$out/teapot.glb" --stats "$out/teapot.json"
+  teapot="teapot.glb teapot.json"
+else
+  echo "no $data/patches/teapot.bpt (set TSR_DATA to the shared data folder): the teapot is skipped"
+fi
+echo
 echo "wrote:"
 for f in terrain.png terrain.glb terrain-mesh.json terrain-normals.png terrain-hillshade.png terrain-solid.stl \
-         terrain-solid.json check.txt flyover.json; do
+         terrain-solid.json check.txt flyover.json $teapot; do
   printf '  %-22s %s\n' "$f" "$(du -h "$out/$f" | cut -f1)"
 done
 echo "in $(cd "$out" && pwd)"
