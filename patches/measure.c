@@ -34,7 +34,10 @@
  * triangle's edge from such a corner e to a corner c, the gap triangle
  * is (e, q, c) with q the next location of the same vertex on the far
  * side of the edge (the first one met turning away from the triangle,
- * no farther than 4 edge lengths). These triangles are consulted only
+ * no farther than 4 edge lengths, a corner of the domain on a collapsed
+ * side included), kept only when its side q-c too is a kept triangle's
+ * edge or on the domain's border, so that a real hole next to a
+ * collapsed edge is not papered over. These triangles are consulted only
  * for samples that no kept triangle contains. A sample in neither is
  * `uncovered` (untrimmed source: a gap of the mesh) or `trimmed_out`.
  */
@@ -108,7 +111,10 @@ static bool grow(const tsr_allocator *a, void **p, size_t *cap, size_t need, siz
     return true;
 }
 
-static const double *tri_uv(const measurer *M, uint32_t t) { return M->r->tri_uv + 6 * (size_t)t; }
+static const double *tri_uv(const measurer *M, uint32_t t)
+{
+    return M->r->tri_uv + 6 * (size_t)t;
+}
 
 static void vertex_pos(const measurer *M, uint32_t v, double p[3])
 {
@@ -481,6 +487,45 @@ static tsr_status find_gaps(measurer *M)
     return TSR_OK;
 }
 
+static bool near_uv(const measurer *M, const double *a, const double *b)
+{
+    return fabs(a[0] - b[0]) <= M->sep && fabs(a[1] - b[1]) <= M->sep;
+}
+
+/* Whether some kept triangle of the current source (bucketed) has the
+ * edge a-b in (u, v). */
+static bool kept_edge(const measurer *M, const double a[2], const double b[2])
+{
+    uint32_t ci, cj;
+    cell_of(M, 0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), &ci, &cj);
+    size_t c = (size_t)cj * M->gx + ci;
+    for (uint32_t k = M->cell_start[c]; k < M->cell_start[c + 1]; k++) {
+        const double *t = entry_uv(M, M->entries[k]);
+        for (int q = 0; q < 3; q++) {
+            const double *p0 = t + 2 * q, *p1 = t + 2 * ((q + 1) % 3);
+            if ((near_uv(M, p0, a) && near_uv(M, p1, b)) || (near_uv(M, p0, b) && near_uv(M, p1, a)))
+                return true;
+        }
+    }
+    return false;
+}
+
+/* A reconstructed gap triangle (e, q, o) is kept when its side q-o, like
+ * e-o, is the edge of a kept triangle or lies on the domain's border: a
+ * dropped triangle is enclosed by its neighbours, whereas a "gap" reaching
+ * past a missing triangle (a hole of the mesh next to a collapsed edge)
+ * is not, and must stay uncovered. */
+static bool keep_gap(const measurer *M, const gap_tri *g)
+{
+    const double *q = g->uv + 2, *o = g->uv + 4;
+    for (int side = 0; side < 4; side++) {
+        int c = side < 2 ? 0 : 1;
+        if (fabs(q[c] - M->dom[side]) <= M->sep && fabs(o[c] - M->dom[side]) <= M->sep)
+            return true;
+    }
+    return kept_edge(M, q, o);
+}
+
 static tsr_status measure_source(measurer *M, uint32_t per_side)
 {
     tsr_psource_info si;
@@ -497,6 +542,16 @@ static tsr_status measure_source(measurer *M, uint32_t per_side)
     M->ntri = M->src_start[M->src + 1] - M->src_start[M->src];
 
     tsr_status st = find_gaps(M);
+    if (st == TSR_OK && M->ngaps) {
+        /* keep the gap triangles closed by kept edges (see keep_gap) */
+        size_t n = M->ngaps, kept = 0;
+        M->ngaps = 0;
+        st = build_buckets(M);
+        for (size_t k = 0; k < n && st == TSR_OK; k++)
+            if (keep_gap(M, &M->gaps[k]))
+                M->gaps[kept++] = M->gaps[k];
+        M->ngaps = kept;
+    }
     if (st == TSR_OK)
         st = build_buckets(M);
     if (st != TSR_OK)

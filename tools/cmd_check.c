@@ -1,15 +1,21 @@
-/* cmd_check.c: `tessera check terrain IN`: tessellation error tests. For
- * each camera: select the cut, build its mesh, and measure with the
- * brute-force oracle (tsr_terrain_measure: heightfield and mesh only) the
- * worst screen error, plus validation and the 2:1 restriction. */
+/* cmd_check.c: tessellation error tests.
+ *  - `tessera check terrain IN`: for each camera, select the cut, build
+ *    its mesh, and measure with the brute-force oracle
+ *    (tsr_terrain_measure: heightfield and mesh only) the worst screen
+ *    error, plus validation and the 2:1 restriction.
+ *  - `tessera check patches IN`: tessellate a patch model (patches/ptess.h)
+ *    view-independently and for each camera, and measure it with the
+ *    independent oracle tsr_ptess_measure (mesh, tri_uv and the surface's
+ *    own evaluation only), plus validation and a search for cracks. */
 #include "camera.h"
+#include "patches/ptess.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-static void help(FILE *f)
+static void help_terrain(FILE *f)
 {
     fprintf(f, "usage: tessera check terrain IN [options]\n\n"
                "Selects the view-dependent tessellation of a heightfield for each camera and measures it\n"
@@ -59,7 +65,16 @@ typedef struct cam_result {
     bool watertight, conforming, balanced;
 } cam_result;
 
-static int run(int argc, char **argv)
+static void help_patches(FILE *f);
+
+static void help(FILE *f)
+{
+    help_terrain(f);
+    fprintf(f, "\n");
+    help_patches(f);
+}
+
+static int run_terrain(int argc, char **argv)
 {
     cli_heightfield_options o = {0};
     view_options v = {60, 1920, 1080, 1, 1};
@@ -69,20 +84,10 @@ static int run(int argc, char **argv)
     char **cam_args = calloc((size_t)argc + 1, sizeof *cam_args);
     int ncam_args = 0;
     int rc = CLI_OK;
-    if (argc < 2 || strcmp(argv[1], "terrain")) {
-        if (argc >= 2 && cli_is_help(argv[1])) {
-            help(stdout);
-            free(cam_args);
-            return CLI_OK;
-        }
-        cli_error("check", "what to check? 'tessera check terrain IN' (see tessera check --help)");
-        free(cam_args);
-        return CLI_USAGE;
-    }
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i];
         if (cli_is_help(a)) {
-            help(stdout);
+            help_terrain(stdout);
             free(cam_args);
             return CLI_OK;
         }
@@ -287,5 +292,771 @@ static int run(int argc, char **argv)
     return rc;
 }
 
-const cli_command cli_cmd_check = {"check", "tessellation error tests: 'check terrain IN' measures the screen-space bound",
-                                   run, help};
+/* ---- check patches ------------------------------------------------------ */
+
+static void help_patches(FILE *f)
+{
+    fprintf(
+        f,
+        "usage: tessera check patches IN [options]\n\n"
+        "Tessellates a patch model (patches/ptess.h) view-independently and for each camera, and measures every\n"
+        "mesh independently (tsr_ptess_measure): the largest distance between the surface S(u, v), as the patch\n"
+        "itself evaluates it, and the mesh's point at the same (u, v), over a grid of samples per piece and the\n"
+        "midpoint of every triangle edge; for a camera, in pixels between their projections. Every mesh is also\n"
+        "validated (oriented, edge-manifold, no bad, degenerate or duplicate triangles, no T-junctions) and\n"
+        "searched for cracks: boundary edges lying along another boundary edge (within 1e-6 of the model's\n"
+        "diagonal), where surfaces that should be joined are not (along a non-manifold edge of a cage,\n"
+        "which ptess.h does not join, they count as seams). Exits 1 when a run exceeds its tolerance, leaves\n"
+        "a sample of an untrimmed patch uncovered, or fails a check.\n\n"
+        "IN is a Bezier patch file (.bpt), an OBJ with free-form surfaces (cstype/surf), or a polygon OBJ read as\n"
+        "the cage of a subdivision surface (Catmull-Clark; bilinear when the file name starts with \"bilinear\").\n\n"
+        "options:\n"
+        "  --max-error E         view-independent tolerance, model units (default 1e-3 of the box diagonal)\n"
+        "  --pixel-error T       screen-space tolerance of the camera runs, pixels (default 1)\n"
+        "  --cameras N           N random cameras around the model's box: the eye 1.5 to 4 box radii from the\n"
+        "                        centre, not straight above or below, looking at a random point of the box\n"
+        "                        (default 8; 0 for the view-independent run only)\n"
+        "  --seed S              seed of the random cameras (default 1)\n"
+        "  --camera EX,EY,EZ,TX,TY,TZ  a camera at eye E looking at T (model units; repeatable; replaces the\n"
+        "                        random cameras)\n"
+        "  --width W, --height H viewport in pixels (default 1920 x 1080)\n"
+        "  --fov DEG             vertical field of view (default 60)\n"
+        "  --near D              near plane distance (default 1e-3 of the box diagonal)\n"
+        "  --tile N              quads per tile side, even, 2..128 (default 4)\n"
+        "  --max-level L         quadtree depth per piece, 1..12 (default 10)\n"
+        "  --samples N           measurement samples per piece side (default 64)\n"
+        "  --retries N           re-tessellate the pieces of patches whose error is estimated, not bounded\n"
+        "                        (subdivision and trimmed patches) and measured beyond the tolerance, with at\n"
+        "                        most half their tolerance, up to N times (default 6; 0: never), as ptess.h\n"
+        "                        prescribes; Bezier pieces are never retried, their bound is a proof\n"
+        "  --scheme S            catmark or bilinear: the subdivision scheme of a polygon OBJ\n"
+        "  --json                print the results as JSON\n"
+        "  -h, --help            this help\n");
+}
+
+typedef struct patch_input {
+    tsr_patch_set set;
+    tsr_cage cage;
+    tsr_subd *subd;
+    tsr_pmodel *model;
+    const char *kind;
+} patch_input;
+
+static void patch_input_free(patch_input *p)
+{
+    tsr_pmodel_destroy(p->model);
+    tsr_subd_destroy(p->subd);
+    tsr_cage_free(&p->cage);
+    tsr_patch_set_free(&p->set);
+}
+
+static void report_load_error(const char *in, tsr_status st, const tsr_error *err)
+{
+    if (err->message[0] && strstr(err->message, in))
+        cli_error("check", "%s", err->message);
+    else
+        cli_error("check", "%s: %s", in, err->message[0] ? err->message : tsr_status_str(st));
+}
+
+/* Loads IN as a patch set or, when it is an OBJ without surfaces but with
+ * faces, as a subdivision cage; builds the model. Prints the error and
+ * returns CLI_FAIL on failure. scheme: -1 picks it from the file name. */
+static int load_patch_model(const char *in, int scheme, patch_input *p)
+{
+    memset(p, 0, sizeof *p);
+    tsr_error err = {0};
+    tsr_patch_format f = tsr_patch_format_from_path(in);
+    if (f == TSR_PATCH_FORMAT_UNKNOWN) {
+        cli_error("check", "%s: unknown patch format (use .bpt, or .obj with free-form surfaces or a polygon cage)",
+                  in);
+        return CLI_FAIL;
+    }
+    tsr_status st = tsr_patch_set_load(in, f, NULL, &p->set, &err);
+    if (st == TSR_OK) {
+        p->kind = f == TSR_PATCH_FORMAT_BPT ? "bpt" : "obj-surfaces";
+        st = tsr_pmodel_from_set(&p->set, NULL, &p->model, &err);
+    } else if (st == TSR_ERR_EMPTY && f == TSR_PATCH_FORMAT_OBJ) {
+        /* no surface: a polygon cage, if it has faces */
+        tsr_error cerr = {0};
+        tsr_status cst = tsr_cage_load(in, NULL, &p->cage, &cerr);
+        if (cst != TSR_OK) {
+            if (cst == TSR_ERR_EMPTY)
+                report_load_error(in, st, &err); /* neither surfaces nor faces: the set loader's word */
+            else
+                report_load_error(in, cst, &cerr);
+            patch_input_free(p);
+            return CLI_FAIL;
+        }
+        const char *base = strrchr(in, '/');
+        base = base ? base + 1 : in;
+        tsr_subd_scheme sc = scheme >= 0                     ? (tsr_subd_scheme)scheme
+                             : !strncmp(base, "bilinear", 8) ? TSR_SUBD_BILINEAR
+                                                             : TSR_SUBD_CATMARK;
+        p->kind = sc == TSR_SUBD_BILINEAR ? "cage-bilinear" : "cage-catmark";
+        st = tsr_subd_create(&p->cage, sc, NULL, &p->subd, &err);
+        if (st == TSR_OK)
+            st = tsr_pmodel_from_subd(p->subd, NULL, &p->model, &err);
+    }
+    if (st != TSR_OK) {
+        report_load_error(in, st, &err);
+        patch_input_free(p);
+        return CLI_FAIL;
+    }
+    return CLI_OK;
+}
+
+static double urand_patches(uint64_t *s)
+{
+    *s = *s * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(*s >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* A random camera around the box: the eye 1.5 to 4 box radii from its
+ * centre in a random direction at most ~64 degrees from horizontal, looking
+ * at a random point of the box. */
+static void random_patch_camera(const tsr_pmodel_info *info, uint64_t *rng, const view_options *v, tsr_camera *c)
+{
+    double ctr[3], r = 0;
+    for (int k = 0; k < 3; k++) {
+        ctr[k] = 0.5 * (info->lo[k] + info->hi[k]);
+        r += (info->hi[k] - info->lo[k]) * (info->hi[k] - info->lo[k]);
+    }
+    r = sqrt(r) / 2;
+    for (int tries = 0; tries < 1000; tries++) {
+        double z = (2 * urand_patches(rng) - 1) * 0.9, phi = 6.283185307179586 * urand_patches(rng);
+        double dist = r * (1.5 + 2.5 * urand_patches(rng)), h = sqrt(1 - z * z);
+        double dir[3] = {h * cos(phi), h * sin(phi), z};
+        memset(c, 0, sizeof *c);
+        c->fovy_deg = v->fovy_deg;
+        c->width = v->width;
+        c->height = v->height;
+        c->near_dist = v->near_dist;
+        c->pixel_error = v->pixel_error;
+        for (int k = 0; k < 3; k++) {
+            c->eye[k] = ctr[k] + dist * dir[k];
+            c->target[k] = info->lo[k] + urand_patches(rng) * (info->hi[k] - info->lo[k]);
+        }
+        if (tsr_camera_prepare(c))
+            return;
+    }
+}
+
+typedef struct boundary_edge {
+    double lo[3], hi[3];
+    uint32_t a, b;
+    bool unlinked;
+} boundary_edge;
+
+static int cmp_boundary_edge(const void *x, const void *y)
+{
+    const boundary_edge *a = x, *b = y;
+    return a->lo[0] < b->lo[0] ? -1 : a->lo[0] > b->lo[0];
+}
+
+static double seg_dist2(const float *p, const float *a, const float *b)
+{
+    double ab[3], ap[3], l2 = 0, t = 0;
+    for (int k = 0; k < 3; k++) {
+        ab[k] = (double)b[k] - a[k];
+        ap[k] = (double)p[k] - a[k];
+        l2 += ab[k] * ab[k];
+        t += ab[k] * ap[k];
+    }
+    t = l2 > 0 ? t / l2 : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += (ap[k] - t * ab[k]) * (ap[k] - t * ab[k]);
+    return d2;
+}
+
+/* The validator's test (tessellate/validate.c): p within eps of the
+ * segment ab, farther than eps from both ends along it. */
+static bool on_open_segment(const float *p, const float *a, const float *b, double eps)
+{
+    double ab[3], ap[3], l2 = 0, t = 0;
+    for (int k = 0; k < 3; k++) {
+        ab[k] = (double)b[k] - a[k];
+        ap[k] = (double)p[k] - a[k];
+        l2 += ab[k] * ab[k];
+        t += ab[k] * ap[k];
+    }
+    if (l2 <= 0)
+        return false;
+    t /= l2;
+    double len = sqrt(l2);
+    if (t * len <= eps || (1 - t) * len <= eps)
+        return false;
+    double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += (ap[k] - t * ab[k]) * (ap[k] - t * ab[k]);
+    return d2 <= eps * eps;
+}
+
+typedef struct seam_pair {
+    uint32_t edge, vertex;
+} seam_pair;
+
+static int cmp_seam_pair(const void *x, const void *y)
+{
+    const seam_pair *a = x, *b = y;
+    if (a->edge != b->edge)
+        return a->edge < b->edge ? -1 : 1;
+    return a->vertex < b->vertex ? -1 : a->vertex > b->vertex;
+}
+
+typedef struct boundary_report {
+    uint32_t boundary;       /* boundary edges */
+    uint32_t cracks;         /* boundary edges along another one, where ptess.h joins surfaces */
+    uint32_t seams;          /* the same along unlinked patch edges (non-manifold cage edges) */
+    uint32_t seam_junctions; /* (vertex, edge) T-junctions of tsr_mesh_validate between unlinked boundaries */
+} boundary_report;
+
+/* Cracks: boundary edges (one triangle) of the welded mesh lying within
+ * eps of another boundary edge (both endpoints within eps of its segment),
+ * found by a sweep along x. Half-edges marked in `unlinked` (may be NULL)
+ * lie where ptess.h joins nothing by contract (a non-manifold edge of a
+ * cage, where three or more sheets meet): coincidences among those are
+ * seams, not cracks, and the T-junctions that tsr_mesh_validate finds
+ * between them (a boundary vertex of one sheet inside a boundary edge of
+ * another, counted as the validator counts them, with the same eps) are
+ * counted in seam_junctions, to be discounted from its total. */
+static tsr_status check_boundary(const tsr_mesh *m, double eps, const bool *unlinked, boundary_report *rep)
+{
+    memset(rep, 0, sizeof *rep);
+    tsr_halfedges he;
+    if (tsr_halfedges_build(&he, m, NULL) != TSR_OK)
+        return TSR_ERR_NOMEM;
+    uint32_t nb = 0;
+    for (uint32_t h = 0; h < he.count; h++)
+        nb += he.twin[h] == TSR_NO_TWIN;
+    boundary_edge *e = malloc((nb ? nb : 1) * sizeof *e);
+    bool *hit = calloc(nb ? nb : 1, sizeof *hit);
+    seam_pair *pairs = NULL;
+    size_t npairs = 0, cap = 0;
+    tsr_status st = TSR_OK;
+    if (!e || !hit) {
+        st = TSR_ERR_NOMEM;
+        tsr_halfedges_free(&he);
+        goto done;
+    }
+    nb = 0;
+    for (uint32_t h = 0; h < he.count; h++) {
+        if (he.twin[h] != TSR_NO_TWIN)
+            continue;
+        boundary_edge *b = &e[nb++];
+        b->a = m->indices[h];
+        b->b = m->indices[3 * (h / 3) + (h % 3 + 1) % 3];
+        b->unlinked = unlinked && unlinked[h];
+        for (int k = 0; k < 3; k++) {
+            double pa = m->positions[3 * (size_t)b->a + k], pb = m->positions[3 * (size_t)b->b + k];
+            b->lo[k] = (pa < pb ? pa : pb) - eps;
+            b->hi[k] = (pa < pb ? pb : pa) + eps;
+        }
+    }
+    tsr_halfedges_free(&he);
+    qsort(e, nb, sizeof *e, cmp_boundary_edge);
+    double eps2 = eps * eps;
+    for (uint32_t i = 0; i < nb && st == TSR_OK; i++)
+        for (uint32_t j = i + 1; j < nb && e[j].lo[0] <= e[i].hi[0]; j++) {
+            if (e[j].lo[1] > e[i].hi[1] || e[j].hi[1] < e[i].lo[1] || e[j].lo[2] > e[i].hi[2] ||
+                e[j].hi[2] < e[i].lo[2])
+                continue;
+            const float *a0 = m->positions + 3 * (size_t)e[i].a, *a1 = m->positions + 3 * (size_t)e[i].b;
+            const float *b0 = m->positions + 3 * (size_t)e[j].a, *b1 = m->positions + 3 * (size_t)e[j].b;
+            if (seg_dist2(a0, b0, b1) <= eps2 && seg_dist2(a1, b0, b1) <= eps2)
+                hit[i] = true;
+            if (seg_dist2(b0, a0, a1) <= eps2 && seg_dist2(b1, a0, a1) <= eps2)
+                hit[j] = true;
+            if (!e[i].unlinked || !e[j].unlinked)
+                continue;
+            if (npairs + 4 > cap) {
+                size_t nc = cap ? 2 * cap : 256;
+                seam_pair *q = realloc(pairs, nc * sizeof *q);
+                if (!q) {
+                    st = TSR_ERR_NOMEM;
+                    break;
+                }
+                pairs = q;
+                cap = nc;
+            }
+            pairs[npairs++] = (seam_pair){i, e[j].a};
+            pairs[npairs++] = (seam_pair){i, e[j].b};
+            pairs[npairs++] = (seam_pair){j, e[i].a};
+            pairs[npairs++] = (seam_pair){j, e[i].b};
+        }
+    if (st != TSR_OK)
+        goto done;
+    for (uint32_t i = 0; i < nb; i++) {
+        rep->cracks += hit[i] && !e[i].unlinked;
+        rep->seams += hit[i] && e[i].unlinked;
+    }
+    rep->boundary = nb;
+    if (npairs)
+        qsort(pairs, npairs, sizeof *pairs, cmp_seam_pair);
+    for (size_t k = 0; k < npairs; k++) {
+        if (k > 0 && !cmp_seam_pair(&pairs[k], &pairs[k - 1]))
+            continue;
+        const boundary_edge *E = &e[pairs[k].edge];
+        if (pairs[k].vertex != E->a && pairs[k].vertex != E->b &&
+            on_open_segment(m->positions + 3 * (size_t)pairs[k].vertex, m->positions + 3 * (size_t)E->a,
+                            m->positions + 3 * (size_t)E->b, eps))
+            rep->seam_junctions++;
+    }
+done:
+    free(e);
+    free(hit);
+    free(pairs);
+    return st;
+}
+
+/* For a subdivision model: marks the half-edges of r's mesh that lie on a
+ * patch edge without neighbours (tsr_subd_patch_neighbours: the boundary,
+ * a non-manifold cage edge, a hole). NULL when out of memory. */
+static bool *subd_unlinked_halfedges(const tsr_pmodel *m, const tsr_subd *subd, const tsr_ptess_result *r)
+{
+    uint32_t nt = r->mesh.triangle_count;
+    bool *u = calloc(3 * (size_t)nt + 1, sizeof *u);
+    if (!u)
+        return NULL;
+    for (uint32_t t = 0; t < nt; t++) {
+        tsr_psource_info si;
+        if (!tsr_pmodel_source_info(m, r->tri_source[t], &si))
+            continue;
+        const double *uv = r->tri_uv + 6 * (size_t)t;
+        for (int k = 0; k < 3; k++) {
+            const double *p = uv + 2 * k, *q = uv + 2 * ((k + 1) % 3);
+            int edge = fabs(p[1]) < 1e-9 && fabs(q[1]) < 1e-9           ? 0
+                       : fabs(p[0] - 1) < 1e-9 && fabs(q[0] - 1) < 1e-9 ? 1
+                       : fabs(p[1] - 1) < 1e-9 && fabs(q[1] - 1) < 1e-9 ? 2
+                       : fabs(p[0]) < 1e-9 && fabs(q[0]) < 1e-9         ? 3
+                                                                        : -1;
+            tsr_subd_link links[2];
+            if (edge >= 0 && tsr_subd_patch_neighbours(subd, si.patch, si.sub, (uint32_t)edge, links) == 0)
+                u[3 * (size_t)t + k] = true;
+        }
+    }
+    return u;
+}
+
+/* One tessellation and its measurement. */
+typedef struct patch_run {
+    bool has_camera;
+    tsr_camera cam;
+    double tol; /* max_error (model units) or pixel_error */
+    tsr_ptess_measure_result meas;
+    double bound, seconds;
+    uint32_t triangles, vertices, leaves, rounds, rescaled;
+    boundary_report bnd;
+    uint32_t t_junctions;
+    bool watertight, conforming, ok;
+    char failed[600];  /* why the tessellation itself failed, or "" */
+    char invalid[300]; /* tsr_validation_describe of the mesh */
+} patch_run;
+
+/* Runs the tessellator (again, with smaller tolerances for the pieces of
+ * sources whose error is an estimate, while they measure beyond it), then
+ * validates the final mesh. CLI_FAIL only when out of memory; a failing
+ * check is recorded in pr. */
+static int patch_run_do(const tsr_pmodel *m, const tsr_pmodel_info *info, const tsr_subd *subd,
+                        const tsr_ptess_options *base, uint32_t per_side, uint32_t retries, double crack_eps,
+                        patch_run *pr)
+{
+    tsr_ptess_options o = *base;
+    o.camera = pr->has_camera ? &pr->cam : NULL;
+    double *scale = NULL;
+    tsr_ptess_result res;
+    tsr_error err = {0};
+    for (uint32_t round = 0;; round++) {
+        o.piece_scale = scale;
+        tsr_status st = tsr_ptess_run(m, &o, NULL, &res, &err);
+        if (st != TSR_OK) {
+            tsr_ptess_result_free(&res);
+            free(scale);
+            if (st == TSR_ERR_NOMEM) {
+                cli_error("check", "out of memory");
+                return CLI_FAIL;
+            }
+            snprintf(pr->failed, sizeof pr->failed, "tessellation failed: %s",
+                     err.message[0] ? err.message : tsr_status_str(st));
+            pr->ok = false;
+            return CLI_OK;
+        }
+        st = tsr_ptess_measure(m, &res, per_side, o.camera, true, NULL, &pr->meas);
+        if (st != TSR_OK) {
+            tsr_ptess_result_free(&res);
+            free(scale);
+            cli_error("check", "measuring the tessellation: %s", tsr_status_str(st));
+            return CLI_FAIL;
+        }
+        pr->rounds = round + 1;
+        uint32_t again = 0;
+        if (round < retries && !(pr->meas.max_error <= pr->tol * (1 + 1e-9))) {
+            for (uint32_t s = 0; s < info->sources; s++) {
+                double e = pr->meas.source_error[s];
+                tsr_psource_info si;
+                if (!(e <= pr->tol) && tsr_pmodel_source_info(m, s, &si) && (subd || si.trimmed)) {
+                    if (!scale) {
+                        scale = malloc((info->pieces ? info->pieces : 1) * sizeof *scale);
+                        if (!scale) {
+                            tsr_free(NULL, pr->meas.source_error);
+                            tsr_ptess_result_free(&res);
+                            cli_error("check", "out of memory");
+                            return CLI_FAIL;
+                        }
+                        for (uint32_t k = 0; k < info->pieces; k++)
+                            scale[k] = 1;
+                    }
+                    double f = 0.7 * pr->tol / e; /* at least halved each round */
+                    f = f > 0.5 ? 0.5 : f >= 1.0 / 64 ? f : 1.0 / 64;
+                    for (uint32_t b = 0; b < si.pieces_v; b++)
+                        for (uint32_t a = 0; a < si.pieces_u; a++) {
+                            size_t k = si.first_piece + (size_t)b * si.pieces_u + a;
+                            if (k < info->pieces)
+                                scale[k] = scale[k] * f >= 1e-6 ? scale[k] * f : 1e-6;
+                        }
+                    again += si.pieces_u * si.pieces_v;
+                }
+            }
+        }
+        tsr_free(NULL, pr->meas.source_error);
+        pr->meas.source_error = NULL;
+        if (!again)
+            break;
+        pr->rescaled += again;
+        tsr_ptess_result_free(&res);
+    }
+    free(scale);
+    pr->triangles = res.mesh.triangle_count;
+    pr->vertices = res.mesh.vertex_count;
+    pr->leaves = res.leaves;
+    pr->bound = res.bound;
+    pr->seconds = res.seconds;
+    tsr_validation val;
+    tsr_validate_options vo = {0};
+    vo.epsilon = crack_eps;
+    bool *unlinked = subd ? subd_unlinked_halfedges(m, subd, &res) : NULL;
+    if ((subd && !unlinked) || tsr_mesh_validate(&res.mesh, &vo, &val) != TSR_OK ||
+        check_boundary(&res.mesh, crack_eps, unlinked, &pr->bnd) != TSR_OK) {
+        free(unlinked);
+        tsr_ptess_result_free(&res);
+        cli_error("check", "out of memory");
+        return CLI_FAIL;
+    }
+    free(unlinked);
+    tsr_ptess_result_free(&res);
+    pr->watertight = val.bad_indices == 0 && val.nonfinite_positions == 0 && val.degenerate_triangles == 0 &&
+                     val.duplicate_triangles == 0 && val.nonmanifold_edges == 0 && val.misoriented_edges == 0 &&
+                     val.first_bad_triangle == UINT32_MAX && pr->bnd.cracks == 0;
+    /* T-junctions between sheets that ptess.h does not join are no
+     * failure; any other is */
+    pr->t_junctions =
+        val.t_junctions - (pr->bnd.seam_junctions < val.t_junctions ? pr->bnd.seam_junctions : val.t_junctions);
+    pr->conforming = pr->t_junctions == 0;
+    tsr_validation_describe(&val, pr->invalid, sizeof pr->invalid);
+    pr->ok = pr->meas.max_error <= pr->tol * (1 + 1e-9) && pr->meas.uncovered == 0 && pr->watertight &&
+             pr->conforming && pr->triangles > 0;
+    return CLI_OK;
+}
+
+/* " beyond-tolerance uncovered 3 cracks 2 ..." */
+static void patch_run_reasons(const patch_run *pr, char *buf, size_t cap)
+{
+    buf[0] = '\0';
+    if (pr->failed[0]) {
+        snprintf(buf, cap, " %s", pr->failed);
+        return;
+    }
+    size_t n = 0;
+    if (!(pr->meas.max_error <= pr->tol * (1 + 1e-9)))
+        n += (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " beyond-tolerance");
+    if (pr->meas.uncovered)
+        n +=
+            (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " uncovered %llu", (unsigned long long)pr->meas.uncovered);
+    if (pr->bnd.cracks)
+        n += (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " cracks %u", pr->bnd.cracks);
+    if (!pr->watertight && !pr->bnd.cracks)
+        n += (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " not-watertight (%s)", pr->invalid);
+    if (!pr->conforming)
+        n += (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " t-junctions %u", pr->t_junctions);
+    if (pr->triangles == 0)
+        n += (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " no-triangles");
+}
+
+static cJSON *patch_run_json(const patch_run *pr)
+{
+    cJSON *c = cJSON_CreateObject();
+    if (pr->has_camera) {
+        cJSON_AddItemToObject(c, "eye", cJSON_CreateDoubleArray(pr->cam.eye, 3));
+        cJSON_AddItemToObject(c, "target", cJSON_CreateDoubleArray(pr->cam.target, 3));
+        cJSON_AddNumberToObject(c, "max_pixel_error", pr->meas.max_error);
+        cJSON_AddNumberToObject(c, "rms_pixel_error", pr->meas.rms_error);
+    } else {
+        cJSON_AddNumberToObject(c, "max_error", pr->meas.max_error);
+        cJSON_AddNumberToObject(c, "rms_error", pr->meas.rms_error);
+        cJSON_AddNumberToObject(c, "tolerance", pr->tol);
+        cJSON_AddNumberToObject(c, "bound", pr->bound);
+    }
+    cJSON_AddBoolToObject(c, "watertight", pr->watertight);
+    cJSON_AddBoolToObject(c, "conforming", pr->conforming);
+    cJSON_AddNumberToObject(c, "triangles", pr->triangles);
+    cJSON_AddNumberToObject(c, "vertices", pr->vertices);
+    cJSON_AddNumberToObject(c, "leaves", pr->leaves);
+    cJSON_AddNumberToObject(c, "seconds", pr->seconds);
+    cJSON_AddNumberToObject(c, "samples", (double)pr->meas.samples);
+    cJSON_AddNumberToObject(c, "uncovered", (double)pr->meas.uncovered);
+    cJSON_AddNumberToObject(c, "trimmed_out", (double)pr->meas.trimmed_out);
+    cJSON_AddNumberToObject(c, "cracks", pr->bnd.cracks);
+    cJSON_AddNumberToObject(c, "t_junctions", pr->t_junctions);
+    cJSON_AddNumberToObject(c, "nonmanifold_seam_edges", pr->bnd.seams);
+    cJSON_AddNumberToObject(c, "nonmanifold_seam_junctions", pr->bnd.seam_junctions);
+    cJSON_AddNumberToObject(c, "boundary_edges", pr->bnd.boundary);
+    cJSON_AddNumberToObject(c, "rounds", pr->rounds);
+    cJSON_AddNumberToObject(c, "rescaled_pieces", pr->rescaled);
+    if (pr->meas.worst_source != UINT32_MAX) {
+        cJSON_AddNumberToObject(c, "worst_source", pr->meas.worst_source);
+        cJSON_AddItemToObject(c, "worst_uv", cJSON_CreateDoubleArray(pr->meas.worst_uv, 2));
+    }
+    if (pr->failed[0])
+        cJSON_AddStringToObject(c, "error", pr->failed);
+    cJSON_AddBoolToObject(c, "ok", pr->ok);
+    return c;
+}
+
+static int run_patches(int argc, char **argv)
+{
+    view_options v = {60, 1920, 1080, 0, 1};
+    const char *in = NULL;
+    uint32_t ncams = 8, seed = 1, tile = 4, max_level = 0, per_side = 64, retries = 6;
+    double max_error = 0;
+    int scheme = -1;
+    bool json = false;
+    char **cam_args = calloc((size_t)argc + 1, sizeof *cam_args);
+    int ncam_args = 0, rc = CLI_OK;
+    if (!cam_args) {
+        cli_error("check", "out of memory");
+        return CLI_FAIL;
+    }
+    for (int i = 2; i < argc && rc == CLI_OK; i++) {
+        const char *a = argv[i];
+        bool has_value = i + 1 < argc;
+        double d;
+        uint32_t u;
+        if (cli_is_help(a)) {
+            help_patches(stdout);
+            free(cam_args);
+            return CLI_OK;
+        } else if (!strcmp(a, "--json"))
+            json = true;
+        else if (!strcmp(a, "--camera") && has_value)
+            cam_args[ncam_args++] = argv[++i];
+        else if (!strcmp(a, "--scheme") && has_value) {
+            const char *sc = argv[++i];
+            if (strcmp(sc, "catmark") && strcmp(sc, "bilinear")) {
+                cli_error("check", "--scheme %s: use catmark or bilinear", sc);
+                rc = CLI_USAGE;
+            }
+            scheme = !strcmp(sc, "bilinear") ? TSR_SUBD_BILINEAR : TSR_SUBD_CATMARK;
+        } else if ((!strcmp(a, "--cameras") || !strcmp(a, "--seed") || !strcmp(a, "--tile") ||
+                    !strcmp(a, "--max-level") || !strcmp(a, "--samples") || !strcmp(a, "--retries")) &&
+                   has_value) {
+            bool cams = !strcmp(a, "--cameras"), sd = !strcmp(a, "--seed"), tl = !strcmp(a, "--tile");
+            bool ml = !strcmp(a, "--max-level"), sm = !strcmp(a, "--samples");
+            uint32_t lo = cams || sd || !strcmp(a, "--retries") ? 0 : tl || sm ? 2 : 1;
+            uint32_t hi = tl ? TSR_TILE_MAX : ml ? 12 : sm ? 4096 : cams ? 100000 : sd ? UINT32_MAX : 100;
+            if (!cli_parse_u32(argv[++i], lo, hi, &u) || (tl && u % 2)) {
+                cli_error("check", "%s %s: expected %s %u..%u", a, argv[i], tl ? "an even number in" : "a number in",
+                          lo, hi);
+                rc = CLI_USAGE;
+                break;
+            }
+            *(cams ? &ncams : sd ? &seed : tl ? &tile : ml ? &max_level : sm ? &per_side : &retries) = u;
+        } else if ((!strcmp(a, "--max-error") || !strcmp(a, "--pixel-error") || !strcmp(a, "--width") ||
+                    !strcmp(a, "--height") || !strcmp(a, "--fov") || !strcmp(a, "--near")) &&
+                   has_value) {
+            if (!cli_parse_double(argv[++i], &d) || !(d > 0) || (!strcmp(a, "--fov") && d >= 179)) {
+                cli_error("check", "%s %s: must be a positive number%s", a, argv[i],
+                          !strcmp(a, "--fov") ? " below 179" : "");
+                rc = CLI_USAGE;
+                break;
+            }
+            *(!strcmp(a, "--max-error")     ? &max_error
+              : !strcmp(a, "--pixel-error") ? &v.pixel_error
+              : !strcmp(a, "--width")       ? &v.width
+              : !strcmp(a, "--height")      ? &v.height
+              : !strcmp(a, "--fov")         ? &v.fovy_deg
+                                            : &v.near_dist) = d;
+        } else if (a[0] == '-' && a[1] != '\0') {
+            cli_error("check", "%s '%s' (see tessera check --help)", has_value ? "unknown option" : "missing value for",
+                      a);
+            rc = CLI_USAGE;
+        } else if (in) {
+            cli_error("check", "one input at a time ('%s' and '%s' given)", in, a);
+            rc = CLI_USAGE;
+        } else
+            in = a;
+    }
+    if (rc == CLI_OK && !in) {
+        cli_error("check", "no input file (see tessera check --help)");
+        rc = CLI_USAGE;
+    }
+    patch_input p;
+    memset(&p, 0, sizeof p);
+    if (rc == CLI_OK)
+        rc = load_patch_model(in, scheme, &p);
+    if (rc != CLI_OK) {
+        free(cam_args);
+        return rc;
+    }
+    tsr_pmodel_info info;
+    tsr_pmodel_get_info(p.model, &info);
+    double diag = 0;
+    for (int k = 0; k < 3; k++)
+        diag += (info.hi[k] - info.lo[k]) * (info.hi[k] - info.lo[k]);
+    diag = sqrt(diag);
+    if (!(diag > 0) || !isfinite(diag)) {
+        cli_error("check", "%s: the model has no extent (its box is a point)", in);
+        patch_input_free(&p);
+        free(cam_args);
+        return CLI_FAIL;
+    }
+    double tol = max_error > 0 ? max_error : 1e-3 * diag;
+    if (!(v.near_dist > 0))
+        v.near_dist = 1e-3 * diag;
+    int n = ncam_args ? ncam_args : (int)ncams;
+    patch_run *runs = calloc((size_t)n + 1, sizeof *runs);
+    if (!runs) {
+        cli_error("check", "out of memory");
+        rc = CLI_FAIL;
+    }
+    uint64_t rng = 0x9E3779B97F4A7C15ull * ((uint64_t)seed + 1);
+    for (int k = 0; k < n && rc == CLI_OK; k++) {
+        patch_run *r = &runs[k + 1];
+        r->has_camera = true;
+        r->tol = v.pixel_error;
+        if (!ncam_args)
+            random_patch_camera(&info, &rng, &v, &r->cam);
+        else if (!parse_camera(cam_args[k], &v, &r->cam)) {
+            cli_error("check",
+                      "--camera %s: expected EX,EY,EZ,TX,TY,TZ with eye != target, not looking straight "
+                      "up or down",
+                      cam_args[k]);
+            rc = CLI_USAGE;
+        }
+    }
+    tsr_ptess_options base = {0};
+    base.tile_n = tile;
+    base.max_level = max_level;
+    base.max_error = tol;
+    if (rc == CLI_OK && !json)
+        printf("input %s: %s, %u patches, %u pieces, %u linked edges, %u collapsed edges, %u mirrored, %u trimmed; "
+               "box diagonal %.6g\n",
+               in, p.kind, info.sources, info.pieces, info.links, info.collapsed_edges, info.mirrored,
+               info.trimmed_sources, diag);
+    int failures = 0, worst = 0;
+    char why[800];
+    for (int k = 0; k <= n && rc == CLI_OK; k++) {
+        patch_run *r = &runs[k];
+        if (k == 0)
+            r->tol = tol;
+        rc = patch_run_do(p.model, &info, p.subd, &base, per_side, retries, 1e-6 * diag, r);
+        if (rc != CLI_OK)
+            break;
+        failures += !r->ok;
+        if (k > 0 && (worst == 0 || r->meas.max_error > runs[worst].meas.max_error))
+            worst = k;
+        if (json)
+            continue;
+        patch_run_reasons(r, why, sizeof why);
+        char retried[128] = "";
+        if (r->rounds > 1)
+            snprintf(retried, sizeof retried, "  rounds %u (%u pieces rescaled)", r->rounds, r->rescaled);
+        if (r->bnd.seams)
+            snprintf(retried + strlen(retried), sizeof retried - strlen(retried), "  nonmanifold-seam-edges %u",
+                     r->bnd.seams);
+        if (k == 0)
+            printf(
+                "view-independent  max_error %.6g (tolerance %.6g, bound %.6g)  rms %.3g  triangles %u  vertices %u  "
+                "seconds %.3f%s  %s%s\n",
+                r->meas.max_error, r->tol, r->bound, r->meas.rms_error, r->triangles, r->vertices, r->seconds, retried,
+                r->ok ? "ok" : "FAIL", why);
+        else
+            printf("camera %3d  eye %.3g,%.3g,%.3g  max_pixel_error %.4f  triangles %7u  seconds %.3f%s  %s%s\n", k - 1,
+                   r->cam.eye[0], r->cam.eye[1], r->cam.eye[2], r->meas.max_error, r->triangles, r->seconds, retried,
+                   r->ok ? "ok" : "FAIL", why);
+    }
+    if (rc == CLI_OK) {
+        const patch_run *vi = &runs[0], *w = &runs[worst];
+        if (json) {
+            cJSON *j = cJSON_CreateObject();
+            cJSON_AddStringToObject(j, "input", in);
+            cJSON_AddStringToObject(j, "kind", p.kind);
+            cJSON_AddNumberToObject(j, "max_error", tol);
+            cJSON_AddNumberToObject(j, "pixel_error", v.pixel_error);
+            cJSON *mo = cJSON_AddObjectToObject(j, "model");
+            cJSON_AddNumberToObject(mo, "patches", info.sources);
+            cJSON_AddNumberToObject(mo, "pieces", info.pieces);
+            cJSON_AddNumberToObject(mo, "links", info.links);
+            cJSON_AddNumberToObject(mo, "collapsed_edges", info.collapsed_edges);
+            cJSON_AddNumberToObject(mo, "mirrored", info.mirrored);
+            cJSON_AddNumberToObject(mo, "trimmed", info.trimmed_sources);
+            cJSON_AddItemToObject(mo, "lo", cJSON_CreateDoubleArray(info.lo, 3));
+            cJSON_AddItemToObject(mo, "hi", cJSON_CreateDoubleArray(info.hi, 3));
+            cJSON_AddNumberToObject(mo, "diagonal", diag);
+            cJSON *vj = patch_run_json(vi);
+            cJSON_AddNumberToObject(vj, "patches", info.sources);
+            cJSON_AddItemToObject(j, "view_independent", vj);
+            cJSON *arr = cJSON_AddArrayToObject(j, "cameras");
+            for (int k = 1; k <= n; k++)
+                cJSON_AddItemToArray(arr, patch_run_json(&runs[k]));
+            if (n > 0) {
+                cJSON *wj = cJSON_AddObjectToObject(j, "worst");
+                cJSON_AddNumberToObject(wj, "camera", worst - 1);
+                cJSON_AddNumberToObject(wj, "max_pixel_error", w->meas.max_error);
+                if (w->meas.worst_source != UINT32_MAX) {
+                    cJSON_AddNumberToObject(wj, "source", w->meas.worst_source);
+                    cJSON_AddItemToObject(wj, "uv", cJSON_CreateDoubleArray(w->meas.worst_uv, 2));
+                }
+            }
+            cJSON_AddNumberToObject(j, "failures", failures);
+            char *txt = cJSON_Print(j);
+            printf("%s\n", txt);
+            free(txt);
+            cJSON_Delete(j);
+        } else {
+            printf("worst: ");
+            if (n > 0)
+                printf("camera %d, max_pixel_error %.4f px (tau %g) at patch %u (u %.6g, v %.6g); ", worst - 1,
+                       w->meas.max_error, v.pixel_error, w->meas.worst_source, w->meas.worst_uv[0],
+                       w->meas.worst_uv[1]);
+            printf("view-independent max_error %.6g (tolerance %.6g) at patch %u (u %.6g, v %.6g); %d of %d runs "
+                   "failed\n",
+                   vi->meas.max_error, tol, vi->meas.worst_source, vi->meas.worst_uv[0], vi->meas.worst_uv[1], failures,
+                   n + 1);
+        }
+        if (failures)
+            rc = CLI_FAIL;
+    }
+    free(runs);
+    free(cam_args);
+    patch_input_free(&p);
+    return rc;
+}
+
+static int run(int argc, char **argv)
+{
+    if (argc >= 2 && !strcmp(argv[1], "terrain"))
+        return run_terrain(argc, argv);
+    if (argc >= 2 && !strcmp(argv[1], "patches"))
+        return run_patches(argc, argv);
+    if (argc >= 2 && cli_is_help(argv[1])) {
+        help(stdout);
+        return CLI_OK;
+    }
+    cli_error("check", "what to check? 'tessera check terrain IN' or 'tessera check patches IN' (see tessera check "
+                       "--help)");
+    return CLI_USAGE;
+}
+
+const cli_command cli_cmd_check = {
+    "check", "tessellation error tests: 'check terrain IN', 'check patches IN' measure the bounds", run, help};

@@ -1,0 +1,1881 @@
+/* test_ptess.c: adaptive, crack-free tessellation of patches (patches/ptess.h),
+ * each property against an oracle written here, never against numbers
+ * taken from the code under test:
+ *  - surfaces whose Bézier / NURBS form is exact, written as OBJ free-form
+ *    text: a tilted plane (a parallelogram, which any tessellation meshes
+ *    exactly, and a planar trapezoid, bilinear in (u, v)), a quarter
+ *    cylinder and a sphere octant (rational quadratic arcs), the full
+ *    sphere from eight octants, mirrored, reversed and transposed, and a
+ *    bicubic B-spline of several knot spans. The oracle is the closed form
+ *    of the rational quadratic circle, x = ((1-t)^2 + sqrt2 t(1-t)) / D,
+ *    y = (sqrt2 t(1-t) + t^2) / D, D = (1-t)^2 + sqrt2 t(1-t) + t^2, and a
+ *    de Boor evaluation written here: every triangle is sampled at a
+ *    barycentric lattice (corners, edge midpoints and centroid included),
+ *    its (u, v) interpolated from tri_uv and its point from the mesh's
+ *    positions, and compared with the closed form at that (u, v) (the
+ *    parametric error ptess.h bounds) and with the implicit surface
+ *    (distance to the axis, |p| = 1);
+ *  - the welded mesh through tsr_mesh_validate: closed, conforming,
+ *    oriented, Euler characteristic, signed volume against 4/3 pi;
+ *  - view dependence: screen error by projecting the closed form and the
+ *    mesh point, and the near part denser than the far part;
+ *  - data: the Utah teapot against tsr_patch_eval, its open rims found by
+ *    matching control rows here; OpenSubdiv cages against tsr_subd_eval,
+ *    re-tessellated with piece_scale as the contract says the tool does;
+ *  - the contract's refusals.
+ * The mesh stores float positions, so "exact" means within a few float
+ * ulps of the model's size (fslack below). */
+#include "check.h"
+#include "patches/ptess.h"
+
+#include <float.h>
+#include <stdarg.h>
+
+static const double PI = 3.14159265358979323846;
+static const double H2 = 0.70710678118654752440; /* sqrt(2) / 2, the middle weight of a quarter circle */
+
+/* ---- text buffers ------------------------------------------------------------ */
+
+typedef struct sbuf {
+    char *s;
+    size_t n, cap;
+} sbuf;
+
+static void sb_printf(sbuf *b, const char *fmt, ...)
+{
+    for (;;) {
+        va_list ap;
+        va_start(ap, fmt);
+        int k = vsnprintf(b->s ? b->s + b->n : NULL, b->s ? b->cap - b->n : 0, fmt, ap);
+        va_end(ap);
+        if (k < 0)
+            abort();
+        if (b->s && b->n + (size_t)k < b->cap) {
+            b->n += (size_t)k;
+            return;
+        }
+        size_t cap = (b->cap + (size_t)k + 1) * 2;
+        char *s = realloc(b->s, cap);
+        if (!s)
+            abort();
+        b->s = s;
+        b->cap = cap;
+    }
+}
+
+/* ---- closed forms --------------------------------------------------------------- */
+
+/* The rational quadratic quarter circle from (1, 0) to (0, 1), control
+ * points (1, 0), (1, 1), (0, 1) with weights 1, sqrt2/2, 1. */
+static void qcircle(double t, double *x, double *y)
+{
+    double a = (1 - t) * (1 - t), b = 2 * t * (1 - t) * H2, c = t * t, d = a + b + c;
+    *x = (a + b) / d;
+    *y = (b + c) / d;
+}
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void cross3(const double a[3], const double b[3], double c[3])
+{
+    c[0] = a[1] * b[2] - a[2] * b[1];
+    c[1] = a[2] * b[0] - a[0] * b[2];
+    c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static double dist3(const double a[3], const double b[3])
+{
+    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/* B-spline basis functions of degree deg at u (The NURBS Book, A2.1 and
+ * A2.2): N[0..deg] are those of points span-deg .. span; returns span. */
+static int bspline_basis(const double *kn, int count, int deg, double u, double *N)
+{
+    int span = deg;
+    if (u >= kn[count])
+        span = count - 1;
+    else
+        while (span + 1 < count && kn[span + 1] <= u)
+            span++;
+    double left[8], right[8];
+    N[0] = 1;
+    for (int j = 1; j <= deg; j++) {
+        left[j] = u - kn[span + 1 - j];
+        right[j] = kn[span + j] - u;
+        double saved = 0;
+        for (int r = 0; r < j; r++) {
+            double t = N[r] / (right[r + 1] + left[j - r]);
+            N[r] = saved + right[r + 1] * t;
+            saved = left[j - r] * t;
+        }
+        N[j] = saved;
+    }
+    return span;
+}
+
+/* ---- models and results ------------------------------------------------------- */
+
+typedef struct live_count {
+    long live;
+    long calls;
+} live_count;
+
+static void *live_realloc(void *user, void *ptr, size_t size)
+{
+    live_count *c = user;
+    c->calls++;
+    if (size == 0) {
+        if (ptr)
+            c->live--;
+        free(ptr);
+        return NULL;
+    }
+    void *q = realloc(ptr, size);
+    if (q && !ptr)
+        c->live++;
+    return q;
+}
+
+static bool parse_set(const sbuf *text, const char *name, tsr_patch_set *set)
+{
+    tsr_error e = {0};
+    tsr_status st = tsr_patch_set_parse(text->s, text->n, name, TSR_PATCH_FORMAT_OBJ, NULL, set, &e);
+    CHECK_MSG(st == TSR_OK, "%s: %s", name, e.message);
+    return st == TSR_OK;
+}
+
+static bool make_model(const tsr_patch_set *set, tsr_pmodel **m)
+{
+    tsr_error e = {0};
+    *m = NULL;
+    tsr_status st = tsr_pmodel_from_set(set, NULL, m, &e);
+    CHECK_MSG(st == TSR_OK && *m, "tsr_pmodel_from_set: %s (%s)", tsr_status_str(st), e.message);
+    return st == TSR_OK && *m;
+}
+
+static bool run_ptess(const tsr_pmodel *m, const tsr_ptess_options *o, tsr_ptess_result *r)
+{
+    tsr_error e = {0};
+    tsr_status st = tsr_ptess_run(m, o, NULL, r, &e);
+    CHECK_MSG(st == TSR_OK, "tsr_ptess_run: %s (%s)", tsr_status_str(st), e.message);
+    if (st == TSR_OK)
+        CHECK(r->mesh.triangle_count > 0 && r->tri_source && r->tri_uv);
+    return st == TSR_OK && r->mesh.triangle_count > 0 && r->tri_source && r->tri_uv;
+}
+
+/* The largest absolute coordinate of the mesh. */
+static double mesh_maxabs(const tsr_mesh *m)
+{
+    double a = 0;
+    for (uint32_t k = 0; k < 3 * m->vertex_count; k++)
+        a = fmax(a, fabs((double)m->positions[k]));
+    return a;
+}
+
+/* Float rounding of positions of magnitude up to maxabs, with room for
+ * the interpolation: a few ulps. */
+static double fslack(double maxabs)
+{
+    return 8 * FLT_EPSILON * maxabs;
+}
+
+/* Checks what every result must satisfy: indices in range, sources in
+ * range, (u, v) in the source's domain, normals when asked. */
+static void check_shape(const tsr_pmodel *m, const tsr_ptess_result *r, bool normals)
+{
+    tsr_pmodel_info info;
+    tsr_pmodel_get_info(m, &info);
+    const tsr_mesh *me = &r->mesh;
+    uint32_t bad_index = 0, bad_source = 0, bad_uv = 0;
+    for (uint32_t t = 0; t < me->triangle_count; t++) {
+        for (int k = 0; k < 3; k++)
+            bad_index += me->indices[3 * t + k] >= me->vertex_count;
+        uint32_t s = r->tri_source[t];
+        tsr_psource_info si;
+        if (s >= info.sources || !tsr_pmodel_source_info(m, s, &si)) {
+            bad_source++;
+            continue;
+        }
+        double du = 1e-12 * (si.domain[1] - si.domain[0]), dv = 1e-12 * (si.domain[3] - si.domain[2]);
+        for (int k = 0; k < 3; k++) {
+            double u = r->tri_uv[6 * t + 2 * k], v = r->tri_uv[6 * t + 2 * k + 1];
+            bad_uv += !(u >= si.domain[0] - du && u <= si.domain[1] + du && v >= si.domain[2] - dv &&
+                        v <= si.domain[3] + dv);
+        }
+    }
+    CHECK_MSG(bad_index == 0, "%u indices out of range", bad_index);
+    CHECK_MSG(bad_source == 0, "%u triangles name no source", bad_source);
+    CHECK_MSG(bad_uv == 0, "%u triangle corners outside their source's domain", bad_uv);
+    CHECK(normals == (me->normals != NULL));
+}
+
+/* ---- sampling every triangle ------------------------------------------------------ */
+
+/* The true surface of source src at n parameter pairs uv: positions. */
+typedef void (*truth_fn)(void *ctx, uint32_t src, const double *uv, uint32_t n, double *pos);
+
+typedef struct sampling {
+    truth_fn truth;
+    void *ctx;
+    /* optional: distance of a point from the implicit surface */
+    double (*implicit)(void *ctx, const double q[3]);
+    /* optional: pixel error instead of (beside) model units */
+    const tsr_camera *camera;
+    /* optional: per source maximum of the parametric error */
+    double *source_error;
+    /* results */
+    double param_error;   /* max |S(u, v) - mesh(u, v)| */
+    double implicit_error; /* max implicit distance of mesh points */
+    double corner_error;  /* max |S(u, v) - vertex| at triangle corners */
+    double pixel_error;   /* max screen distance, samples in view */
+    uint64_t samples, in_view;
+    uint32_t worst_tri;
+    double worst_uv[2];
+} sampling;
+
+#define LAT 6 /* barycentric lattice i + j + k = LAT: 28 points per triangle */
+
+static void project(const tsr_camera *c, const double p[3], double *x, double *y, double *depth)
+{
+    double d[3] = {p[0] - c->eye[0], p[1] - c->eye[1], p[2] - c->eye[2]};
+    double r = dot3(d, c->right), u = dot3(d, c->up), f = dot3(d, c->fwd);
+    *depth = f;
+    *x = c->width / 2 + c->K * r / f;
+    *y = c->height / 2 - c->K * u / f;
+}
+
+static void sample_result(const tsr_ptess_result *r, sampling *s)
+{
+    const tsr_mesh *m = &r->mesh;
+    double uv[2 * 28], pos[3 * 28], q[3 * 28], lam[3 * 28];
+    uint32_t n = 0;
+    for (int i = 0; i <= LAT; i++)
+        for (int j = 0; j + i <= LAT; j++) {
+            lam[3 * n] = (double)i / LAT;
+            lam[3 * n + 1] = (double)j / LAT;
+            lam[3 * n + 2] = (double)(LAT - i - j) / LAT;
+            n++;
+        }
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t *ix = m->indices + 3 * t;
+        if (ix[0] >= m->vertex_count || ix[1] >= m->vertex_count || ix[2] >= m->vertex_count)
+            continue;
+        const double *tuv = r->tri_uv + 6 * t;
+        for (uint32_t k = 0; k < n; k++) {
+            const double *l = lam + 3 * k;
+            uv[2 * k] = l[0] * tuv[0] + l[1] * tuv[2] + l[2] * tuv[4];
+            uv[2 * k + 1] = l[0] * tuv[1] + l[1] * tuv[3] + l[2] * tuv[5];
+            for (int c = 0; c < 3; c++)
+                q[3 * k + c] = l[0] * m->positions[3 * ix[0] + c] + l[1] * m->positions[3 * ix[1] + c] +
+                               l[2] * m->positions[3 * ix[2] + c];
+        }
+        s->truth(s->ctx, r->tri_source[t], uv, n, pos);
+        for (uint32_t k = 0; k < n; k++) {
+            double e = dist3(pos + 3 * k, q + 3 * k);
+            bool corner = lam[3 * k] == 1 || lam[3 * k + 1] == 1 || lam[3 * k + 2] == 1;
+            if (corner)
+                s->corner_error = fmax(s->corner_error, e);
+            if (e > s->param_error) {
+                s->param_error = e;
+                s->worst_tri = t;
+                s->worst_uv[0] = uv[2 * k];
+                s->worst_uv[1] = uv[2 * k + 1];
+            }
+            if (s->source_error)
+                s->source_error[r->tri_source[t]] = fmax(s->source_error[r->tri_source[t]], e);
+            if (s->implicit)
+                s->implicit_error = fmax(s->implicit_error, s->implicit(s->ctx, q + 3 * k));
+            if (s->camera) {
+                double px, py, pd, qx, qy, qd;
+                project(s->camera, pos + 3 * k, &px, &py, &pd);
+                project(s->camera, q + 3 * k, &qx, &qy, &qd);
+                bool inside_p = px >= 0 && px <= s->camera->width && py >= 0 && py <= s->camera->height;
+                bool inside_q = qx >= 0 && qx <= s->camera->width && qy >= 0 && qy <= s->camera->height;
+                if (pd > s->camera->near_dist && qd > s->camera->near_dist && (inside_p || inside_q)) {
+                    s->pixel_error = fmax(s->pixel_error, hypot(px - qx, py - qy));
+                    s->in_view++;
+                }
+            }
+            s->samples++;
+        }
+    }
+}
+
+/* After a refusal the result must be zeroed (so freeing it is safe):
+ * checked, and freed only when it is. */
+static void check_zeroed_and_free(tsr_ptess_result *r, const char *what)
+{
+    bool zeroed = r->mesh.triangle_count == 0 && r->mesh.vertex_count == 0 && r->mesh.positions == NULL &&
+                  r->mesh.indices == NULL && r->mesh.normals == NULL && r->tri_source == NULL && r->tri_uv == NULL;
+    CHECK_MSG(zeroed, "%s: the result is not zeroed after a refusal", what);
+    if (zeroed)
+        tsr_ptess_result_free(r);
+}
+
+static tsr_validation validate(const tsr_mesh *m)
+{
+    tsr_validation v;
+    memset(&v, 0, sizeof v);
+    CHECK(tsr_mesh_validate(m, NULL, &v) == TSR_OK);
+    return v;
+}
+
+static void describe(const char *what, const tsr_validation *v)
+{
+    char buf[1024];
+    tsr_validation_describe(v, buf, sizeof buf);
+    fprintf(stderr, "  %s: V %u E %u F %u euler %lld boundary %u loops %u: %s\n", what, v->vertices, v->edges,
+            v->triangles, (long long)v->euler, v->boundary_edges, v->boundary_loops, buf);
+}
+
+/* The conformity every tessellation promises: oriented, edge-manifold,
+ * no T-junction, nothing degenerate or repeated. */
+static void check_conforming(const char *what, const tsr_validation *v)
+{
+    CHECK_MSG(v->bad_indices == 0 && v->nonfinite_positions == 0, "%s", what);
+    CHECK_MSG(v->degenerate_triangles == 0, "%s: %u degenerate triangles, first %u", what, v->degenerate_triangles,
+              v->first_degenerate);
+    CHECK_MSG(v->duplicate_triangles == 0, "%s: %u duplicate triangles", what, v->duplicate_triangles);
+    CHECK_MSG(v->nonmanifold_edges == 0, "%s: %u non-manifold edges", what, v->nonmanifold_edges);
+    CHECK_MSG(v->misoriented_edges == 0, "%s: %u misoriented edges", what, v->misoriented_edges);
+    CHECK_MSG(v->t_junctions == 0, "%s: %u T-junctions, first vertex %u on edge %u-%u", what, v->t_junctions,
+              v->first_t_junction[0], v->first_t_junction[1], v->first_t_junction[2]);
+}
+
+static double signed_volume(const tsr_mesh *m)
+{
+    double vol = 0;
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        double p[3][3];
+        for (int k = 0; k < 3; k++)
+            for (int c = 0; c < 3; c++)
+                p[k][c] = m->positions[3 * m->indices[3 * t + k] + c];
+        double x[3];
+        cross3(p[1], p[2], x);
+        vol += dot3(p[0], x) / 6;
+    }
+    return vol;
+}
+
+static void face_normal(const tsr_mesh *m, uint32_t t, double n[3])
+{
+    double p[3][3];
+    for (int k = 0; k < 3; k++)
+        for (int c = 0; c < 3; c++)
+            p[k][c] = m->positions[3 * m->indices[3 * t + k] + c];
+    double a[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+    double b[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+    cross3(a, b, n);
+}
+
+/* Vertex normals: unit, and on the side the triangles face. Returns the
+ * number of corners whose normal opposes its triangle. */
+static uint32_t check_normals_agree(const tsr_mesh *m, const char *what)
+{
+    uint32_t not_unit = 0, opposed = 0;
+    if (!m->normals)
+        return 0;
+    for (uint32_t v = 0; v < m->vertex_count; v++) {
+        const float *n = m->normals + 3 * v;
+        not_unit += fabs(sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]) - 1) > 1e-5;
+    }
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        double fn[3];
+        face_normal(m, t, fn);
+        for (int k = 0; k < 3; k++) {
+            const float *n = m->normals + 3 * m->indices[3 * t + k];
+            double nd[3] = {n[0], n[1], n[2]};
+            opposed += dot3(nd, fn) <= 0;
+        }
+    }
+    CHECK_MSG(not_unit == 0, "%s: %u normals not of unit length", what, not_unit);
+    CHECK_MSG(opposed == 0, "%s: %u corners whose normal opposes the triangle's winding", what, opposed);
+    return opposed;
+}
+
+/* ---- the plane -------------------------------------------------------------------- */
+
+/* A tilted frame: origin o, orthonormal e1, e2, normal n = e1 x e2. */
+static const double plane_o[3] = {1, -2, 0.5};
+static const double plane_e1[3] = {2.0 / 3, 1.0 / 3, 2.0 / 3};
+static const double plane_e2[3] = {-0.44721359549995794, 0.89442719099991588, 0}; /* (-1, 2, 0) / sqrt5 */
+
+static void plane_point(double a, double b, double p[3])
+{
+    for (int c = 0; c < 3; c++)
+        p[c] = plane_o[c] + a * plane_e1[c] + b * plane_e2[c];
+}
+
+/* Corners in the plane's (a, b): a bilinear patch over them. */
+typedef struct quad4 {
+    double a[4], b[4]; /* (0,0), (1,0), (0,1), (1,1) */
+} quad4;
+
+static void quad_truth(void *ctx, uint32_t src, const double *uv, uint32_t n, double *pos)
+{
+    const quad4 *q = ctx;
+    (void)src;
+    for (uint32_t k = 0; k < n; k++) {
+        double u = uv[2 * k], v = uv[2 * k + 1];
+        double w[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
+        double a = 0, b = 0;
+        for (int c = 0; c < 4; c++) {
+            a += w[c] * q->a[c];
+            b += w[c] * q->b[c];
+        }
+        plane_point(a, b, pos + 3 * k);
+    }
+}
+
+static double plane_distance(void *ctx, const double q[3])
+{
+    (void)ctx;
+    double n[3], d[3] = {q[0] - plane_o[0], q[1] - plane_o[1], q[2] - plane_o[2]};
+    cross3(plane_e1, plane_e2, n);
+    return fabs(dot3(d, n));
+}
+
+static void quad_obj(sbuf *b, const quad4 *q)
+{
+    for (int c = 0; c < 4; c++) {
+        double p[3];
+        plane_point(q->a[c], q->b[c], p);
+        sb_printf(b, "v %.17g %.17g %.17g\n", p[0], p[1], p[2]);
+    }
+    sb_printf(b, "cstype bezier\ndeg 1 1\nsurf 0 1 0 1 -4 -3 -2 -1\nend\n");
+}
+
+/* A parallelogram is linear in (u, v): the root tile of every tile size
+ * is exact, so one leaf, tile_n^2 quads, a zero bound. */
+TEST(plane_parallelogram_exact)
+{
+    quad4 q = {{0, 3, 0.8, 3.8}, {0, 0, 1.3, 1.3}};
+    sbuf b = {0};
+    quad_obj(&b, &q);
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "parallelogram.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        CHECK(info.sources == 1 && info.pieces == 1 && info.links == 0 && info.collapsed_edges == 0 &&
+              info.mirrored == 0 && info.trimmed_sources == 0);
+        const uint32_t tiles[] = {2, 4, 8, 16};
+        for (int ti = 0; ti < 4; ti++)
+            for (double E = 1e-1; E >= 1e-6; E /= 100) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                o.tile_n = tiles[ti];
+                tsr_ptess_result r;
+                if (run_ptess(m, &o, &r)) {
+                    check_shape(m, &r, false);
+                    CHECK_MSG(r.leaves == 1, "tile %u E %g: %u leaves for a linear patch", tiles[ti], E, r.leaves);
+                    CHECK_MSG(r.mesh.triangle_count == 2 * tiles[ti] * tiles[ti], "tile %u: %u triangles", tiles[ti],
+                              r.mesh.triangle_count);
+                    CHECK_MSG(r.bound <= 1e-12 * 4, "bound %g", r.bound);
+                    sampling s = {quad_truth, &q, plane_distance, NULL, NULL, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+                    sample_result(&r, &s);
+                    double sl = fslack(mesh_maxabs(&r.mesh));
+                    CHECK_MSG(s.implicit_error <= sl, "off the plane by %g", s.implicit_error);
+                    CHECK_MSG(s.param_error <= sl, "parametric error %g", s.param_error);
+                    tsr_validation v = validate(&r.mesh);
+                    check_conforming("parallelogram", &v);
+                    CHECK(v.boundary_loops == 1 && v.euler == 1);
+                }
+                tsr_ptess_result_free(&r);
+            }
+        /* the measurement agrees */
+        tsr_ptess_options o = {0};
+        o.max_error = 1e-3;
+        tsr_ptess_result r;
+        if (run_ptess(m, &o, &r)) {
+            tsr_ptess_measure_result mr;
+            memset(&mr, 0, sizeof mr);
+            CHECK(tsr_ptess_measure(m, &r, 9, NULL, false, NULL, &mr) == TSR_OK);
+            CHECK_MSG(mr.max_error <= fslack(5), "measured %g", mr.max_error);
+            CHECK(mr.uncovered == 0 && mr.samples >= 81);
+        }
+        tsr_ptess_result_free(&r);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* A planar trapezoid is bilinear in (u, v): every point stays in the
+ * plane whatever the tessellation, and the parametric error is bounded. */
+TEST(plane_trapezoid_bilinear)
+{
+    quad4 q = {{0, 3, 0.4, 2.1}, {0, 0, 1.3, 1.6}};
+    sbuf b = {0};
+    quad_obj(&b, &q);
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "trapezoid.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        for (double E = 1e-1; E >= 1e-4; E /= 10) {
+            tsr_ptess_options o = {0};
+            o.max_error = E;
+            o.normals = true;
+            tsr_ptess_result r;
+            if (run_ptess(m, &o, &r)) {
+                check_shape(m, &r, true);
+                sampling s = {quad_truth, &q, plane_distance, NULL, NULL, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+                sample_result(&r, &s);
+                double sl = fslack(mesh_maxabs(&r.mesh));
+                CHECK_MSG(s.implicit_error <= sl, "E %g: off the plane by %g", E, s.implicit_error);
+                CHECK_MSG(s.param_error <= E + sl, "E %g: parametric error %g at (%g, %g)", E, s.param_error,
+                          s.worst_uv[0], s.worst_uv[1]);
+                CHECK_MSG(s.param_error <= r.bound + sl, "E %g: error %g beyond the reported bound %g", E,
+                          s.param_error, r.bound);
+                CHECK_MSG(r.bound <= E, "bound %g > E %g", r.bound, E);
+                CHECK_MSG(s.corner_error <= sl, "corner error %g", s.corner_error);
+                /* the true normal of a plane is its normal */
+                double n[3];
+                cross3(plane_e1, plane_e2, n);
+                uint32_t off = 0;
+                for (uint32_t v = 0; v < r.mesh.vertex_count; v++) {
+                    const float *vn = r.mesh.normals + 3 * v;
+                    double c = vn[0] * n[0] + vn[1] * n[1] + vn[2] * n[2];
+                    if (fabs(c - 1) > 1e-6 && off++ == 0)
+                        fprintf(stderr, "  vertex %u (%g %g %g): normal (%g %g %g), want (%g %g %g)\n", v,
+                                r.mesh.positions[3 * v], r.mesh.positions[3 * v + 1], r.mesh.positions[3 * v + 2],
+                                vn[0], vn[1], vn[2], n[0], n[1], n[2]);
+                }
+                CHECK_MSG(off == 0, "%u normals off the plane's normal", off);
+                tsr_validation v = validate(&r.mesh);
+                check_conforming("trapezoid", &v);
+                CHECK(v.boundary_loops == 1 && v.euler == 1);
+            }
+            tsr_ptess_result_free(&r);
+        }
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* ---- the quarter cylinder ----------------------------------------------------------- */
+
+typedef struct cylinder {
+    double cx, cy, z0, R, H;
+} cylinder;
+
+static void cyl_truth(void *ctx, uint32_t src, const double *uv, uint32_t n, double *pos)
+{
+    const cylinder *c = ctx;
+    (void)src;
+    for (uint32_t k = 0; k < n; k++) {
+        double x, y;
+        qcircle(uv[2 * k], &x, &y);
+        pos[3 * k] = c->cx + c->R * x;
+        pos[3 * k + 1] = c->cy + c->R * y;
+        pos[3 * k + 2] = c->z0 + c->H * uv[2 * k + 1];
+    }
+}
+
+static double cyl_distance(void *ctx, const double q[3])
+{
+    const cylinder *c = ctx;
+    return fabs(hypot(q[0] - c->cx, q[1] - c->cy) - c->R);
+}
+
+static void cyl_obj(sbuf *b, const cylinder *c)
+{
+    const double A[3][2] = {{1, 0}, {1, 1}, {0, 1}}, w[3] = {1, H2, 1};
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 3; i++)
+            sb_printf(b, "v %.17g %.17g %.17g %.17g\n", c->cx + c->R * A[i][0], c->cy + c->R * A[i][1],
+                      c->z0 + c->H * j, w[i]);
+    sb_printf(b, "cstype rat bezier\ndeg 2 1\nsurf 0 1 0 1 -6 -5 -4 -3 -2 -1\nend\n");
+}
+
+TEST(quarter_cylinder_error)
+{
+    cylinder c = {0.5, -1.25, 0.25, 2, 3};
+    sbuf b = {0};
+    cyl_obj(&b, &c);
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "cylinder.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    live_count lc = {0, 0};
+    tsr_allocator al = {live_realloc, &lc};
+    tsr_error e = {0};
+    tsr_status st = tsr_pmodel_from_set(&set, &al, &m, &e);
+    CHECK_MSG(st == TSR_OK && m, "%s", e.message);
+    if (st == TSR_OK && m) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        CHECK(info.sources == 1 && info.pieces == 1 && info.links == 0 && info.collapsed_edges == 0);
+        CHECK_NEAR(info.lo[0], c.cx, 1e-12);
+        CHECK_NEAR(info.hi[0], c.cx + c.R, 1e-12);
+        CHECK_NEAR(info.lo[2], c.z0, 1e-12);
+        CHECK_NEAR(info.hi[2], c.z0 + c.H, 1e-12);
+        tsr_psource_info si;
+        CHECK(tsr_pmodel_source_info(m, 0, &si));
+        CHECK(si.patch == 0 && si.first_piece == 0 && si.pieces_u == 1 && si.pieces_v == 1 && !si.trimmed &&
+              !si.mirrored);
+        CHECK(si.domain[0] == 0 && si.domain[1] == 1 && si.domain[2] == 0 && si.domain[3] == 1);
+        CHECK(!tsr_pmodel_source_info(m, 1, &si));
+        /* the source's true surface, against the closed form */
+        for (int k = 0; k < 49; k++) {
+            double uv[2] = {(k % 7) / 6.0, (k / 7) / 6.0}, want[3], got[3], n[3];
+            cyl_truth(&c, 0, uv, 1, want);
+            CHECK(tsr_pmodel_eval(m, 0, uv[0], uv[1], got, n) == TSR_OK);
+            CHECK(dist3(want, got) <= 1e-12);
+            /* outward: du x dv of this net points away from the axis */
+            double radial[3] = {want[0] - c.cx, want[1] - c.cy, 0};
+            CHECK_NEAR(dot3(n, radial), c.R, 1e-9);
+        }
+        double pos[3];
+        CHECK(tsr_pmodel_eval(m, 1, 0.5, 0.5, pos, NULL) == TSR_ERR_ARGUMENT);
+
+        const uint32_t tiles[] = {2, 4, 8, 16};
+        uint32_t prev_tris[4] = {0, 0, 0, 0};
+        for (double E = 1e-1; E >= 0.99e-4; E /= 10)
+            for (int ti = 0; ti < 4; ti++) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                o.tile_n = tiles[ti];
+                o.normals = ti == 1;
+                tsr_ptess_result r;
+                st = tsr_ptess_run(m, &o, &al, &r, &e);
+                CHECK_MSG(st == TSR_OK, "E %g tile %u: %s", E, tiles[ti], e.message);
+                if (st == TSR_OK) {
+                    check_shape(m, &r, o.normals);
+                    sampling s = {cyl_truth, &c, cyl_distance, NULL, NULL, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+                    sample_result(&r, &s);
+                    double sl = fslack(mesh_maxabs(&r.mesh));
+                    CHECK_MSG(s.param_error <= E + sl, "E %g tile %u: parametric error %g at (%.9g, %.9g)", E,
+                              tiles[ti], s.param_error, s.worst_uv[0], s.worst_uv[1]);
+                    CHECK_MSG(s.implicit_error <= E + sl, "E %g tile %u: %g off the cylinder", E, tiles[ti],
+                              s.implicit_error);
+                    CHECK_MSG(s.param_error <= r.bound + sl, "E %g tile %u: error %g beyond the reported bound %g", E,
+                              tiles[ti], s.param_error, r.bound);
+                    CHECK_MSG(r.bound <= E, "E %g tile %u: bound %g", E, tiles[ti], r.bound);
+                    CHECK_MSG(s.corner_error <= sl, "corner error %g", s.corner_error);
+                    CHECK_MSG(r.mesh.triangle_count >= prev_tris[ti], "E %g tile %u: %u triangles, coarser than %u", E,
+                              tiles[ti], r.mesh.triangle_count, prev_tris[ti]);
+                    prev_tris[ti] = r.mesh.triangle_count;
+                    tsr_validation v = validate(&r.mesh);
+                    check_conforming("cylinder", &v);
+                    CHECK(v.boundary_loops == 1 && v.euler == 1 && v.coincident_vertices == 0);
+                    if (o.normals) {
+                        /* the true normal: radial, outward */
+                        uint32_t off = 0;
+                        for (uint32_t k = 0; k < r.mesh.vertex_count; k++) {
+                            const float *p = r.mesh.positions + 3 * k, *n = r.mesh.normals + 3 * k;
+                            double rx = p[0] - c.cx, ry = p[1] - c.cy, l = hypot(rx, ry);
+                            off += (n[0] * rx + n[1] * ry) / l < 1 - 1e-6 || fabs(n[2]) > 1e-3;
+                        }
+                        CHECK_MSG(off == 0, "%u normals not radial", off);
+                    }
+                    tsr_ptess_measure_result mr;
+                    memset(&mr, 0, sizeof mr);
+                    if (ti == 1) {
+                        CHECK(tsr_ptess_measure(m, &r, 9, NULL, true, &al, &mr) == TSR_OK);
+                        CHECK_MSG(mr.max_error <= E + sl, "E %g: measured %g", E, mr.max_error);
+                        CHECK(mr.uncovered == 0 && mr.trimmed_out == 0 && mr.samples >= 81);
+                        CHECK(mr.source_error != NULL);
+                        if (mr.source_error)
+                            CHECK_NEAR(mr.source_error[0], mr.max_error, 0);
+                        tsr_free(&al, mr.source_error);
+                    }
+                }
+                tsr_ptess_result_free(&r);
+            }
+    }
+    tsr_pmodel_destroy(m);
+    CHECK_MSG(lc.live == 0, "%ld blocks of the allocator not freed", lc.live);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* ---- spheres ---------------------------------------------------------------------- */
+
+/* An octant of the unit sphere: the tensor product of two quarter
+ * circles, S(u, v) = (X(u) X(v), Y(u) X(v), Y(v)), pole at v = 1 (a
+ * collapsed edge), mirrored by signs, its net optionally reversed along
+ * its first index (u -> 1 - u) and then transposed (u <-> v). */
+typedef struct octant {
+    int sx, sy, sz;
+    bool rev, transpose;
+} octant;
+
+static void octant_point(const octant *o, double u, double v, double p[3])
+{
+    if (o->rev)
+        u = 1 - u;
+    if (o->transpose) {
+        double t = u;
+        u = v;
+        v = t;
+    }
+    double xu, yu, xv, yv;
+    qcircle(u, &xu, &yu);
+    qcircle(v, &xv, &yv);
+    p[0] = o->sx * xu * xv;
+    p[1] = o->sy * yu * xv;
+    p[2] = o->sz * yv;
+}
+
+static bool octant_outward(const octant *o)
+{
+    int flips = (o->sx < 0) + (o->sy < 0) + (o->sz < 0) + o->rev + o->transpose;
+    return flips % 2 == 0;
+}
+
+static void octant_obj(sbuf *b, const octant *o)
+{
+    const double A[3][2] = {{1, 0}, {1, 1}, {0, 1}}, w[3] = {1, H2, 1};
+    for (int j = 0; j < 3; j++)
+        for (int i = 0; i < 3; i++) {
+            int a = o->rev ? 2 - i : i, c = j;
+            if (o->transpose) {
+                int t = a;
+                a = c;
+                c = t;
+            }
+            /* net point (a, c) of the octant +++ */
+            double p[3] = {A[a][0] * A[c][0], A[a][1] * A[c][0], A[c][1]};
+            sb_printf(b, "v %.17g %.17g %.17g %.17g\n", o->sx * p[0] + 0.0, o->sy * p[1] + 0.0, o->sz * p[2] + 0.0,
+                      w[a] * w[c]);
+        }
+    sb_printf(b, "cstype rat bezier\ndeg 2 2\nsurf 0 1 0 1 -9 -8 -7 -6 -5 -4 -3 -2 -1\nend\n");
+}
+
+typedef struct octants {
+    const octant *o;
+    uint32_t n;
+} octants;
+
+static void octants_truth(void *ctx, uint32_t src, const double *uv, uint32_t n, double *pos)
+{
+    const octants *os = ctx;
+    for (uint32_t k = 0; k < n; k++) {
+        if (src < os->n)
+            octant_point(&os->o[src], uv[2 * k], uv[2 * k + 1], pos + 3 * k);
+        else
+            pos[3 * k] = pos[3 * k + 1] = pos[3 * k + 2] = NAN;
+    }
+}
+
+static double sphere_distance(void *ctx, const double q[3])
+{
+    (void)ctx;
+    return fabs(sqrt(dot3(q, q)) - 1);
+}
+
+/* Mesh vertices within tol of p. */
+static uint32_t vertices_at(const tsr_mesh *m, const double p[3], double tol)
+{
+    uint32_t n = 0;
+    for (uint32_t v = 0; v < m->vertex_count; v++) {
+        double q[3] = {m->positions[3 * v], m->positions[3 * v + 1], m->positions[3 * v + 2]};
+        n += dist3(p, q) <= tol;
+    }
+    return n;
+}
+
+/* Normals along p / |p| (or against it, sign -1). */
+static uint32_t normals_off_radial(const tsr_mesh *m, double sign, double tol)
+{
+    uint32_t off = 0;
+    for (uint32_t v = 0; m->normals && v < m->vertex_count; v++) {
+        const float *p = m->positions + 3 * v, *n = m->normals + 3 * v;
+        double l = sqrt((double)p[0] * p[0] + (double)p[1] * p[1] + (double)p[2] * p[2]);
+        double c = sign * (n[0] * p[0] + n[1] * p[1] + n[2] * p[2]) / l;
+        off += c < 1 - tol;
+    }
+    return off;
+}
+
+TEST(sphere_octant_pole)
+{
+    const octant o = {1, 1, 1, false, false};
+    octants os = {&o, 1};
+    sbuf b = {0};
+    octant_obj(&b, &o);
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "octant.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        CHECK_MSG(info.sources == 1 && info.pieces == 1 && info.collapsed_edges == 1 && info.links == 0,
+                  "sources %u pieces %u collapsed %u links %u", info.sources, info.pieces, info.collapsed_edges,
+                  info.links);
+        const uint32_t tiles[] = {2, 4, 8, 16};
+        for (double E = 1e-1; E >= 0.99e-4; E /= 10)
+            for (int ti = 0; ti < 4; ti++) {
+                tsr_ptess_options o2 = {0};
+                o2.max_error = E;
+                o2.tile_n = tiles[ti];
+                o2.normals = true;
+                tsr_ptess_result r;
+                if (!run_ptess(m, &o2, &r)) {
+                    tsr_ptess_result_free(&r);
+                    continue;
+                }
+                check_shape(m, &r, true);
+                sampling s = {octants_truth, &os, sphere_distance, NULL, NULL, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+                sample_result(&r, &s);
+                double sl = fslack(1);
+                CHECK_MSG(s.param_error <= E + sl, "E %g tile %u: parametric error %g at (%.9g, %.9g)", E, tiles[ti],
+                          s.param_error, s.worst_uv[0], s.worst_uv[1]);
+                CHECK_MSG(s.implicit_error <= E + sl, "E %g tile %u: %g off the sphere", E, tiles[ti],
+                          s.implicit_error);
+                CHECK_MSG(s.param_error <= r.bound + sl, "E %g: error %g beyond the bound %g", E, s.param_error,
+                          r.bound);
+                CHECK_MSG(r.bound <= E, "E %g: bound %g", E, r.bound);
+                CHECK_MSG(s.corner_error <= sl, "corner error %g", s.corner_error);
+                /* the pole: one vertex; no repeated corner, no zero area */
+                const double pole[3] = {0, 0, 1};
+                uint32_t at_pole = vertices_at(&r.mesh, pole, 1e-6);
+                CHECK_MSG(at_pole == 1, "E %g tile %u: %u vertices at the pole", E, tiles[ti], at_pole);
+                tsr_validation v = validate(&r.mesh);
+                check_conforming("octant", &v);
+                CHECK_MSG(v.boundary_loops == 1 && v.euler == 1 && v.coincident_vertices == 0,
+                          "loops %u euler %lld coincident %u", v.boundary_loops, (long long)v.euler,
+                          v.coincident_vertices);
+                /* the true normals: radial, outward (|n| = 1 checked there) */
+                check_normals_agree(&r.mesh, "octant");
+                uint32_t off = normals_off_radial(&r.mesh, 1, 1e-6);
+                CHECK_MSG(off == 0, "E %g: %u normals not along p / |p|", E, off);
+                if (E > 0.5e-2 && ti == 1) {
+                    tsr_ptess_measure_result mr;
+                    memset(&mr, 0, sizeof mr);
+                    CHECK(tsr_ptess_measure(m, &r, 9, NULL, false, NULL, &mr) == TSR_OK);
+                    CHECK_MSG(mr.max_error <= E + sl, "E %g: measured %g", E, mr.max_error);
+                    CHECK_MSG(mr.uncovered == 0, "E %g: %llu samples in no triangle (beside the collapsed edge?)", E,
+                              (unsigned long long)mr.uncovered);
+                }
+                tsr_ptess_result_free(&r);
+            }
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* The eight octants in one OBJ, in the order given. */
+static void sphere_obj(sbuf *b, const octant *o, uint32_t n)
+{
+    for (uint32_t k = 0; k < n; k++)
+        octant_obj(b, &o[k]);
+}
+
+/* A closed sphere: welded, closed, conforming, Euler 2, one vertex per
+ * pole, oriented as the first octant, |volume| near 4/3 pi. */
+static void check_sphere(const char *what, const octant *o, double E, int expect_mirrored, double expect_sign)
+{
+    octants os = {o, 8};
+    sbuf b = {0};
+    sphere_obj(&b, o, 8);
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, what, &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        CHECK_MSG(info.sources == 8 && info.pieces == 8, "%s: sources %u pieces %u", what, info.sources, info.pieces);
+        CHECK_MSG(info.links == 24, "%s: %u linked edges, want 8 x 3", what, info.links);
+        CHECK_MSG(info.collapsed_edges == 8, "%s: %u collapsed edges, want 8", what, info.collapsed_edges);
+        CHECK_MSG((int)info.mirrored == expect_mirrored, "%s: %u mirrored, want %d", what, info.mirrored,
+                  expect_mirrored);
+        for (uint32_t k = 0; k < 8; k++) {
+            tsr_psource_info si;
+            CHECK(tsr_pmodel_source_info(m, k, &si));
+            bool want = octant_outward(&o[k]) != octant_outward(&o[0]);
+            CHECK_MSG(si.mirrored == want, "%s: source %u mirrored %d", what, k, si.mirrored);
+            /* the normal tsr_pmodel_eval gives is as the mesh orients it */
+            double p[3], n[3];
+            CHECK(tsr_pmodel_eval(m, k, 0.3, 0.6, p, n) == TSR_OK);
+            double want_p[3];
+            octant_point(&o[k], 0.3, 0.6, want_p);
+            CHECK(dist3(p, want_p) <= 1e-12);
+            CHECK_NEAR(dot3(n, p), expect_sign, 1e-9);
+        }
+        tsr_ptess_options opt = {0};
+        opt.max_error = E;
+        opt.normals = true;
+        tsr_ptess_result r;
+        if (run_ptess(m, &opt, &r)) {
+            check_shape(m, &r, true);
+            sampling s = {octants_truth, &os, sphere_distance, NULL, NULL, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+            sample_result(&r, &s);
+            double sl = fslack(1);
+            CHECK_MSG(s.param_error <= E + sl, "%s: parametric error %g (source %u at %.9g, %.9g)", what,
+                      s.param_error, r.tri_source[s.worst_tri], s.worst_uv[0], s.worst_uv[1]);
+            CHECK_MSG(s.implicit_error <= E + sl, "%s: %g off the sphere", what, s.implicit_error);
+            CHECK_MSG(s.corner_error <= sl + 1e-9, "%s: corner error %g", what, s.corner_error);
+            tsr_validation v = validate(&r.mesh);
+            describe(what, &v);
+            check_conforming(what, &v);
+            CHECK_MSG(v.boundary_edges == 0, "%s: %u boundary edges", what, v.boundary_edges);
+            CHECK_MSG(v.euler == 2, "%s: Euler characteristic %lld", what, (long long)v.euler);
+            CHECK_MSG(v.coincident_vertices == 0, "%s: %u coincident vertices (not welded)", what,
+                      v.coincident_vertices);
+            CHECK(tsr_validation_ok(&v));
+            const double north[3] = {0, 0, 1}, south[3] = {0, 0, -1};
+            CHECK_MSG(vertices_at(&r.mesh, north, 1e-6) == 1 && vertices_at(&r.mesh, south, 1e-6) == 1,
+                      "%s: %u vertices at the north pole, %u at the south", what, vertices_at(&r.mesh, north, 1e-6),
+                      vertices_at(&r.mesh, south, 1e-6));
+            double vol = signed_volume(&r.mesh), want = 4 * PI / 3;
+            CHECK_MSG(vol * expect_sign > 0, "%s: signed volume %g, want sign %g", what, vol, expect_sign);
+            /* every point within E of the sphere: the volume within area * E */
+            CHECK_MSG(fabs(fabs(vol) - want) <= 4 * PI * E * 1.05, "%s: |volume| %.9g vs 4/3 pi = %.9g", what,
+                      fabs(vol), want);
+            check_normals_agree(&r.mesh, what);
+            uint32_t off = normals_off_radial(&r.mesh, expect_sign, 1e-6);
+            CHECK_MSG(off == 0, "%s: %u normals not along %s p / |p|", what, off, expect_sign > 0 ? "+" : "-");
+            tsr_ptess_measure_result mr;
+            memset(&mr, 0, sizeof mr);
+            CHECK(tsr_ptess_measure(m, &r, 9, NULL, false, NULL, &mr) == TSR_OK);
+            CHECK_MSG(mr.max_error <= E + sl, "%s: measured %g", what, mr.max_error);
+            CHECK_MSG(mr.uncovered == 0, "%s: %llu samples in no triangle", what, (unsigned long long)mr.uncovered);
+        }
+        tsr_ptess_result_free(&r);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* All outward, some written reversed or transposed so the shared rows of
+ * control points run backwards: nothing to mirror. */
+TEST(sphere_closed_outward_nets)
+{
+    const octant o[8] = {{1, 1, 1, false, false},   {-1, 1, 1, true, false},  {-1, -1, 1, true, true},
+                         {1, -1, 1, false, true},   {1, 1, -1, false, true},  {-1, 1, -1, false, false},
+                         {-1, -1, -1, true, false}, {1, -1, -1, true, true}};
+    for (int k = 0; k < 8; k++)
+        CHECK(octant_outward(&o[k]));
+    check_sphere("sphere_outward.obj", o, 1e-3, 0, 1);
+    check_sphere("sphere_outward_coarse.obj", o, 5e-2, 0, 1);
+}
+
+/* Plain mirror images: four octants face inward and are mirrored to agree
+ * with the first. */
+TEST(sphere_closed_mirrored_octants)
+{
+    octant o[8];
+    for (int k = 0; k < 8; k++)
+        o[k] = (octant){k & 1 ? -1 : 1, k & 2 ? -1 : 1, k & 4 ? -1 : 1, false, false};
+    check_sphere("sphere_mirrors.obj", o, 1e-3, 4, 1);
+}
+
+/* The first octant faces inward: the whole sphere follows it. */
+TEST(sphere_closed_first_inward)
+{
+    octant o[8];
+    for (int k = 0; k < 8; k++)
+        o[k] = (octant){k & 1 ? 1 : -1, k & 2 ? -1 : 1, k & 4 ? -1 : 1, false, false};
+    CHECK(!octant_outward(&o[0]));
+    check_sphere("sphere_inward.obj", o, 2e-3, 4, -1);
+}
+
+/* piece_scale tightens one piece's tolerance and no other's. */
+TEST(piece_scale_tightens_one_piece)
+{
+    octant o[8];
+    for (int k = 0; k < 8; k++)
+        o[k] = (octant){k & 1 ? -1 : 1, k & 2 ? -1 : 1, k & 4 ? -1 : 1, false, false};
+    octants os = {o, 8};
+    sbuf b = {0};
+    sphere_obj(&b, o, 8);
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "sphere_scale.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        const double E = 1e-2;
+        double scale[8] = {1, 1, 1, 1, 1, 1, 1, 1};
+        tsr_psource_info si;
+        CHECK(tsr_pmodel_source_info(m, 5, &si) && si.pieces_u == 1 && si.pieces_v == 1);
+        uint32_t p5 = si.first_piece < 8 ? si.first_piece : 0;
+        scale[p5] = 0.05;
+        tsr_ptess_options opt = {0};
+        opt.max_error = E;
+        tsr_ptess_result r0, r1;
+        bool ok0 = run_ptess(m, &opt, &r0);
+        opt.piece_scale = scale;
+        bool ok1 = run_ptess(m, &opt, &r1);
+        if (ok0 && ok1) {
+            double e0[8] = {0}, e1[8] = {0};
+            uint32_t t0[8] = {0}, t1[8] = {0};
+            sampling s0 = {octants_truth, &os, NULL, NULL, e0, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+            sampling s1 = {octants_truth, &os, NULL, NULL, e1, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+            sample_result(&r0, &s0);
+            sample_result(&r1, &s1);
+            for (uint32_t t = 0; t < r0.mesh.triangle_count; t++)
+                t0[r0.tri_source[t] & 7]++;
+            for (uint32_t t = 0; t < r1.mesh.triangle_count; t++)
+                t1[r1.tri_source[t] & 7]++;
+            double sl = fslack(1);
+            for (int k = 0; k < 8; k++) {
+                double want = k == 5 ? 0.05 * E : E;
+                CHECK_MSG(e1[k] <= want + sl, "source %d: error %g, tolerance %g", k, e1[k], want);
+                CHECK_MSG(e0[k] <= E + sl, "source %d: error %g", k, e0[k]);
+            }
+            CHECK_MSG(t1[5] > 4 * t0[5], "source 5: %u triangles with scale 0.05, %u without", t1[5], t0[5]);
+            /* still closed: the finer piece's edges are matched by its neighbours */
+            tsr_validation v = validate(&r1.mesh);
+            check_conforming("scaled sphere", &v);
+            CHECK(v.boundary_edges == 0 && v.euler == 2);
+        }
+        tsr_ptess_result_free(&r0);
+        tsr_ptess_result_free(&r1);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* ---- a B-spline of several spans ----------------------------------------------------- */
+
+#define BS_NU 6
+#define BS_NV 5
+static const double bs_ku[BS_NU + 4] = {0, 0, 0, 0, 0.7, 1.5, 3, 3, 3, 3};
+static const double bs_kv[BS_NV + 4] = {0, 0, 0, 0, 0.8, 2, 2, 2, 2};
+
+static void bs_ctrl(int i, int j, double p[3])
+{
+    double x = i, y = 1.2 * j;
+    p[0] = x;
+    p[1] = y;
+    p[2] = 0.6 * sin(1.3 * x) * cos(0.9 * y) + 0.05 * x * y;
+}
+
+/* ctx: the control points, 3 * BS_NU * BS_NV, from bs_ctrl */
+static void bs_truth(void *ctx, uint32_t src, const double *uv, uint32_t n, double *pos)
+{
+    const double *ctrl = ctx;
+    (void)src;
+    for (uint32_t k = 0; k < n; k++) {
+        double Nu[4], Nv[4];
+        int su = bspline_basis(bs_ku, BS_NU, 3, uv[2 * k], Nu);
+        int sv = bspline_basis(bs_kv, BS_NV, 3, uv[2 * k + 1], Nv);
+        double p[3] = {0, 0, 0};
+        for (int b = 0; b <= 3; b++)
+            for (int a = 0; a <= 3; a++) {
+                const double *c = ctrl + 3 * ((sv - 3 + b) * BS_NU + (su - 3 + a));
+                for (int d = 0; d < 3; d++)
+                    p[d] += Nu[a] * Nv[b] * c[d];
+            }
+        memcpy(pos + 3 * k, p, sizeof p);
+    }
+}
+
+TEST(bspline_pieces_conform)
+{
+    sbuf b = {0};
+    double ctrl[3 * BS_NU * BS_NV];
+    for (int j = 0; j < BS_NV; j++)
+        for (int i = 0; i < BS_NU; i++) {
+            double *p = ctrl + 3 * (j * BS_NU + i);
+            bs_ctrl(i, j, p);
+            sb_printf(&b, "v %.17g %.17g %.17g\n", p[0], p[1], p[2]);
+        }
+    sb_printf(&b, "cstype bspline\ndeg 3 3\nsurf 0 3 0 2");
+    for (int k = 1; k <= BS_NU * BS_NV; k++)
+        sb_printf(&b, " %d", k);
+    sb_printf(&b, "\nparm u");
+    for (int k = 0; k < BS_NU + 4; k++)
+        sb_printf(&b, " %.17g", bs_ku[k]);
+    sb_printf(&b, "\nparm v");
+    for (int k = 0; k < BS_NV + 4; k++)
+        sb_printf(&b, " %.17g", bs_kv[k]);
+    sb_printf(&b, "\nend\n");
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "bspline.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        /* 3 x 2 spans; 2 x 2 + 3 x 1 shared edges, each side counted */
+        CHECK_MSG(info.sources == 1 && info.pieces == 6, "sources %u pieces %u", info.sources, info.pieces);
+        CHECK_MSG(info.links == 14, "%u linked edges, want 14", info.links);
+        CHECK(info.collapsed_edges == 0 && info.mirrored == 0);
+        tsr_psource_info si;
+        CHECK(tsr_pmodel_source_info(m, 0, &si));
+        CHECK(si.pieces_u == 3 && si.pieces_v == 2 && si.first_piece == 0);
+        CHECK(si.domain[0] == 0 && si.domain[1] == 3 && si.domain[2] == 0 && si.domain[3] == 2);
+        /* (1e-4 gives some 430 000 triangles: too slow to sample here) */
+        for (double E = 1e-1; E >= 0.99e-3; E /= 10)
+            for (uint32_t tile = 2; tile <= 8; tile *= 2) {
+                tsr_ptess_options opt = {0};
+                opt.max_error = E;
+                opt.tile_n = tile;
+                tsr_ptess_result r;
+                if (run_ptess(m, &opt, &r)) {
+                    check_shape(m, &r, false);
+                    sampling s = {bs_truth, ctrl, NULL, NULL, NULL, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+                    sample_result(&r, &s);
+                    double sl = fslack(mesh_maxabs(&r.mesh));
+                    CHECK_MSG(s.param_error <= E + sl, "E %g tile %u: parametric error %g at (%.9g, %.9g)", E, tile,
+                              s.param_error, s.worst_uv[0], s.worst_uv[1]);
+                    CHECK_MSG(s.param_error <= r.bound + sl, "E %g: error %g beyond the bound %g", E, s.param_error,
+                              r.bound);
+                    CHECK_MSG(s.corner_error <= sl + 1e-9, "corner error %g", s.corner_error);
+                    CHECK(r.leaves >= 6);
+                    tsr_validation v = validate(&r.mesh);
+                    check_conforming("bspline", &v);
+                    CHECK_MSG(v.boundary_loops == 1 && v.euler == 1 && v.coincident_vertices == 0,
+                              "E %g tile %u: loops %u euler %lld coincident %u", E, tile, v.boundary_loops,
+                              (long long)v.euler, v.coincident_vertices);
+                    uint32_t bad = 0;
+                    CHECK_MSG(tsr_mesh_boundary_is_rect(&r.mesh, 0, 0, BS_NU - 1, 1.2 * (BS_NV - 1), 1e-5, &bad),
+                              "E %g tile %u: boundary vertex %u off the outer sides", E, tile, bad);
+                    if (tile == 4 && E > 0.5e-3) {
+                        tsr_ptess_measure_result mr;
+                        memset(&mr, 0, sizeof mr);
+                        CHECK(tsr_ptess_measure(m, &r, 9, NULL, false, NULL, &mr) == TSR_OK);
+                        CHECK_MSG(mr.max_error <= E + sl, "E %g: measured %g", E, mr.max_error);
+                        CHECK(mr.uncovered == 0 && mr.samples >= 6 * 81);
+                    }
+                }
+                tsr_ptess_result_free(&r);
+            }
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* Two patches sharing half of an edge are not linked: the contract keeps
+ * partial overlaps apart. Two sharing a whole edge, written backwards,
+ * are. */
+TEST(partial_overlap_not_linked)
+{
+    sbuf b = {0};
+    sb_printf(&b, "v 0 0 0\nv 2 0 0\nv 0 1 0\nv 2 1 0.5\n"
+                  "cstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nend\n"
+                  "v 3 0 0\nv 3 0.5 0\nv 2 0.5 0.25\n"
+                  "surf 0 1 0 1 2 5 7 6\nend\n"
+                  "v 2 2 0\nv 0 2 0.3\n"
+                  "surf 0 1 0 1 8 9 4 3\nend\n");
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "overlap.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        /* patch 2's north row (points 4, 3) is patch 0's north row (3, 4)
+         * reversed, and the two agree in orientation: linked, nothing
+         * mirrored. Patch 1's west edge is the lower half of patch 0's
+         * east edge: not linked. */
+        CHECK_MSG(info.sources == 3 && info.links == 2, "sources %u links %u", info.sources, info.links);
+        CHECK_MSG(info.mirrored == 0, "%u mirrored", info.mirrored);
+        tsr_ptess_options o = {0};
+        o.max_error = 1e-3;
+        tsr_ptess_result r;
+        if (run_ptess(m, &o, &r)) {
+            tsr_validation v = validate(&r.mesh);
+            /* patches 0 and 2 welded into one disc, patch 1 another */
+            CHECK_MSG(v.boundary_loops == 2 && v.misoriented_edges == 0 && v.nonmanifold_edges == 0,
+                      "loops %u misoriented %u", v.boundary_loops, v.misoriented_edges);
+        }
+        tsr_ptess_result_free(&r);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* ---- view dependence --------------------------------------------------------------- */
+
+/* A long quarter cylinder along x, seen from near its x = 0 end. */
+static const double VL = 20, VR = 1;
+
+static void vcyl_truth(void *ctx, uint32_t src, const double *uv, uint32_t n, double *pos)
+{
+    (void)ctx;
+    (void)src;
+    for (uint32_t k = 0; k < n; k++) {
+        double x, y;
+        qcircle(uv[2 * k], &x, &y);
+        pos[3 * k] = VL * uv[2 * k + 1];
+        pos[3 * k + 1] = VR * x;
+        pos[3 * k + 2] = VR * y;
+    }
+}
+
+TEST(camera_near_finer)
+{
+    sbuf b = {0};
+    const double A[3][2] = {{1, 0}, {1, 1}, {0, 1}}, w[3] = {1, H2, 1};
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 3; i++)
+            sb_printf(&b, "v %.17g %.17g %.17g %.17g\n", VL * j, VR * A[i][0], VR * A[i][1], w[i]);
+    sb_printf(&b, "cstype rat bezier\ndeg 2 1\nsurf 0 1 0 1 -6 -5 -4 -3 -2 -1\nend\n");
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "long_cylinder.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    tsr_camera cam;
+    memset(&cam, 0, sizeof cam);
+    const double eye[3] = {-2, 2.5, 1.8}, target[3] = {10, 0.3, 0.3};
+    memcpy(cam.eye, eye, sizeof eye);
+    memcpy(cam.target, target, sizeof target);
+    cam.fovy_deg = 50;
+    cam.width = 1024;
+    cam.height = 768;
+    cam.near_dist = 0.05;
+    cam.pixel_error = 0.5;
+    CHECK(tsr_camera_prepare(&cam));
+    /* the regions compared are in view: their corners project inside */
+    const double probes[4][3] = {{2, 1, 0}, {2, 0, 1}, {20, 1, 0}, {20, 0, 1}};
+    for (int k = 0; k < 4; k++) {
+        double x, y, d;
+        project(&cam, probes[k], &x, &y, &d);
+        CHECK_MSG(x > 0 && x < cam.width && y > 0 && y < cam.height && d > cam.near_dist, "probe %d at %g %g", k, x,
+                  y);
+    }
+    if (make_model(&set, &m)) {
+        for (int pass = 0; pass < 2; pass++) {
+            tsr_ptess_options opt = {0};
+            opt.camera = &cam;
+            opt.tile_n = pass ? 8 : 4;
+            tsr_ptess_result r;
+            if (run_ptess(m, &opt, &r)) {
+                check_shape(m, &r, false);
+                sampling s = {vcyl_truth, NULL, NULL, &cam, NULL, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+                sample_result(&r, &s);
+                CHECK(s.in_view > 1000);
+                CHECK_MSG(s.pixel_error <= cam.pixel_error + 1e-2, "tile %u: screen error %g px > %g", opt.tile_n,
+                          s.pixel_error, cam.pixel_error);
+                /* density: triangles per unit of surface area */
+                double area[2] = {0, 0};
+                uint32_t count[2] = {0, 0};
+                for (uint32_t t = 0; t < r.mesh.triangle_count; t++) {
+                    double cx = 0;
+                    for (int k = 0; k < 3; k++)
+                        cx += r.mesh.positions[3 * r.mesh.indices[3 * t + k]] / 3.0;
+                    int region = cx >= 2 && cx <= 6 ? 0 : cx >= 14 && cx <= 20 ? 1 : -1;
+                    if (region < 0)
+                        continue;
+                    double fn[3];
+                    face_normal(&r.mesh, t, fn);
+                    area[region] += sqrt(dot3(fn, fn)) / 2;
+                    count[region]++;
+                }
+                double dn = count[0] / fmax(area[0], 1e-30), df = count[1] / fmax(area[1], 1e-30);
+                fprintf(stderr, "  tile %u: %u triangles, %u leaves; near %u (%.1f per unit area), far %u (%.1f)\n",
+                        opt.tile_n, r.mesh.triangle_count, r.leaves, count[0], dn, count[1], df);
+                CHECK_MSG(count[1] > 0 && dn >= 2 * df, "near density %g, far %g", dn, df);
+                tsr_validation v = validate(&r.mesh);
+                check_conforming("camera", &v);
+                tsr_ptess_measure_result mr;
+                memset(&mr, 0, sizeof mr);
+                CHECK(tsr_ptess_measure(m, &r, 9, &cam, false, NULL, &mr) == TSR_OK);
+                CHECK_MSG(mr.max_error <= cam.pixel_error + 1e-2, "measured %g px", mr.max_error);
+                CHECK(mr.uncovered == 0);
+            }
+            tsr_ptess_result_free(&r);
+        }
+        /* a tighter pixel error refines more */
+        tsr_ptess_options opt = {0};
+        opt.camera = &cam;
+        tsr_ptess_result r1, r2;
+        bool ok1 = run_ptess(m, &opt, &r1);
+        tsr_camera cam2 = cam;
+        cam2.pixel_error = 0.1;
+        opt.camera = &cam2;
+        bool ok2 = run_ptess(m, &opt, &r2);
+        if (ok1 && ok2)
+            CHECK_MSG(r2.mesh.triangle_count > r1.mesh.triangle_count, "%u triangles at 0.1 px, %u at 0.5 px",
+                      r2.mesh.triangle_count, r1.mesh.triangle_count);
+        tsr_ptess_result_free(&r1);
+        tsr_ptess_result_free(&r2);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* ---- the contract's refusals ---------------------------------------------------------- */
+
+TEST(bad_options)
+{
+    cylinder c = {0, 0, 0, 1, 1};
+    sbuf b = {0};
+    cyl_obj(&b, &c);
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "bad_options.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        static const double scale_zero[1] = {0}, scale_big[1] = {1.5}, scale_nan[1] = {NAN}, scale_neg[1] = {-0.5};
+        struct {
+            const char *name;
+            double max_error;
+            uint32_t tile_n, max_level;
+            const double *scale;
+        } cases[] = {
+            {"max_error 0", 0, 0, 0, NULL},          {"max_error -1", -1, 0, 0, NULL},
+            {"max_error NaN", NAN, 0, 0, NULL},      {"max_error inf", INFINITY, 0, 0, NULL},
+            {"tile_n 3", 1e-2, 3, 0, NULL},          {"tile_n 1", 1e-2, 1, 0, NULL},
+            {"tile_n 130", 1e-2, TSR_TILE_MAX + 2, 0, NULL}, {"max_level 13", 1e-2, 0, 13, NULL},
+            {"piece_scale 0", 1e-2, 0, 0, scale_zero}, {"piece_scale 1.5", 1e-2, 0, 0, scale_big},
+            {"piece_scale NaN", 1e-2, 0, 0, scale_nan}, {"piece_scale -0.5", 1e-2, 0, 0, scale_neg},
+        };
+        for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+            tsr_ptess_options o = {0};
+            o.max_error = cases[k].max_error;
+            o.tile_n = cases[k].tile_n;
+            o.max_level = cases[k].max_level;
+            o.piece_scale = cases[k].scale;
+            tsr_ptess_result r;
+            memset(&r, 0xAB, sizeof r);
+            tsr_error e = {0};
+            tsr_status st = tsr_ptess_run(m, &o, NULL, &r, &e);
+            CHECK_MSG(st == TSR_ERR_ARGUMENT, "%s: %s", cases[k].name, tsr_status_str(st));
+            CHECK_MSG(e.status == TSR_ERR_ARGUMENT && e.message[0], "%s: no message", cases[k].name);
+            check_zeroed_and_free(&r, cases[k].name);
+        }
+        /* the edges of the ranges are accepted */
+        struct {
+            uint32_t tile_n, max_level;
+        } edges[] = {{2, 1}, {TSR_TILE_MAX, 1}, {2, 12}};
+        for (size_t k = 0; k < sizeof edges / sizeof edges[0]; k++) {
+            tsr_ptess_options o = {0};
+            o.max_error = 1e-1;
+            o.tile_n = edges[k].tile_n;
+            o.max_level = edges[k].max_level;
+            tsr_ptess_result r;
+            tsr_error e = {0};
+            CHECK_MSG(tsr_ptess_run(m, &o, NULL, &r, &e) == TSR_OK, "tile %u level %u: %s", o.tile_n, o.max_level,
+                      e.message);
+            tsr_ptess_result_free(&r);
+        }
+        /* a camera without max_error is fine; max_error is ignored then */
+        tsr_camera cam;
+        memset(&cam, 0, sizeof cam);
+        const double eye[3] = {3, 3, 2};
+        memcpy(cam.eye, eye, sizeof eye);
+        cam.fovy_deg = 60;
+        cam.width = 640;
+        cam.height = 480;
+        cam.near_dist = 0.1;
+        cam.pixel_error = 1;
+        CHECK(tsr_camera_prepare(&cam));
+        tsr_ptess_options o = {0};
+        o.camera = &cam;
+        tsr_ptess_result r;
+        tsr_error e = {0};
+        CHECK_MSG(tsr_ptess_run(m, &o, NULL, &r, &e) == TSR_OK, "camera, max_error 0: %s", e.message);
+        tsr_ptess_result_free(&r);
+        /* NULL pointers */
+        o.camera = NULL;
+        o.max_error = 1e-2;
+        memset(&r, 0xAB, sizeof r);
+        CHECK(tsr_ptess_run(NULL, &o, NULL, &r, &e) == TSR_ERR_ARGUMENT);
+        check_zeroed_and_free(&r, "NULL model");
+        memset(&r, 0xAB, sizeof r);
+        CHECK(tsr_ptess_run(m, NULL, NULL, &r, &e) == TSR_ERR_ARGUMENT);
+        check_zeroed_and_free(&r, "NULL options");
+        CHECK(tsr_ptess_run(m, &o, NULL, NULL, &e) == TSR_ERR_ARGUMENT);
+        /* measure: per_side < 2, NULL pointers */
+        CHECK(tsr_ptess_run(m, &o, NULL, &r, NULL) == TSR_OK);
+        tsr_ptess_measure_result mr;
+        CHECK(tsr_ptess_measure(m, &r, 1, NULL, false, NULL, &mr) == TSR_ERR_ARGUMENT);
+        CHECK(tsr_ptess_measure(NULL, &r, 4, NULL, false, NULL, &mr) == TSR_ERR_ARGUMENT);
+        CHECK(tsr_ptess_measure(m, NULL, 4, NULL, false, NULL, &mr) == TSR_ERR_ARGUMENT);
+        CHECK(tsr_ptess_measure(m, &r, 4, NULL, false, NULL, NULL) == TSR_ERR_ARGUMENT);
+        tsr_ptess_result_free(&r);
+        /* source queries out of range */
+        double p[3];
+        tsr_psource_info si;
+        CHECK(tsr_pmodel_eval(m, 7, 0, 0, p, NULL) == TSR_ERR_ARGUMENT);
+        CHECK(!tsr_pmodel_source_info(m, 7, &si));
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+TEST(null_and_empty_inputs)
+{
+    tsr_ptess_result r;
+    memset(&r, 0, sizeof r);
+    tsr_ptess_result_free(&r); /* a zeroed result */
+    tsr_pmodel_destroy(NULL);
+    tsr_pmodel *m = NULL;
+    tsr_error e = {0};
+    CHECK(tsr_pmodel_from_set(NULL, NULL, &m, &e) == TSR_ERR_ARGUMENT && e.message[0]);
+    tsr_patch_set empty;
+    memset(&empty, 0, sizeof empty);
+    uint32_t first_loop = 0;
+    empty.first_loop = &first_loop;
+    CHECK(tsr_pmodel_from_set(&empty, NULL, &m, &e) == TSR_ERR_EMPTY);
+    CHECK(tsr_pmodel_from_subd(NULL, NULL, &m, &e) == TSR_ERR_ARGUMENT);
+}
+
+/* ---- data: the teapot ------------------------------------------------------------- */
+
+/* A polynomial Bézier patch over [0,1]^2 by its Bernstein basis, written
+ * here (the .bpt teapot's patches are all such); false for any other. */
+static bool bernstein_eval(const tsr_patch *p, double u, double v, double pos[3])
+{
+    bool unit = (p->u0 == 0 && p->u1 == 0 && p->v0 == 0 && p->v1 == 0) ||
+                (p->u0 == 0 && p->u1 == 1 && p->v0 == 0 && p->v1 == 1);
+    if (p->kind != TSR_PATCH_BEZIER || p->weights || p->degree_u > 7 || p->degree_v > 7 || !unit)
+        return false;
+    double bu[8], bv[8];
+    for (int pass = 0; pass < 2; pass++) {
+        int d = pass ? p->degree_v : p->degree_u;
+        double t = pass ? v : u, *b = pass ? bv : bu;
+        for (int i = 0; i <= d; i++) {
+            double c = 1; /* binomial (d, i) */
+            for (int k = 1; k <= i; k++)
+                c = c * (d - i + k) / k;
+            b[i] = c * pow(t, i) * pow(1 - t, d - i);
+        }
+    }
+    pos[0] = pos[1] = pos[2] = 0;
+    for (int j = 0; j <= p->degree_v; j++)
+        for (int i = 0; i <= p->degree_u; i++)
+            for (int c = 0; c < 3; c++)
+                pos[c] += bu[i] * bv[j] * p->ctrl[3 * (j * (p->degree_u + 1) + i) + c];
+    return true;
+}
+
+typedef struct set_ctx {
+    const tsr_patch_set *set;
+    const tsr_pmodel *m;
+} set_ctx;
+
+static void set_truth(void *ctx, uint32_t src, const double *uv, uint32_t n, double *pos)
+{
+    const tsr_patch_set *set = ((const set_ctx *)ctx)->set;
+    const tsr_pmodel *m = ((const set_ctx *)ctx)->m;
+    tsr_psource_info si;
+    bool ok = tsr_pmodel_source_info(m, src, &si) && si.patch < set->num_patches;
+    const tsr_patch *p = ok ? &set->patches[si.patch] : NULL;
+    for (uint32_t k = 0; k < n; k++)
+        if (!ok || !bernstein_eval(p, uv[2 * k], uv[2 * k + 1], pos + 3 * k))
+            pos[3 * k] = pos[3 * k + 1] = pos[3 * k + 2] = NAN;
+}
+
+/* Control row of edge e (0 south, 1 east, 2 north, 3 west) of a Bézier
+ * patch: point k along the edge's parameter. */
+static const double *edge_point(const tsr_patch *p, int e, uint32_t k)
+{
+    uint32_t nu = p->count_u, nv = p->count_v, i, j;
+    switch (e) {
+    case 0: i = k, j = 0; break;
+    case 1: i = nu - 1, j = k; break;
+    case 2: i = k, j = nv - 1; break;
+    default: i = 0, j = k; break;
+    }
+    return p->ctrl + 3 * (j * nu + i);
+}
+
+static uint32_t edge_len(const tsr_patch *p, int e)
+{
+    return e == 0 || e == 2 ? p->count_u : p->count_v;
+}
+
+/* Which edges of a set of Bézier patches are open: neither collapsed nor
+ * matched by another edge's row of control points (forwards or
+ * reversed) within tol. open[4 * patch + e]. */
+static void open_edges(const tsr_patch_set *s, double tol, bool *open)
+{
+    for (uint32_t p = 0; p < s->num_patches; p++)
+        for (int e = 0; e < 4; e++) {
+            const tsr_patch *P = &s->patches[p];
+            uint32_t n = edge_len(P, e);
+            bool collapsed = true;
+            for (uint32_t k = 1; k < n; k++)
+                collapsed = collapsed && dist3(edge_point(P, e, 0), edge_point(P, e, k)) <= tol;
+            bool matched = false;
+            for (uint32_t q = 0; q < s->num_patches && !matched && !collapsed; q++)
+                for (int f = 0; f < 4 && !matched; f++) {
+                    const tsr_patch *Q = &s->patches[q];
+                    if ((q == p && f == e) || edge_len(Q, f) != n)
+                        continue;
+                    bool fw = true, bw = true;
+                    for (uint32_t k = 0; k < n; k++) {
+                        fw = fw && dist3(edge_point(P, e, k), edge_point(Q, f, k)) <= tol;
+                        bw = bw && dist3(edge_point(P, e, k), edge_point(Q, f, n - 1 - k)) <= tol;
+                    }
+                    matched = fw || bw;
+                }
+            open[4 * p + e] = !collapsed && !matched;
+        }
+}
+
+/* The domain side (0..3) both parameter points lie on, or -1. */
+static int side_of(const double a[2], const double b[2], const double dom[4])
+{
+    double eu = 1e-9 * (dom[1] - dom[0]), ev = 1e-9 * (dom[3] - dom[2]);
+    if (fabs(a[1] - dom[2]) <= ev && fabs(b[1] - dom[2]) <= ev)
+        return 0;
+    if (fabs(a[0] - dom[1]) <= eu && fabs(b[0] - dom[1]) <= eu)
+        return 1;
+    if (fabs(a[1] - dom[3]) <= ev && fabs(b[1] - dom[3]) <= ev)
+        return 2;
+    if (fabs(a[0] - dom[0]) <= eu && fabs(b[0] - dom[0]) <= eu)
+        return 3;
+    return -1;
+}
+
+static double seg_point_dist(const double a[3], const double b[3], const double p[3])
+{
+    double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+    double l = dot3(ab, ab), t = l > 0 ? fmin(1, fmax(0, dot3(ap, ab) / l)) : 0;
+    double q[3] = {a[0] + t * ab[0], a[1] + t * ab[1], a[2] + t * ab[2]};
+    return dist3(q, p);
+}
+
+/* Boundary edges: each on an open edge of its source, and no two close
+ * together (a crack would be two boundary chains along one curve). */
+static void check_boundary_on_open_edges(const tsr_pmodel *m, const tsr_ptess_result *r, const bool *open,
+                                         uint32_t num_patches, double crack_tol, const char *what)
+{
+    tsr_halfedges he;
+    memset(&he, 0, sizeof he);
+    if (tsr_halfedges_build(&he, &r->mesh, NULL) != TSR_OK) {
+        CHECK(false);
+        return;
+    }
+    const tsr_mesh *me = &r->mesh;
+    uint32_t nb = 0, off_side = 0, on_closed = 0;
+    uint32_t *bh = malloc(sizeof(uint32_t) * (he.count + 1));
+    for (uint32_t h = 0; h < he.count && bh; h++) {
+        if (he.twin[h] != TSR_NO_TWIN)
+            continue;
+        uint32_t t = h / 3, k = h % 3, k1 = (k + 1) % 3;
+        if (me->indices[3 * t] == me->indices[3 * t + 1] || me->indices[3 * t + 1] == me->indices[3 * t + 2] ||
+            me->indices[3 * t] == me->indices[3 * t + 2])
+            continue; /* degenerate: counted by the validator */
+        bh[nb++] = h;
+        tsr_psource_info si;
+        if (!tsr_pmodel_source_info(m, r->tri_source[t], &si)) {
+            off_side++;
+            continue;
+        }
+        int side = side_of(r->tri_uv + 6 * t + 2 * k, r->tri_uv + 6 * t + 2 * k1, si.domain);
+        if (side < 0) {
+            if (off_side++ == 0)
+                fprintf(stderr, "  %s: boundary edge inside source %u: (%g, %g)-(%g, %g)\n", what, r->tri_source[t],
+                        r->tri_uv[6 * t + 2 * k], r->tri_uv[6 * t + 2 * k + 1], r->tri_uv[6 * t + 2 * k1],
+                        r->tri_uv[6 * t + 2 * k1 + 1]);
+        } else if (si.patch < num_patches && !open[4 * si.patch + (uint32_t)side]) {
+            if (on_closed++ == 0)
+                fprintf(stderr, "  %s: boundary edge on side %d of patch %u, which has a partner\n", what, side,
+                        si.patch);
+        }
+    }
+    CHECK_MSG(off_side == 0, "%s: %u boundary edges inside a source's domain", what, off_side);
+    CHECK_MSG(on_closed == 0, "%s: %u boundary edges on linked or collapsed patch edges", what, on_closed);
+    /* cracks: a boundary edge's midpoint near another boundary edge that
+     * shares no vertex with it */
+    uint32_t cracks = 0;
+    for (uint32_t a = 0; a < nb; a++) {
+        uint32_t ha = bh[a], ia = me->indices[ha], ja = me->indices[3 * (ha / 3) + (ha % 3 + 1) % 3];
+        double pa[3], qa[3], mid[3];
+        for (int c = 0; c < 3; c++) {
+            pa[c] = me->positions[3 * ia + c];
+            qa[c] = me->positions[3 * ja + c];
+            mid[c] = (pa[c] + qa[c]) / 2;
+        }
+        for (uint32_t bi = 0; bi < nb; bi++) {
+            uint32_t hb = bh[bi], ib = me->indices[hb], jb = me->indices[3 * (hb / 3) + (hb % 3 + 1) % 3];
+            if (ib == ia || ib == ja || jb == ia || jb == ja)
+                continue;
+            double pb[3], qb[3];
+            for (int c = 0; c < 3; c++) {
+                pb[c] = me->positions[3 * ib + c];
+                qb[c] = me->positions[3 * jb + c];
+            }
+            if (seg_point_dist(pb, qb, mid) <= crack_tol) {
+                if (cracks++ == 0)
+                    fprintf(stderr, "  %s: boundary edges %u-%u and %u-%u lie together (a crack)\n", what, ia, ja, ib,
+                            jb);
+                break;
+            }
+        }
+    }
+    CHECK_MSG(cracks == 0, "%s: %u boundary edges along another boundary edge", what, cracks);
+    free(bh);
+    tsr_halfedges_free(&he);
+}
+
+TEST(data_teapot)
+{
+    const char *data = check_data_dir();
+    if (!data)
+        SKIP("no data folder");
+    char path[5000];
+    snprintf(path, sizeof path, "%s/patches/teapot.bpt", data);
+    tsr_patch_set set;
+    tsr_error e = {0};
+    if (tsr_patch_set_load(path, TSR_PATCH_FORMAT_UNKNOWN, NULL, &set, &e) != TSR_OK) {
+        if (e.status == TSR_ERR_NOT_FOUND)
+            SKIP("%s", e.message);
+        CHECK_MSG(false, "%s", e.message);
+        return;
+    }
+    /* the size of the model: the control points' box */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t p = 0; p < set.num_patches; p++)
+        for (uint32_t k = 0; k < set.patches[p].count_u * set.patches[p].count_v; k++)
+            for (int c = 0; c < 3; c++) {
+                lo[c] = fmin(lo[c], set.patches[p].ctrl[3 * k + c]);
+                hi[c] = fmax(hi[c], set.patches[p].ctrl[3 * k + c]);
+            }
+    double size = dist3(lo, hi);
+    bool *open = calloc(4 * (size_t)set.num_patches, sizeof(bool));
+    open_edges(&set, 1e-9 * size, open);
+    uint32_t n_open = 0;
+    for (uint32_t k = 0; k < 4 * set.num_patches; k++)
+        n_open += open[k];
+    tsr_pmodel *m = NULL;
+    if (make_model(&set, &m)) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        CHECK(info.sources == set.num_patches && info.pieces == set.num_patches && info.trimmed_sources == 0);
+        /* every edge is linked, collapsed or open: the sides the model
+         * leaves unlinked are exactly the open ones and the collapsed ones */
+        CHECK_MSG(info.links + info.collapsed_edges + n_open == 4 * set.num_patches,
+                  "links %u + collapsed %u + open (by control rows) %u != 4 x %u", info.links, info.collapsed_edges,
+                  n_open, set.num_patches);
+        fprintf(stderr, "  teapot: %u patches, links %u, collapsed %u, open edges %u, mirrored %u\n", set.num_patches,
+                info.links, info.collapsed_edges, n_open, info.mirrored);
+        set_ctx pair = {&set, m};
+        for (double E = 1e-2; E >= 0.99e-3; E /= 10) {
+            tsr_ptess_options opt = {0};
+            opt.max_error = E;
+            opt.normals = true;
+            tsr_ptess_result r;
+            if (run_ptess(m, &opt, &r)) {
+                check_shape(m, &r, true);
+                tsr_ptess_measure_result mr;
+                memset(&mr, 0, sizeof mr);
+                CHECK(tsr_ptess_measure(m, &r, 8, NULL, false, NULL, &mr) == TSR_OK);
+                double sl = fslack(mesh_maxabs(&r.mesh));
+                CHECK_MSG(mr.max_error <= E + sl, "E %g: measured %g (source %u at %g, %g)", E, mr.max_error,
+                          mr.worst_source, mr.worst_uv[0], mr.worst_uv[1]);
+                CHECK_MSG(mr.uncovered == 0, "E %g: %llu uncovered samples", E, (unsigned long long)mr.uncovered);
+                sampling s = {set_truth, &pair, NULL, NULL, NULL, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+                sample_result(&r, &s);
+                CHECK_MSG(s.param_error <= E + sl, "E %g: parametric error %g (source %u at %.9g, %.9g)", E,
+                          s.param_error, r.tri_source[s.worst_tri], s.worst_uv[0], s.worst_uv[1]);
+                CHECK_MSG(s.param_error <= r.bound + sl, "E %g: error %g beyond the bound %g", E, s.param_error,
+                          r.bound);
+                CHECK_MSG(s.corner_error <= sl + 1e-8 * size, "E %g: corner error %g", E, s.corner_error);
+                tsr_validation v = validate(&r.mesh);
+                describe("teapot", &v);
+                check_conforming("teapot", &v);
+                check_boundary_on_open_edges(m, &r, open, set.num_patches, 1e-6 * size, "teapot");
+                fprintf(stderr, "  teapot E %g: %u triangles, %u leaves, bound %g, measured %g, sampled %g\n", E,
+                        r.mesh.triangle_count, r.leaves, r.bound, mr.max_error, s.param_error);
+            }
+            tsr_ptess_result_free(&r);
+        }
+    }
+    tsr_pmodel_destroy(m);
+    free(open);
+    tsr_patch_set_free(&set);
+}
+
+/* ---- data: OpenSubdiv cages -------------------------------------------------------- */
+
+typedef struct subd_ctx {
+    const tsr_subd *subd;
+    const tsr_pmodel *m;
+} subd_ctx;
+
+static void subd_truth(void *ctx, uint32_t src, const double *uv, uint32_t n, double *pos)
+{
+    const subd_ctx *c = ctx;
+    tsr_psource_info si;
+    if (!tsr_pmodel_source_info(c->m, src, &si) || tsr_subd_eval(c->subd, si.patch, si.sub, uv, n, pos, NULL, NULL) !=
+                                                       TSR_OK)
+        for (uint32_t k = 0; k < 3 * n; k++)
+            pos[k] = NAN;
+}
+
+typedef struct cage_case {
+    const char *file;
+    bool closed;   /* Euler 2, no boundary, positive volume */
+    bool manifold; /* conformity checks apply */
+    bool smooth;   /* no sharp crease: vertex normals agree with every triangle around */
+    int euler;     /* when not closed and manifold: the expected Euler characteristic, 99 unchecked */
+} cage_case;
+
+static void run_cage(const char *dir, const cage_case *cc, double E)
+{
+    char path[5200];
+    snprintf(path, sizeof path, "%.4096s/%.1000s", dir, cc->file);
+    tsr_cage cage;
+    tsr_error e = {0};
+    if (tsr_cage_load(path, NULL, &cage, &e) != TSR_OK) {
+        CHECK_MSG(false, "%s", e.message);
+        return;
+    }
+    tsr_subd *subd = NULL;
+    tsr_status st = tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, &subd, &e);
+    tsr_cage_free(&cage);
+    CHECK_MSG(st == TSR_OK, "%s: %s", cc->file, e.message);
+    if (st != TSR_OK)
+        return;
+    tsr_pmodel *m = NULL;
+    st = tsr_pmodel_from_subd(subd, NULL, &m, &e);
+    CHECK_MSG(st == TSR_OK && m, "%s: tsr_pmodel_from_subd: %s (%s)", cc->file, tsr_status_str(st), e.message);
+    if (st == TSR_OK && m) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        uint32_t want_sources = 0;
+        for (uint32_t f = 0; f < tsr_subd_face_count(subd); f++)
+            want_sources += tsr_subd_face_has_limit(subd, f) ? tsr_subd_face_patches(subd, f) : 0;
+        CHECK_MSG(info.sources == want_sources && info.pieces == want_sources, "%s: sources %u pieces %u, want %u",
+                  cc->file, info.sources, info.pieces, want_sources);
+        double size = dist3(info.lo, info.hi);
+        subd_ctx ctx = {subd, m};
+        double *scale = malloc(sizeof(double) * (info.pieces + 1));
+        double *serr = calloc(info.sources + 1, sizeof(double));
+        for (uint32_t k = 0; k < info.pieces; k++)
+            scale[k] = 1;
+        /* the loop the contract describes: tessellate, measure, tighten
+         * the pieces found beyond the tolerance */
+        bool scaled = false;
+        double first_error = -1, prev_worst = INFINITY;
+        for (int round = 0; round < 4; round++) {
+            tsr_ptess_options opt = {0};
+            opt.max_error = E;
+            opt.normals = true;
+            opt.piece_scale = scaled ? scale : NULL;
+            tsr_ptess_result r;
+            bool ok = run_ptess(m, &opt, &r);
+            if (!ok) {
+                tsr_ptess_result_free(&r);
+                break;
+            }
+            memset(serr, 0, sizeof(double) * info.sources);
+            sampling s = {subd_truth, &ctx, NULL, NULL, serr, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+            sample_result(&r, &s);
+            tsr_ptess_measure_result mr;
+            memset(&mr, 0, sizeof mr);
+            CHECK(tsr_ptess_measure(m, &r, 6, NULL, true, NULL, &mr) == TSR_OK);
+            for (uint32_t k = 0; mr.source_error && k < info.sources; k++)
+                serr[k] = fmax(serr[k], mr.source_error[k]);
+            double worst = fmax(s.param_error, mr.max_error);
+            if (round == 0)
+                first_error = worst;
+            double sl = fslack(mesh_maxabs(&r.mesh));
+            /* re-tessellating must make progress, else it is pointless (and
+             * the meshes grow without end) */
+            bool stuck = round > 0 && worst > 0.7 * prev_worst;
+            prev_worst = worst;
+            if (worst <= E + sl || round == 3 || stuck) {
+                fprintf(stderr, "  %s E %g: %u triangles, rounds %d, first error %.3g, final %.3g\n", cc->file, E,
+                        r.mesh.triangle_count, round + 1, first_error, worst);
+                CHECK_MSG(worst <= E + sl, "%s E %g: error %g after %d rounds (source %u at %g, %g)", cc->file, E,
+                          worst, round + 1, r.tri_source[s.worst_tri], s.worst_uv[0], s.worst_uv[1]);
+                CHECK_MSG(mr.uncovered == 0, "%s: %llu uncovered samples", cc->file, (unsigned long long)mr.uncovered);
+                CHECK_MSG(s.corner_error <= sl + 1e-8 * size, "%s: corner error %g", cc->file, s.corner_error);
+                check_shape(m, &r, true);
+                tsr_validation v = validate(&r.mesh);
+                describe(cc->file, &v);
+                if (cc->manifold) {
+                    check_conforming(cc->file, &v);
+                    if (cc->smooth)
+                        check_normals_agree(&r.mesh, cc->file);
+                }
+                else
+                    CHECK_MSG(v.degenerate_triangles == 0, "%s: %u degenerate triangles", cc->file,
+                              v.degenerate_triangles);
+                if (cc->closed) {
+                    CHECK_MSG(v.boundary_edges == 0 && v.euler == 2, "%s: boundary %u, Euler %lld", cc->file,
+                              v.boundary_edges, (long long)v.euler);
+                    CHECK_MSG(v.coincident_vertices == 0, "%s: %u coincident vertices", cc->file,
+                              v.coincident_vertices);
+                    CHECK_MSG(signed_volume(&r.mesh) > 0, "%s: volume %g", cc->file, signed_volume(&r.mesh));
+                } else if (cc->manifold && cc->euler != 99) {
+                    CHECK_MSG(v.euler == cc->euler, "%s: Euler %lld, want %d", cc->file, (long long)v.euler,
+                              cc->euler);
+                }
+                tsr_free(NULL, mr.source_error);
+                tsr_ptess_result_free(&r);
+                break;
+            }
+            for (uint32_t k = 0; k < info.sources; k++) {
+                tsr_psource_info si;
+                if (serr[k] <= E || !tsr_pmodel_source_info(m, k, &si))
+                    continue;
+                for (uint32_t p = 0; p < si.pieces_u * si.pieces_v && si.first_piece + p < info.pieces; p++)
+                    scale[si.first_piece + p] = fmax(1e-3, scale[si.first_piece + p] * fmax(0.05, fmin(0.5, 0.9 * E / serr[k])));
+            }
+            scaled = true;
+            tsr_free(NULL, mr.source_error);
+            tsr_ptess_result_free(&r);
+        }
+        free(scale);
+        free(serr);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_subd_destroy(subd);
+}
+
+TEST(data_osd_cages)
+{
+    const char *data = check_data_dir();
+    if (!data)
+        SKIP("no data folder");
+    char dir[5000];
+    snprintf(dir, sizeof dir, "%s/patches/osd", data);
+    struct stat st;
+    if (stat(dir, &st) != 0)
+        SKIP("no %s", dir);
+    static const cage_case cases[] = {
+        {"catmark_cube.obj", true, true, true, 2},
+        {"catmark_cube_creases1.obj", true, true, false, 2},
+        {"catmark_pyramid.obj", true, true, true, 2},    /* triangles next to a quad */
+        {"catmark_nonquads.obj", false, true, true, 99}, /* N-gons next to quads, open */
+        {"catmark_hole_test1.obj", false, true, true, 1}, /* a cube less one face: a disc */
+        {"catmark_fan.obj", false, false, true, 99},     /* non-manifold: error only */
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++)
+        for (double E = 1e-2; E >= 0.99e-3; E /= 10)
+            run_cage(dir, &cases[k], E);
+}
+
+TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error),
+          T(sphere_octant_pole), T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants),
+          T(sphere_closed_first_inward), T(piece_scale_tightens_one_piece), T(bspline_pieces_conform),
+          T(partial_overlap_not_linked), T(camera_near_finer), T(bad_options), T(null_and_empty_inputs),
+          T(data_teapot), T(data_osd_cages))

@@ -1,0 +1,133 @@
+#!/usr/bin/env bash
+# check_patches.sh TESSERA [DATA]: `tessera check patches` end to end. The
+# check itself is the oracle (tsr_ptess_measure against the patches' own
+# evaluation, validation, crack search); here we make sure it runs and
+# passes on a generated rational surface, on the teapot and on OpenSubdiv
+# cages, that it can fail, and that bad input fails cleanly, naming the
+# file. Exits 77 (skipped) after the data-free cases when DATA is absent.
+set -u
+tessera=$1 data=${2:-}
+dir=$(mktemp -d "${TMPDIR:-/tmp}/tsr-check-patches-XXXXXX")
+trap 'rm -rf "$dir"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+# expect_ok NAME FILE ARGS...: exit 0, the summary line says no run failed
+expect_ok() {
+  local name=$1 file=$2
+  shift 2
+  "$tessera" check patches "$file" "$@" > "$dir/out.txt" 2> "$dir/err.txt"
+  local rc=$?
+  [ $rc -eq 0 ] || fail "$name: exit $rc: $(grep -h FAIL "$dir/out.txt" | head -3) $(cat "$dir/err.txt")"
+  grep -q "^view-independent .* ok$" "$dir/out.txt" || fail "$name: no passing view-independent run"
+  grep -q "; 0 of [0-9]* runs failed$" "$dir/out.txt" || fail "$name: $(tail -1 "$dir/out.txt")"
+  echo "ok $name: $(tail -1 "$dir/out.txt")"
+}
+
+# expect_bad NAME FILE: exit 1 (not a crash, not usage), one message naming the file
+expect_bad() {
+  local name=$1 file=$2
+  "$tessera" check patches "$file" > "$dir/out.txt" 2> "$dir/err.txt"
+  local rc=$?
+  [ $rc -eq 1 ] || fail "$name: exit $rc, expected 1: $(cat "$dir/err.txt")"
+  grep -qF "$file" "$dir/err.txt" || fail "$name: the message does not name the file: $(cat "$dir/err.txt")"
+  echo "ok $name refused: $(head -1 "$dir/err.txt")"
+}
+
+# A rational biquadratic Bezier patch that is exactly a sphere octant: the
+# quarter circle (1,0), (1,1), (0,1) with weights 1, sqrt(2)/2, 1 swept
+# around z by the same circle, P_ij = (r_j C_i, z_j), w_ij = w_i w_j. Its
+# north edge collapses to the pole (0, 0, 1).
+octant() { # sx sy sz: the octant mirrored by these signs
+  awk -v sx="$1" -v sy="$2" -v sz="$3" 'BEGIN {
+    h = sqrt(2) / 2
+    cx[0] = 1; cy[0] = 0; cw[0] = 1; cx[1] = 1; cy[1] = 1; cw[1] = h; cx[2] = 0; cy[2] = 1; cw[2] = 1
+    r[0] = 1; z[0] = 0; mw[0] = 1; r[1] = 1; z[1] = 1; mw[1] = h; r[2] = 0; z[2] = 1; mw[2] = 1
+    for (j = 0; j < 3; j++)
+      for (i = 0; i < 3; i++)
+        printf "v %.17g %.17g %.17g %.17g\n", sx * r[j] * cx[i], sy * r[j] * cy[i], sz * z[j], cw[i] * mw[j]
+  }'
+}
+{
+  echo "# sphere octant, rational Bezier 2x2"
+  octant 1 1 1
+  echo "cstype rat bezier"
+  echo "deg 2 2"
+  echo "surf 0 1 0 1 1 2 3 4 5 6 7 8 9"
+  echo "parm u 0 1"
+  echo "parm v 0 1"
+  echo "end"
+} > "$dir/octant.obj"
+expect_ok "sphere octant" "$dir/octant.obj" --cameras 4
+# not vacuous: the octant's error is a good part of the tolerance
+awk '/^view-independent/ { for (i = 1; i < NF; i++) if ($i == "max_error") exit !($(i + 1) > 1e-4) }' "$dir/out.txt" \
+  || fail "octant: error too small to test anything: $(grep ^view "$dir/out.txt")"
+
+# the whole sphere: eight octants, four of them mirrored, joined along their
+# edges and meeting at the poles
+{
+  for s in "1 1 1" "-1 1 1" "1 -1 1" "-1 -1 1" "1 1 -1" "-1 1 -1" "1 -1 -1" "-1 -1 -1"; do
+    # shellcheck disable=SC2086
+    octant $s
+  done
+  echo "cstype rat bezier"
+  echo "deg 2 2"
+  for k in 0 1 2 3 4 5 6 7; do
+    echo "surf 0 1 0 1 $(seq -s ' ' $((9 * k + 1)) $((9 * k + 9)))"
+    echo "end"
+  done
+} > "$dir/sphere.obj"
+expect_ok "sphere of 8 octants" "$dir/sphere.obj" --cameras 4 --seed 7
+
+# JSON carries the keys of check terrain where they mean something, and ours
+"$tessera" check patches "$dir/octant.obj" --cameras 2 --json > "$dir/out.json" || fail "json check failed"
+for k in input pixel_error max_error cameras eye target max_pixel_error watertight conforming triangles seconds \
+         view_independent bound vertices patches failures; do
+  grep -q "\"$k\"" "$dir/out.json" || fail "no key $k in the JSON"
+done
+echo "ok json keys"
+
+# the check can fail: a tolerance far below what float positions can hold
+"$tessera" check patches "$dir/octant.obj" --cameras 0 --max-error 1e-12 --max-level 3 > "$dir/tight.txt" 2>&1
+[ $? -eq 1 ] || fail "an impossible tolerance passed: $(tail -1 "$dir/tight.txt")"
+grep -q "FAIL beyond-tolerance" "$dir/tight.txt" || fail "no beyond-tolerance failure: $(cat "$dir/tight.txt")"
+echo "ok an impossible tolerance fails"
+
+# bad input fails cleanly, naming the file
+expect_bad "missing file" "$dir/missing.bpt"
+: > "$dir/empty.obj"
+expect_bad "empty file" "$dir/empty.obj"
+: > "$dir/empty.bpt"
+expect_bad "empty bpt" "$dir/empty.bpt"
+head -c 4096 /dev/urandom > "$dir/garbage.bpt"
+expect_bad "garbage bpt" "$dir/garbage.bpt"
+head -c 4096 /dev/urandom > "$dir/garbage.obj"
+expect_bad "garbage obj" "$dir/garbage.obj"
+printf 'v 0 0 0\nv 1 0 0\nf 1 2 9\n' > "$dir/badface.obj"
+expect_bad "cage with a bad index" "$dir/badface.obj"
+printf 'hello\n' > "$dir/notes.txt"
+expect_bad "unknown format" "$dir/notes.txt"
+# bad usage: exit 2
+for args in "--max-error 0" "--tile 3" "--max-level 13" "--camera 1,2,3" "--scheme loop" "--cameras -1"; do
+  # shellcheck disable=SC2086
+  "$tessera" check patches "$dir/octant.obj" $args > /dev/null 2>&1
+  rc=$?
+  [ $rc -eq 2 ] || fail "'$args' gave exit $rc, expected 2"
+done
+echo "ok bad usage"
+
+if [ -z "$data" ] || [ ! -d "$data/patches" ]; then
+  echo "teapot and cages skipped: no shared data"
+  exit 77
+fi
+
+expect_ok teapot "$data/patches/teapot.bpt"
+# a .bpt cut in the middle of a patch
+head -n 200 "$data/patches/teapot.bpt" > "$dir/truncated.bpt"
+expect_bad "truncated bpt" "$dir/truncated.bpt"
+
+for shape in catmark_cube catmark_cube_creases1 catmark_gregory_test1 catmark_fan catmark_hole_test1 bilinear_cube; do
+  expect_ok "$shape" "$data/patches/osd/$shape.obj" --cameras 3
+done
+# the scheme can be forced: the cube's cage as a bilinear surface is the cage itself
+expect_ok "catmark_cube as bilinear" "$data/patches/osd/catmark_cube.obj" --cameras 1 --scheme bilinear
+grep -q "cage-bilinear" "$dir/out.txt" || fail "--scheme bilinear not used: $(head -1 "$dir/out.txt")"
