@@ -1373,6 +1373,17 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
     }
     tsr_free(a, seen.keys);
     tsr_free(a, seen.vals);
+    double hu = INFINITY, hv = INFINITY;
+    for (uint32_t k = 0; k < s->pu * s->pv; k++) {
+        const pctx *c = &b->ctx[s->first_piece + k];
+        const piece *p = &m->pieces[s->first_piece + k];
+        const tsr_qleaf *lv = tsr_quadtree_leaves(c->qt);
+        for (uint32_t li = 0; li < tsr_quadtree_leaf_count(c->qt); li++) {
+            double f = 1.0 / ((double)c->N * (double)(1u << lv[li].node.level));
+            hu = fmin(hu, f * (p->rect[1] - p->rect[0]));
+            hv = fmin(hv, f * (p->rect[3] - p->rect[2]));
+        }
+    }
     /* the trim loops */
     const tsr_patch_set *set = m->set;
     for (uint32_t l = set->first_loop[s->patch]; l < set->first_loop[s->patch + 1] && st == TSR_OK; l++) {
@@ -1385,6 +1396,37 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
             break;
         }
         tsr_trim_loop_sample(set, l, trim_tol_uv, pts, cnt, &cnt);
+        /* a chord straight in (u, v) is not straight on the surface: cut
+         * loop edges to the finest tile spacing of the source */
+        uint32_t extra = 0;
+        for (uint32_t k = 0; k < cnt; k++) {
+            const double *p0 = pts + 2 * k, *p1 = pts + 2 * ((k + 1) % cnt);
+            double len = fmax(fabs(p1[0] - p0[0]) / hu, fabs(p1[1] - p0[1]) / hv);
+            extra += len > 1 ? (uint32_t)fmin(ceil(len), 65536.0) - 1 : 0;
+        }
+        if (extra) {
+            double *more = tsr_alloc(a, ((size_t)cnt + extra) * 2 * sizeof *more);
+            if (!more) {
+                tsr_free(a, pts);
+                st = TSR_ERR_NOMEM;
+                break;
+            }
+            uint32_t n2 = 0;
+            for (uint32_t k = 0; k < cnt; k++) {
+                const double *p0 = pts + 2 * k, *p1 = pts + 2 * ((k + 1) % cnt);
+                double len = fmax(fabs(p1[0] - p0[0]) / hu, fabs(p1[1] - p0[1]) / hv);
+                uint32_t parts = len > 1 ? (uint32_t)fmin(ceil(len), 65536.0) : 1;
+                for (uint32_t q = 0; q < parts; q++) {
+                    double f = (double)q / parts;
+                    more[2 * n2] = p0[0] + f * (p1[0] - p0[0]);
+                    more[2 * n2 + 1] = p0[1] + f * (p1[1] - p0[1]);
+                    n2++;
+                }
+            }
+            tsr_free(a, pts);
+            pts = more;
+            cnt = n2;
+        }
         size_t base = np;
         for (uint32_t k = 0; k < cnt && st == TSR_OK; k++) {
             GROW(xy, np, cap, 2)

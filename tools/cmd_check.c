@@ -1024,15 +1024,21 @@ static int run_patches(int argc, char **argv)
             free(txt);
             cJSON_Delete(j);
         } else {
+            char at[2][96];
+            for (int k = 0; k < 2; k++) {
+                const patch_run *r = k ? vi : w;
+                if (r->meas.worst_source == UINT32_MAX)
+                    snprintf(at[k], sizeof at[k], "with no sample measured");
+                else
+                    snprintf(at[k], sizeof at[k], "at patch %u (u %.6g, v %.6g)", r->meas.worst_source,
+                             r->meas.worst_uv[0], r->meas.worst_uv[1]);
+            }
             printf("worst: ");
             if (n > 0)
-                printf("camera %d, max_pixel_error %.4f px (tau %g) at patch %u (u %.6g, v %.6g); ", worst - 1,
-                       w->meas.max_error, v.pixel_error, w->meas.worst_source, w->meas.worst_uv[0],
-                       w->meas.worst_uv[1]);
-            printf("view-independent max_error %.6g (tolerance %.6g) at patch %u (u %.6g, v %.6g); %d of %d runs "
-                   "failed\n",
-                   vi->meas.max_error, tol, vi->meas.worst_source, vi->meas.worst_uv[0], vi->meas.worst_uv[1], failures,
-                   n + 1);
+                printf("camera %d, max_pixel_error %.4f px (tau %g) %s; ", worst - 1, w->meas.max_error, v.pixel_error,
+                       at[0]);
+            printf("view-independent max_error %.6g (tolerance %.6g) %s; %d of %d runs failed\n", vi->meas.max_error,
+                   tol, at[1], failures, n + 1);
         }
         if (failures)
             rc = CLI_FAIL;

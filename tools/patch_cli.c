@@ -100,6 +100,7 @@ tsr_status cli_patch_tessellate(const tsr_pmodel *m, const tsr_ptess_options *op
     memset(meas, 0, sizeof *meas);
     memset(r, 0, sizeof *r);
     tsr_status st = TSR_OK;
+    double prev = INFINITY;
     for (uint32_t round = 0;; round++) {
         tsr_ptess_result_free(r);
         st = tsr_ptess_run(m, &opt, NULL, r, err);
@@ -111,8 +112,11 @@ tsr_status cli_patch_tessellate(const tsr_pmodel *m, const tsr_ptess_options *op
             tsr_error_set(err, st, "measuring the tessellation: %s", tsr_status_str(st));
             break;
         }
-        if (meas->max_error <= tol || round == rounds)
+        /* stop when done, out of rounds, or when tightening stopped paying
+         * (the error hardly moved: more rounds would only grow the mesh) */
+        if (meas->max_error <= tol || round == rounds || (round > 0 && meas->max_error > 0.9 * prev))
             break;
+        prev = meas->max_error;
         if (!scale) {
             scale = malloc((size_t)info.pieces * sizeof *scale);
             if (!scale) {
