@@ -1048,7 +1048,7 @@ TEST(piece_scale_tightens_one_piece)
                 CHECK_MSG(e1[k] <= want + sl, "source %d: error %g, tolerance %g", k, e1[k], want);
                 CHECK_MSG(e0[k] <= E + sl, "source %d: error %g", k, e0[k]);
             }
-            CHECK_MSG(t1[5] > 4 * t0[5], "source 5: %u triangles with scale 0.05, %u without", t1[5], t0[5]);
+            CHECK_MSG(t1[5] >= 4 * t0[5], "source 5: %u triangles with scale 0.05, %u without", t1[5], t0[5]);
             /* still closed: the finer piece's edges are matched by its neighbours */
             tsr_validation v = validate(&r1.mesh);
             check_conforming("scaled sphere", &v);
@@ -1263,7 +1263,7 @@ TEST(camera_near_finer)
     cam.pixel_error = 0.5;
     CHECK(tsr_camera_prepare(&cam));
     /* the regions compared are in view: their corners project inside */
-    const double probes[4][3] = {{2, 1, 0}, {2, 0, 1}, {20, 1, 0}, {20, 0, 1}};
+    const double probes[4][3] = {{1, 1, 0}, {1, 0, 1}, {20, 1, 0}, {20, 0, 1}};
     for (int k = 0; k < 4; k++) {
         double x, y, d;
         project(&cam, probes[k], &x, &y, &d);
@@ -1282,14 +1282,17 @@ TEST(camera_near_finer)
                 CHECK(s.in_view > 1000);
                 CHECK_MSG(s.pixel_error <= cam.pixel_error + 1e-2, "tile %u: screen error %g px > %g", opt.tile_n,
                           s.pixel_error, cam.pixel_error);
-                /* density: triangles per unit of surface area */
+                /* density: triangles per unit of surface area, near (x in [1, 4],
+                 * depth about 4) against far (x in [16, 20], depth about 20):
+                 * a screen error bound makes h^2 grow with depth, so the
+                 * density falls about fivefold; at least twofold is asked */
                 double area[2] = {0, 0};
                 uint32_t count[2] = {0, 0};
                 for (uint32_t t = 0; t < r.mesh.triangle_count; t++) {
                     double cx = 0;
                     for (int k = 0; k < 3; k++)
                         cx += r.mesh.positions[3 * r.mesh.indices[3 * t + k]] / 3.0;
-                    int region = cx >= 2 && cx <= 6 ? 0 : cx >= 14 && cx <= 20 ? 1 : -1;
+                    int region = cx >= 1 && cx <= 4 ? 0 : cx >= 16 && cx <= 20 ? 1 : -1;
                     if (region < 0)
                         continue;
                     double fn[3];
