@@ -895,83 +895,6 @@ static void collect_spans(pctx *c)
 
 /* ---- vertex welding ------------------------------------------------------------ */
 
-typedef struct vmap {
-    uint64_t *keys; /* key + 1, 0 empty */
-    uint32_t *vals;
-    size_t mask, count;
-} vmap;
-
-static uint64_t mix64(uint64_t k)
-{
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdull;
-    k ^= k >> 33;
-    k *= 0xc4ceb9fe1a85ec53ull;
-    k ^= k >> 33;
-    return k;
-}
-
-/* Empty map with room for n keys without growing. */
-static bool vmap_init(vmap *m, size_t n, const tsr_allocator *a)
-{
-    size_t cap = 1024;
-    while (cap < 2 * n + 2)
-        cap *= 2;
-    m->keys = tsr_alloc(a, cap * sizeof *m->keys);
-    m->vals = tsr_alloc(a, cap * sizeof *m->vals);
-    if (!m->keys || !m->vals) {
-        tsr_free(a, m->keys);
-        tsr_free(a, m->vals);
-        m->keys = NULL;
-        m->vals = NULL;
-        return false;
-    }
-    memset(m->keys, 0, cap * sizeof *m->keys);
-    m->mask = cap - 1;
-    m->count = 0;
-    return true;
-}
-
-static uint32_t *vmap_slot(vmap *m, uint64_t key, bool *found, const tsr_allocator *a)
-{
-    if (2 * (m->count + 1) > m->mask + 1 || !m->keys) {
-        size_t cap = m->keys ? 2 * (m->mask + 1) : 1024;
-        uint64_t *nk = tsr_alloc(a, cap * sizeof *nk);
-        uint32_t *nv = tsr_alloc(a, cap * sizeof *nv);
-        if (!nk || !nv) {
-            tsr_free(a, nk);
-            tsr_free(a, nv);
-            return NULL;
-        }
-        memset(nk, 0, cap * sizeof *nk);
-        for (size_t i = 0; m->keys && i <= m->mask; i++)
-            if (m->keys[i]) {
-                size_t h = mix64(m->keys[i]) & (cap - 1);
-                while (nk[h])
-                    h = (h + 1) & (cap - 1);
-                nk[h] = m->keys[i];
-                nv[h] = m->vals[i];
-            }
-        tsr_free(a, m->keys);
-        tsr_free(a, m->vals);
-        m->keys = nk;
-        m->vals = nv;
-        m->mask = cap - 1;
-    }
-    size_t h = mix64(key + 1) & m->mask;
-    while (m->keys[h]) {
-        if (m->keys[h] == key + 1) {
-            *found = true;
-            return &m->vals[h];
-        }
-        h = (h + 1) & m->mask;
-    }
-    m->keys[h] = key + 1;
-    m->count++;
-    *found = false;
-    return &m->vals[h];
-}
-
 typedef struct lpoint {
     uint32_t piece, i, j;
 } lpoint;
@@ -1084,7 +1007,7 @@ typedef struct builder {
     pctx *ctx;
     tsr_ptess_result *out;
     const tsr_allocator *a;
-    vmap map;
+    tsr_keymap map;
     canon_buf cb;
     uint32_t tri_cap;
     uint8_t *used; /* per stitch mask, per tile vertex: used by the pattern */
@@ -1112,7 +1035,7 @@ static uint32_t vertex_of(builder *b, lpoint q, const double *pre)
     if (!canonical(b->m, b->ctx, q, &b->cb, b->a, &c))
         return UINT32_MAX;
     bool found;
-    uint32_t *slot = vmap_slot(&b->map, lkey(c), &found, b->a);
+    uint32_t *slot = tsr_keymap_slot(&b->map, lkey(c), &found, b->a);
     if (!slot)
         return UINT32_MAX;
     if (found)
@@ -1320,7 +1243,7 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
     uint64_t *key = tsr_alloc(a, cap * sizeof *key); /* canonical lattice key + 1, 0 for trim points */
     uint32_t *seg = tsr_alloc(a, segcap * 2 * sizeof *seg);
     tsr_status st = (xy && key && seg) ? TSR_OK : TSR_ERR_NOMEM;
-    vmap seen = {0};
+    tsr_keymap seen = {0};
 #define GROW(ptr, n, c, per)                                                                                          \
     if (st == TSR_OK && (n) + 1 > (c)) {                                                                              \
         size_t nc = 2 * (c);                                                                                          \
@@ -1349,7 +1272,7 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
                         break;
                     }
                     bool found;
-                    uint32_t *slot = vmap_slot(&seen, lkey(cq), &found, a);
+                    uint32_t *slot = tsr_keymap_slot(&seen, lkey(cq), &found, a);
                     if (!slot) {
                         st = TSR_ERR_NOMEM;
                         break;
@@ -1371,8 +1294,7 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
                 }
         }
     }
-    tsr_free(a, seen.keys);
-    tsr_free(a, seen.vals);
+    tsr_keymap_free(&seen, a);
     double hu = INFINITY, hv = INFINITY;
     for (uint32_t k = 0; k < s->pu * s->pv; k++) {
         const pctx *c = &b->ctx[s->first_piece + k];
@@ -1701,7 +1623,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         b.tri_cap = (uint32_t)want_t;
         /* tile-border vertices go through the map: 4N of (N+1)^2 */
         size_t border = (size_t)(want_v * 4 * opt.tile_n / ((uint64_t)row * row)) + 64;
-        if (st == TSR_OK && !vmap_init(&b.map, border, a))
+        if (st == TSR_OK && !tsr_keymap_reserve(&b.map, border, a))
             st = TSR_ERR_NOMEM;
     }
     double bound = 0;
@@ -1790,8 +1712,7 @@ done:
     tsr_free(a, b.tile_tmp);
     if (pat_ok)
         tsr_tile_patterns_free(&pat);
-    tsr_free(a, b.map.keys);
-    tsr_free(a, b.map.vals);
+    tsr_keymap_free(&b.map, a);
     tsr_free(a, b.cb.p);
     for (uint32_t p = 0; ctx && p < m->npieces; p++) {
         tsr_quadtree_destroy(ctx[p].qt);

@@ -468,69 +468,6 @@ float tsr_quadtree_vertex_morph(const tsr_qleaf *leaf, uint32_t n, uint32_t i, u
 
 /* ---- mesh ---------------------------------------------------------------- */
 
-typedef struct vmap {
-    uint64_t *keys; /* key + 1; 0 = empty */
-    uint32_t *vals;
-    size_t mask;
-    size_t count;
-} vmap;
-
-static uint64_t mix64(uint64_t k)
-{
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdull;
-    k ^= k >> 33;
-    k *= 0xc4ceb9fe1a85ec53ull;
-    k ^= k >> 33;
-    return k;
-}
-
-static bool vmap_grow(vmap *m, const tsr_allocator *a)
-{
-    size_t cap = m->mask ? 2 * (m->mask + 1) : 1024;
-    uint64_t *keys = tsr_alloc(a, cap * sizeof *keys);
-    uint32_t *vals = tsr_alloc(a, cap * sizeof *vals);
-    if (!keys || !vals) {
-        tsr_free(a, keys);
-        tsr_free(a, vals);
-        return false;
-    }
-    memset(keys, 0, cap * sizeof *keys);
-    for (size_t i = 0; m->keys && i <= m->mask; i++) {
-        if (!m->keys[i])
-            continue;
-        size_t h = mix64(m->keys[i]) & (cap - 1);
-        while (keys[h])
-            h = (h + 1) & (cap - 1);
-        keys[h] = m->keys[i];
-        vals[h] = m->vals[i];
-    }
-    tsr_free(a, m->keys);
-    tsr_free(a, m->vals);
-    m->keys = keys;
-    m->vals = vals;
-    m->mask = cap - 1;
-    return true;
-}
-
-/* Returns the slot of key (inserting an empty one if absent); *found says
- * whether it was there. NULL when out of memory. */
-static uint32_t *vmap_slot(vmap *m, uint64_t key, bool *found, const tsr_allocator *a)
-{
-    if ((m->count + 1) * 2 > m->mask + 1 && !vmap_grow(m, a))
-        return NULL;
-    uint64_t k = key + 1;
-    size_t h = mix64(k) & m->mask;
-    while (m->keys[h] && m->keys[h] != k)
-        h = (h + 1) & m->mask;
-    *found = m->keys[h] == k;
-    if (!*found) {
-        m->keys[h] = k;
-        m->count++;
-    }
-    return &m->vals[h];
-}
-
 tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh *m)
 {
     const tsr_surface *s = &qt->s;
@@ -541,7 +478,7 @@ tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh 
     if (st != TSR_OK)
         return st;
     uint32_t *local = tsr_alloc(a, (size_t)row * row * sizeof *local);
-    vmap map = {0};
+    tsr_keymap map = {0};
     if (!local) {
         tsr_tile_patterns_free(&pat);
         return TSR_ERR_NOMEM;
@@ -559,7 +496,7 @@ tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh 
                 gi = gi > s->extent_x ? s->extent_x : gi;
                 gj = gj > s->extent_y ? s->extent_y : gj;
                 bool found;
-                uint32_t *slot = vmap_slot(&map, gj * ((uint64_t)s->extent_x + 1) + gi, &found, a);
+                uint32_t *slot = tsr_keymap_slot(&map, gj * ((uint64_t)s->extent_x + 1) + gi, &found, a);
                 if (!slot) {
                     st = TSR_ERR_NOMEM;
                     break;
@@ -586,8 +523,7 @@ tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh 
         }
     }
     tsr_free(a, local);
-    tsr_free(a, map.keys);
-    tsr_free(a, map.vals);
+    tsr_keymap_free(&map, a);
     tsr_tile_patterns_free(&pat);
     return st;
 }

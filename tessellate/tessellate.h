@@ -187,6 +187,26 @@ typedef struct tsr_halfedges {
 tsr_status tsr_halfedges_build(tsr_halfedges *he, const tsr_mesh *m, const tsr_allocator *alloc);
 void tsr_halfedges_free(tsr_halfedges *he);
 
+/* ---- Key map ----------------------------------------------------------- */
+
+/* A hash map from 64-bit keys (any value but UINT64_MAX) to 32-bit values,
+ * open addressing with linear probing, for welding vertices by key. Zero-
+ * initialise it; free with tsr_keymap_free and the same allocator. */
+typedef struct tsr_keymap {
+    uint64_t *keys; /* key + 1; 0 = empty */
+    uint32_t *vals;
+    size_t mask;
+    size_t count;
+} tsr_keymap;
+
+/* Makes room for n keys in all without growing again; false when out of
+ * memory (the map is unchanged). */
+bool tsr_keymap_reserve(tsr_keymap *m, size_t n, const tsr_allocator *a);
+/* The value slot of key, inserted (uninitialised) when absent; *found
+ * says whether it was there. NULL when out of memory. */
+uint32_t *tsr_keymap_slot(tsr_keymap *m, uint64_t key, bool *found, const tsr_allocator *a);
+void tsr_keymap_free(tsr_keymap *m, const tsr_allocator *a);
+
 /* ---- Validation -------------------------------------------------------- */
 
 typedef struct tsr_validate_options {
@@ -243,6 +263,11 @@ bool tsr_validation_ok(const tsr_validation *v);
 
 /* Writes a one-line summary of the failures ("ok" when none) into buf. */
 void tsr_validation_describe(const tsr_validation *v, char *buf, size_t cap);
+
+/* Whether p lies within eps of the segment ab and farther than eps from
+ * both of its ends along it: the conformity test of tsr_mesh_validate (a
+ * vertex inside another triangle's edge is a T-junction). */
+bool tsr_point_on_open_segment(const float p[3], const float a[3], const float b[3], double eps);
 
 /* Checks that every boundary edge of m lies on the border of the rectangle
  * [x0,x1]×[y0,y1] (within eps, in x and y) and that the boundary forms a

@@ -110,7 +110,7 @@ static void cell_of(const grid *g, const float *p, int64_t c[3])
         c[k] = (int64_t)floor((p[k] - g->origin[k]) * g->inv_cell);
 }
 
-static bool point_on_open_segment(const float *p, const float *a, const float *b, double eps)
+bool tsr_point_on_open_segment(const float p[3], const float a[3], const float b[3], double eps)
 {
     double ab[3], ap[3], l2 = 0, t = 0;
     for (int k = 0; k < 3; k++) {
@@ -498,7 +498,7 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                     for (size_t j = 0; j < nv; j++) {
                         if (!used[j] || j == a || j == b)
                             continue;
-                        if (point_on_open_segment(m->positions + 3 * j, pa, pb, eps)) {
+                        if (tsr_point_on_open_segment(m->positions + 3 * j, pa, pb, eps)) {
                             v->t_junctions++;
                             if (v->first_t_junction[0] == UINT32_MAX) {
                                 v->first_t_junction[0] = (uint32_t)j;
@@ -521,7 +521,7 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                                 cell_of(&g, m->positions + 3 * (size_t)j, cj);
                                 if (cj[0] != x || cj[1] != y || cj[2] != z)
                                     continue; /* hash collision: another cell */
-                                if (point_on_open_segment(m->positions + 3 * (size_t)j, pa, pb, eps)) {
+                                if (tsr_point_on_open_segment(m->positions + 3 * (size_t)j, pa, pb, eps)) {
                                     v->t_junctions++;
                                     if (v->first_t_junction[0] == UINT32_MAX) {
                                         v->first_t_junction[0] = j;

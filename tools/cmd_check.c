@@ -8,7 +8,7 @@
  *    independent oracle tsr_ptess_measure (mesh, tri_uv and the surface's
  *    own evaluation only), plus validation and a search for cracks. */
 #include "camera.h"
-#include "patches/ptess.h"
+#include "patch_cli.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -334,77 +334,6 @@ static void help_patches(FILE *f)
         "  -h, --help            this help\n");
 }
 
-typedef struct patch_input {
-    tsr_patch_set set;
-    tsr_cage cage;
-    tsr_subd *subd;
-    tsr_pmodel *model;
-    const char *kind;
-} patch_input;
-
-static void patch_input_free(patch_input *p)
-{
-    tsr_pmodel_destroy(p->model);
-    tsr_subd_destroy(p->subd);
-    tsr_cage_free(&p->cage);
-    tsr_patch_set_free(&p->set);
-}
-
-static void report_load_error(const char *in, tsr_status st, const tsr_error *err)
-{
-    if (err->message[0] && strstr(err->message, in))
-        cli_error("check", "%s", err->message);
-    else
-        cli_error("check", "%s: %s", in, err->message[0] ? err->message : tsr_status_str(st));
-}
-
-/* Loads IN as a patch set or, when it is an OBJ without surfaces but with
- * faces, as a subdivision cage; builds the model. Prints the error and
- * returns CLI_FAIL on failure. scheme: -1 picks it from the file name. */
-static int load_patch_model(const char *in, int scheme, patch_input *p)
-{
-    memset(p, 0, sizeof *p);
-    tsr_error err = {0};
-    tsr_patch_format f = tsr_patch_format_from_path(in);
-    if (f == TSR_PATCH_FORMAT_UNKNOWN) {
-        cli_error("check", "%s: unknown patch format (use .bpt, or .obj with free-form surfaces or a polygon cage)",
-                  in);
-        return CLI_FAIL;
-    }
-    tsr_status st = tsr_patch_set_load(in, f, NULL, &p->set, &err);
-    if (st == TSR_OK) {
-        p->kind = f == TSR_PATCH_FORMAT_BPT ? "bpt" : "obj-surfaces";
-        st = tsr_pmodel_from_set(&p->set, NULL, &p->model, &err);
-    } else if (st == TSR_ERR_EMPTY && f == TSR_PATCH_FORMAT_OBJ) {
-        /* no surface: a polygon cage, if it has faces */
-        tsr_error cerr = {0};
-        tsr_status cst = tsr_cage_load(in, NULL, &p->cage, &cerr);
-        if (cst != TSR_OK) {
-            if (cst == TSR_ERR_EMPTY)
-                report_load_error(in, st, &err); /* neither surfaces nor faces: the set loader's word */
-            else
-                report_load_error(in, cst, &cerr);
-            patch_input_free(p);
-            return CLI_FAIL;
-        }
-        const char *base = strrchr(in, '/');
-        base = base ? base + 1 : in;
-        tsr_subd_scheme sc = scheme >= 0                     ? (tsr_subd_scheme)scheme
-                             : !strncmp(base, "bilinear", 8) ? TSR_SUBD_BILINEAR
-                                                             : TSR_SUBD_CATMARK;
-        p->kind = sc == TSR_SUBD_BILINEAR ? "cage-bilinear" : "cage-catmark";
-        st = tsr_subd_create(&p->cage, sc, NULL, &p->subd, &err);
-        if (st == TSR_OK)
-            st = tsr_pmodel_from_subd(p->subd, NULL, &p->model, &err);
-    }
-    if (st != TSR_OK) {
-        report_load_error(in, st, &err);
-        patch_input_free(p);
-        return CLI_FAIL;
-    }
-    return CLI_OK;
-}
-
 static double urand_patches(uint64_t *s)
 {
     *s = *s * 6364136223846793005ull + 1442695040888963407ull;
@@ -470,28 +399,6 @@ static double seg_dist2(const float *p, const float *a, const float *b)
     return d2;
 }
 
-/* The validator's test (tessellate/validate.c): p within eps of the
- * segment ab, farther than eps from both ends along it. */
-static bool on_open_segment(const float *p, const float *a, const float *b, double eps)
-{
-    double ab[3], ap[3], l2 = 0, t = 0;
-    for (int k = 0; k < 3; k++) {
-        ab[k] = (double)b[k] - a[k];
-        ap[k] = (double)p[k] - a[k];
-        l2 += ab[k] * ab[k];
-        t += ab[k] * ap[k];
-    }
-    if (l2 <= 0)
-        return false;
-    t /= l2;
-    double len = sqrt(l2);
-    if (t * len <= eps || (1 - t) * len <= eps)
-        return false;
-    double d2 = 0;
-    for (int k = 0; k < 3; k++)
-        d2 += (ap[k] - t * ab[k]) * (ap[k] - t * ab[k]);
-    return d2 <= eps * eps;
-}
 
 typedef struct seam_pair {
     uint32_t edge, vertex;
@@ -599,7 +506,7 @@ static tsr_status check_boundary(const tsr_mesh *m, double eps, const bool *unli
             continue;
         const boundary_edge *E = &e[pairs[k].edge];
         if (pairs[k].vertex != E->a && pairs[k].vertex != E->b &&
-            on_open_segment(m->positions + 3 * (size_t)pairs[k].vertex, m->positions + 3 * (size_t)E->a,
+            tsr_point_on_open_segment(m->positions + 3 * (size_t)pairs[k].vertex, m->positions + 3 * (size_t)E->a,
                             m->positions + 3 * (size_t)E->b, eps))
             rep->seam_junctions++;
     }
@@ -829,7 +736,7 @@ static int run_patches(int argc, char **argv)
     const char *in = NULL;
     uint32_t ncams = 8, seed = 1, tile = 4, max_level = 0, per_side = 64, retries = 6;
     double max_error = 0;
-    int scheme = -1;
+    const char *scheme = NULL;
     bool json = false;
     char **cam_args = calloc((size_t)argc + 1, sizeof *cam_args);
     int ncam_args = 0, rc = CLI_OK;
@@ -856,7 +763,7 @@ static int run_patches(int argc, char **argv)
                 cli_error("check", "--scheme %s: use catmark or bilinear", sc);
                 rc = CLI_USAGE;
             }
-            scheme = !strcmp(sc, "bilinear") ? TSR_SUBD_BILINEAR : TSR_SUBD_CATMARK;
+            scheme = sc;
         } else if ((!strcmp(a, "--cameras") || !strcmp(a, "--seed") || !strcmp(a, "--tile") ||
                     !strcmp(a, "--max-level") || !strcmp(a, "--samples") || !strcmp(a, "--retries")) &&
                    has_value) {
@@ -900,23 +807,20 @@ static int run_patches(int argc, char **argv)
         cli_error("check", "no input file (see tessera check --help)");
         rc = CLI_USAGE;
     }
-    patch_input p;
+    cli_patch_model p;
     memset(&p, 0, sizeof p);
-    if (rc == CLI_OK)
-        rc = load_patch_model(in, scheme, &p);
+    if (rc == CLI_OK && !cli_patch_model_load("check", in, scheme, &p))
+        rc = CLI_FAIL;
     if (rc != CLI_OK) {
         free(cam_args);
         return rc;
     }
     tsr_pmodel_info info;
     tsr_pmodel_get_info(p.model, &info);
-    double diag = 0;
-    for (int k = 0; k < 3; k++)
-        diag += (info.hi[k] - info.lo[k]) * (info.hi[k] - info.lo[k]);
-    diag = sqrt(diag);
+    double diag = p.diag;
     if (!(diag > 0) || !isfinite(diag)) {
         cli_error("check", "%s: the model has no extent (its box is a point)", in);
-        patch_input_free(&p);
+        cli_patch_model_free(&p);
         free(cam_args);
         return CLI_FAIL;
     }
@@ -1045,7 +949,7 @@ static int run_patches(int argc, char **argv)
     }
     free(runs);
     free(cam_args);
-    patch_input_free(&p);
+    cli_patch_model_free(&p);
     return rc;
 }
 

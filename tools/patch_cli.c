@@ -5,67 +5,50 @@
 #include <stdlib.h>
 #include <string.h>
 
-static bool ends_with_ci(const char *s, const char *suffix)
+static void report_load_error(const char *cmd, const char *in, tsr_status st, const tsr_error *err)
 {
-    size_t n = strlen(s), k = strlen(suffix);
-    if (n < k)
-        return false;
-    for (size_t i = 0; i < k; i++) {
-        char a = s[n - k + i], b = suffix[i];
-        if (a >= 'A' && a <= 'Z')
-            a = (char)(a - 'A' + 'a');
-        if (a != b)
-            return false;
-    }
-    return true;
+    if (err->message[0] && strstr(err->message, in))
+        cli_error(cmd, "%s", err->message);
+    else
+        cli_error(cmd, "%s: %s", in, err->message[0] ? err->message : tsr_status_str(st));
 }
 
 bool cli_patch_model_load(const char *cmd, const char *path, const char *scheme, cli_patch_model *out)
 {
     memset(out, 0, sizeof *out);
     tsr_error err = {0};
-    tsr_status st;
-    if (ends_with_ci(path, ".bpt")) {
-        st = tsr_patch_set_load(path, TSR_PATCH_FORMAT_BPT, NULL, &out->set, &err);
-    } else if (ends_with_ci(path, ".obj")) {
-        st = tsr_patch_set_load(path, TSR_PATCH_FORMAT_OBJ, NULL, &out->set, &err);
-        if (st == TSR_ERR_EMPTY) {
-            /* no free-form surface: a polygon cage? */
-            tsr_error cerr = {0};
-            tsr_status cs = tsr_cage_load(path, NULL, &out->cage, &cerr);
-            if (cs == TSR_OK) {
-                const char *base = strrchr(path, '/');
-                base = base ? base + 1 : path;
-                bool bilinear = scheme ? !strcmp(scheme, "bilinear") : !strncmp(base, "bilinear", 8);
-                cs = tsr_subd_create(&out->cage, bilinear ? TSR_SUBD_BILINEAR : TSR_SUBD_CATMARK, NULL, &out->subd,
-                                     &cerr);
-                if (cs != TSR_OK) {
-                    cli_error(cmd, "%s: %s", path, cerr.message);
-                    tsr_cage_free(&out->cage);
-                    return false;
-                }
-                out->is_subd = true;
-                st = TSR_OK;
-            } else if (cs != TSR_ERR_EMPTY) {
-                cli_error(cmd, "%s", cerr.message);
-                return false;
-            } else {
-                cli_error(cmd, "%s: no free-form surface and no polygon face", path);
-                return false;
-            }
+    tsr_patch_format f = tsr_patch_format_from_path(path);
+    if (f == TSR_PATCH_FORMAT_UNKNOWN) {
+        cli_error(cmd, "%s: unknown patch format (use .bpt, or .obj with free-form surfaces or a polygon cage)", path);
+        return false;
+    }
+    tsr_status st = tsr_patch_set_load(path, f, NULL, &out->set, &err);
+    if (st == TSR_OK) {
+        out->kind = f == TSR_PATCH_FORMAT_BPT ? "bpt" : "obj-surfaces";
+        st = tsr_pmodel_from_set(&out->set, NULL, &out->model, &err);
+    } else if (st == TSR_ERR_EMPTY && f == TSR_PATCH_FORMAT_OBJ) {
+        /* no free-form surface: a polygon cage, if it has faces */
+        tsr_error cerr = {0};
+        tsr_status cst = tsr_cage_load(path, NULL, &out->cage, &cerr);
+        if (cst != TSR_OK) {
+            if (cst == TSR_ERR_EMPTY)
+                report_load_error(cmd, path, st, &err); /* neither surfaces nor faces: the set loader's word */
+            else
+                report_load_error(cmd, path, cst, &cerr);
+            cli_patch_model_free(out);
+            return false;
         }
-    } else {
-        cli_error(cmd, "%s: unknown patch format (use .bpt, or .obj with free-form surfaces or polygons)", path);
-        return false;
+        const char *base = strrchr(path, '/');
+        base = base ? base + 1 : path;
+        bool bilinear = scheme ? !strcmp(scheme, "bilinear") : !strncmp(base, "bilinear", 8);
+        out->kind = bilinear ? "cage-bilinear" : "cage-catmark";
+        out->is_subd = true;
+        st = tsr_subd_create(&out->cage, bilinear ? TSR_SUBD_BILINEAR : TSR_SUBD_CATMARK, NULL, &out->subd, &err);
+        if (st == TSR_OK)
+            st = tsr_pmodel_from_subd(out->subd, NULL, &out->model, &err);
     }
     if (st != TSR_OK) {
-        cli_error(cmd, "%s", err.message);
-        return false;
-    }
-    st = out->is_subd ? tsr_pmodel_from_subd(out->subd, NULL, &out->model, &err)
-                      : tsr_pmodel_from_set(&out->set, NULL, &out->model, &err);
-    if (st != TSR_OK) {
-        cli_error(cmd, "%s: %s", path, err.message);
+        report_load_error(cmd, path, st, &err);
         cli_patch_model_free(out);
         return false;
     }

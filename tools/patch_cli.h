@@ -14,14 +14,16 @@ typedef struct cli_patch_model {
     tsr_subd *subd;
     tsr_pmodel *model;
     bool is_subd;
+    const char *kind;    /* "bpt", "obj-surfaces", "cage-catmark" or "cage-bilinear" */
     double diag;         /* model box diagonal */
 } cli_patch_model;
 
 /* Loads path: .bpt, or .obj with free-form surfaces (cstype/surf), else
  * .obj polygons as a subdivision cage (scheme: "catmark", "bilinear", or
  * NULL: bilinear when the file name starts with "bilinear", else
- * catmark). Prints "tessera CMD: message" naming the file and returns
- * false on failure (nothing to free then). */
+ * catmark). An OBJ with neither surfaces nor faces gets the surface
+ * loader's message. Prints "tessera CMD: message" naming the file and
+ * returns false on failure (nothing to free then). */
 bool cli_patch_model_load(const char *cmd, const char *path, const char *scheme, cli_patch_model *out);
 void cli_patch_model_free(cli_patch_model *m);
 
