@@ -572,72 +572,110 @@ tsr_status tsr_pmodel_eval(const tsr_pmodel *m, uint32_t src, double u, double v
 
 /* ---- error bounds --------------------------------------------------------- */
 
-/* The bound of ptess.h for a Bézier net over its own [0,1]^2, tiles of N
- * quads: second-derivative bounds per coordinate (through the quotient
- * rule when rational, coordinates taken from c), then the interpolation
- * bound of the worst triangle shape (interior, stitched along s or t). */
-static double bezier_delta(int du, int dv, const double *P, const double *W, const double c[3], double N)
+/* Linear interpolation on a tile's triangles, from bounds a, b, c of
+ * |D^2 S[v, v]|'s three terms at the tile's spacing h (a = h^2 M_ss,
+ * b = h^2 M_st, c = h^2 M_tt, M bounds of |S_ss|, |S_st|, |S_tt|). The
+ * error at x of a triangle with vertices x_i is -1/2 sum l_i D^2 S(xi_i)
+ * [v_i, v_i], v_i = x_i - x, so it is within 1/2 (a V_s + 2 b sqrt(V_s
+ * V_t) + c V_t) with V the barycentric variances of the v_i's components
+ * (in units of h^2). Interior triangles (legs h): V_s, V_t <= 1/4, both at
+ * the hypotenuse midpoint: (a + 2b + c) / 8. A stitched triangle (base 2h
+ * on the tile edge, apex h above its middle, the only shape stitching
+ * makes): on the apex column, V_s = 1 - tau, V_t = tau (1 - tau) at
+ * height tau h, and the maximum over tau is bounded by that of (1 - tau)
+ * (a + c tau) plus 2b max (1 - tau) sqrt(tau) = 2b * 2 / (3 sqrt 3). */
+static void shape_bounds(double a, double b, double c, double out[3])
+{
+    out[0] = (a + 2 * b + c) / 8;
+    double gs = c <= a ? a : (a + c) * (a + c) / (4 * c), gt = a <= c ? c : (a + c) * (a + c) / (4 * a);
+    out[1] = 0.5 * (gs + 0.7698004 * b); /* stitched along s (south, north edges) */
+    out[2] = 0.5 * (gt + 0.7698004 * b); /* stitched along t (east, west edges) */
+}
+
+static double norm3(double x, double y, double z) { return sqrt(x * x + y * y + z * z); }
+
+/* The bounds of ptess.h for a Bézier net over its own [0,1]^2, tiles of N
+ * quads: out[0] for interior triangles, out[1], out[2] for triangles
+ * stitched along s and t. Second-derivative bounds from the net's second
+ * differences, as vectors (|sum B_k X_k| <= max |X_k|); when rational,
+ * through the quotient rule (S_s = (Q_s - w_s (S - c)) / w, S_ss = (Q_ss -
+ * w_ss (S - c) - 2 w_s S_s) / w, Q = w (S - c)) with c the centre of the
+ * net's box, which is free: interpolation error does not change under
+ * translation. */
+static void bezier_delta(int du, int dv, const double *P, const double *W, double N, double out[3])
 {
     int nu = du + 1, nv = dv + 1;
-    double Ass[3] = {0}, Ast[3] = {0}, Att[3] = {0};
-#define Q(i, j, k) ((W ? W[(j) * nu + (i)] : 1.0) * (P[3 * ((j) * nu + (i)) + (k)] - c[k]))
+    double c[3], lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int k = 0; k < nu * nv; k++)
+        for (int q = 0; q < 3; q++) {
+            lo[q] = fmin(lo[q], P[3 * k + q]);
+            hi[q] = fmax(hi[q], P[3 * k + q]);
+        }
+    for (int q = 0; q < 3; q++)
+        c[q] = W ? 0.5 * (lo[q] + hi[q]) : 0;
+    double Q[3 * TSR_BEZIER_MAX_POINTS], A = 0, wmin = INFINITY;
+    for (int k = 0; k < nu * nv; k++) {
+        double w = W ? W[k] : 1;
+        wmin = fmin(wmin, w);
+        for (int q = 0; q < 3; q++)
+            Q[3 * k + q] = w * (P[3 * k + q] - c[q]);
+        if (W)
+            A = fmax(A, norm3(P[3 * k] - c[0], P[3 * k + 1] - c[1], P[3 * k + 2] - c[2]));
+    }
+#define QD(i, j, q) Q[3 * ((j) * nu + (i)) + (q)]
 #define WW(i, j) (W ? W[(j) * nu + (i)] : 1.0)
-    double qss[3] = {0}, qtt[3] = {0}, qst[3] = {0}, qs[3] = {0}, qt[3] = {0}, A[3] = {0};
-    double wmin = INFINITY, ws = 0, wt = 0, wss = 0, wtt = 0, wst = 0;
+    double qs = 0, qt = 0, qss = 0, qtt = 0, qst = 0, ws = 0, wt = 0, wss = 0, wtt = 0, wst = 0;
     for (int j = 0; j < nv; j++)
         for (int i = 0; i < nu; i++) {
-            double w = WW(i, j);
-            wmin = w < wmin ? w : wmin;
-            for (int k = 0; k < 3; k++) {
-                double d = fabs(P[3 * (j * nu + i) + k] - c[k]);
-                A[k] = d > A[k] ? d : A[k];
-            }
+            double w = WW(i, j), d[3];
             if (i + 1 < nu) {
                 ws = fmax(ws, fabs(WW(i + 1, j) - w));
-                for (int k = 0; k < 3; k++)
-                    qs[k] = fmax(qs[k], fabs(Q(i + 1, j, k) - Q(i, j, k)));
+                for (int q = 0; q < 3; q++)
+                    d[q] = QD(i + 1, j, q) - QD(i, j, q);
+                qs = fmax(qs, norm3(d[0], d[1], d[2]));
             }
             if (j + 1 < nv) {
                 wt = fmax(wt, fabs(WW(i, j + 1) - w));
-                for (int k = 0; k < 3; k++)
-                    qt[k] = fmax(qt[k], fabs(Q(i, j + 1, k) - Q(i, j, k)));
+                for (int q = 0; q < 3; q++)
+                    d[q] = QD(i, j + 1, q) - QD(i, j, q);
+                qt = fmax(qt, norm3(d[0], d[1], d[2]));
             }
             if (i + 2 < nu) {
                 wss = fmax(wss, fabs(WW(i + 2, j) - 2 * WW(i + 1, j) + w));
-                for (int k = 0; k < 3; k++)
-                    qss[k] = fmax(qss[k], fabs(Q(i + 2, j, k) - 2 * Q(i + 1, j, k) + Q(i, j, k)));
+                for (int q = 0; q < 3; q++)
+                    d[q] = QD(i + 2, j, q) - 2 * QD(i + 1, j, q) + QD(i, j, q);
+                qss = fmax(qss, norm3(d[0], d[1], d[2]));
             }
             if (j + 2 < nv) {
                 wtt = fmax(wtt, fabs(WW(i, j + 2) - 2 * WW(i, j + 1) + w));
-                for (int k = 0; k < 3; k++)
-                    qtt[k] = fmax(qtt[k], fabs(Q(i, j + 2, k) - 2 * Q(i, j + 1, k) + Q(i, j, k)));
+                for (int q = 0; q < 3; q++)
+                    d[q] = QD(i, j + 2, q) - 2 * QD(i, j + 1, q) + QD(i, j, q);
+                qtt = fmax(qtt, norm3(d[0], d[1], d[2]));
             }
             if (i + 1 < nu && j + 1 < nv) {
                 wst = fmax(wst, fabs(WW(i + 1, j + 1) - WW(i + 1, j) - WW(i, j + 1) + w));
-                for (int k = 0; k < 3; k++)
-                    qst[k] = fmax(qst[k], fabs(Q(i + 1, j + 1, k) - Q(i + 1, j, k) - Q(i, j + 1, k) + Q(i, j, k)));
+                for (int q = 0; q < 3; q++)
+                    d[q] = QD(i + 1, j + 1, q) - QD(i + 1, j, q) - QD(i, j + 1, q) + QD(i, j, q);
+                qst = fmax(qst, norm3(d[0], d[1], d[2]));
             }
         }
-#undef Q
+#undef QD
 #undef WW
-    double fu = du, fv = dv, fuu = du * (du - 1.0), fvv = dv * (dv - 1.0), fuv = fu * fv;
-    double sum = 0;
-    for (int k = 0; k < 3; k++) {
-        if (!W) {
-            Ass[k] = fuu * qss[k];
-            Att[k] = fvv * qtt[k];
-            Ast[k] = fuv * qst[k];
-        } else {
-            double Bs = (fu * qs[k] + fu * ws * A[k]) / wmin, Bt = (fv * qt[k] + fv * wt * A[k]) / wmin;
-            Ass[k] = (fuu * qss[k] + 2 * fu * ws * Bs + fuu * wss * A[k]) / wmin;
-            Att[k] = (fvv * qtt[k] + 2 * fv * wt * Bt + fvv * wtt * A[k]) / wmin;
-            Ast[k] = (fuv * qst[k] + fuv * wst * A[k] + fu * ws * Bt + fv * wt * Bs) / wmin;
-        }
-        double h2 = 1.0 / (N * N), a = h2 * Ass[k], b = h2 * Ast[k], cc = h2 * Att[k];
-        double e = fmax(a + 2 * b + cc, fmax(4 * a + 4 * b + cc, a + 4 * b + 4 * cc)) / 8;
-        sum += e * e;
+    double fu = du, fv = dv, fuu = du * (du - 1.0), fvv = dv * (dv - 1.0), fuv = fu * fv, Mss, Mst, Mtt;
+    if (!W) {
+        Mss = fuu * qss;
+        Mtt = fvv * qtt;
+        Mst = fuv * qst;
+    } else {
+        double Bs = (fu * qs + fu * ws * A) / wmin, Bt = (fv * qt + fv * wt * A) / wmin;
+        Mss = (fuu * qss + 2 * fu * ws * Bs + fuu * wss * A) / wmin;
+        Mtt = (fvv * qtt + 2 * fv * wt * Bt + fvv * wtt * A) / wmin;
+        Mst = (fuv * qst + fuv * wst * A + fu * ws * Bt + fv * wt * Bs) / wmin;
     }
-    return sqrt(sum) * (1 + 1e-12) + 1e-300;
+    double h2 = 1.0 / (N * N);
+    shape_bounds(h2 * Mss, h2 * Mst, h2 * Mtt, out);
+    for (int k = 0; k < 3; k++)
+        out[k] = out[k] * (1 + 1e-12) + 1e-300;
 }
 
 /* Bernstein polynomials of degree d at t (d + 1 values). */
@@ -719,21 +757,34 @@ static void bez_interval(const tsr_patch *p, const double r[4], double *out, dou
 
 /* ---- tessellation context ----------------------------------------------- */
 
+/* What a node's bounds and errors are, kept once computed: the passes
+ * select each piece's tree again and again. */
+typedef struct nodeval {
+    float lo[3], hi[3];
+    float d[3];    /* interior, stitched along s, stitched along t */
+    uint8_t force; /* split it: a finer neighbour's stitched tile needs it */
+} nodeval;
+
 typedef struct pctx {
     const tsr_pmodel *m;
     const tsr_ptess_options *opt;
     uint32_t piece;
     uint32_t N;
     double tol; /* max_error or pixel_error, times the piece's scale */
-    uint8_t *req[4]; /* per edge segment: largest span log allowed */
+    uint8_t *req[4]; /* per edge, the largest span log allowed, as a tree over
+                        the 2^L segments (req_cap, req_query) */
     uint8_t *act[4]; /* per edge segment: span log of the leaf there */
     tsr_surface surf;
     tsr_quadtree *qt;
-    /* the last node asked about */
-    uint64_t cache_key;
-    float lo[3], hi[3], delta;
+    const tsr_allocator *alloc;
+    tsr_keymap memo; /* node key -> index in nv */
+    nodeval *nv;
+    uint32_t nnv, capnv;
+    nodeval cur;     /* the last node asked about */
+    uint64_t cur_key;
+    float override;  /* >= 0: surf_error answers this (stitched checks) */
+    bool nomem;      /* the memo could not grow */
     uint64_t *evaluations;
-    double accepted; /* largest delta of a node the refinement kept */
     double *scratch; /* subd tile positions */
     double *uv;
 } pctx;
@@ -748,15 +799,12 @@ static void node_rect(const pctx *c, tsr_qnode n, double r[4])
     (void)c;
 }
 
-static void node_info(pctx *c, tsr_qnode n)
+static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
 {
-    uint64_t key = tsr_qnode_key(n) + 1;
-    if (key == c->cache_key)
-        return;
-    c->cache_key = key;
     const piece *p = &c->m->pieces[c->piece];
-    double r[4];
+    double r[4], d[3];
     node_rect(c, n, r);
+    memset(out, 0, sizeof *out);
     if (p->kind == KIND_BEZIER) {
         double ctrl[3 * TSR_BEZIER_MAX_POINTS], w[TSR_BEZIER_MAX_POINTS];
         tsr_patch sub = p->bez;
@@ -770,11 +818,21 @@ static void node_info(pctx *c, tsr_qnode n)
         for (uint32_t i = 0; i < cnt; i++)
             box_add(lo, hi, sub.ctrl + 3 * i);
         for (int k = 0; k < 3; k++) {
-            c->lo[k] = nextafterf((float)lo[k], -INFINITY);
-            c->hi[k] = nextafterf((float)hi[k], INFINITY);
+            out->lo[k] = nextafterf((float)lo[k], -INFINITY);
+            out->hi[k] = nextafterf((float)hi[k], INFINITY);
         }
-        c->delta = (float)bezier_delta(sub.degree_u, sub.degree_v, sub.ctrl, sub.weights, p->centre, c->N);
-        c->delta = nextafterf(c->delta, INFINITY);
+        bezier_delta(sub.degree_u, sub.degree_v, sub.ctrl, sub.weights, c->N, d);
+        /* the parent's bounds hold for the child at a quarter (the same
+         * derivative bounds over a part, half the spacing): monotone */
+        if (n.level > 0) {
+            tsr_qnode up = {n.x >> 1, n.y >> 1, (uint8_t)(n.level - 1)};
+            const uint32_t *slot = tsr_keymap_find(&c->memo, tsr_qnode_key(up));
+            if (slot)
+                for (int k = 0; k < 3; k++)
+                    d[k] = fmin(d[k], 0.25 * c->nv[*slot].d[k]);
+        }
+        for (int k = 0; k < 3; k++)
+            out->d[k] = nextafterf((float)d[k], INFINITY);
         return;
     }
     /* subd: the tile's vertices, second differences, an estimate */
@@ -786,10 +844,10 @@ static void node_info(pctx *c, tsr_qnode n)
         }
     double *P = c->scratch;
     if (tsr_subd_eval(c->m->subd, p->face, p->sub, c->uv, row * row, P, NULL, NULL) != TSR_OK) {
-        c->delta = INFINITY;
         for (int k = 0; k < 3; k++) {
-            c->lo[k] = (float)p->lo[k];
-            c->hi[k] = (float)p->hi[k];
+            out->d[k] = INFINITY;
+            out->lo[k] = (float)p->lo[k];
+            out->hi[k] = (float)p->hi[k];
         }
         return;
     }
@@ -809,21 +867,75 @@ static void node_info(pctx *c, tsr_qnode n)
                     b[k] = fmax(b[k], fabs(p0[3 * row + 3 + k] - p0[3 * row + k] - p0[3 + k] + p0[k]));
             }
         }
-    double sum = 0;
+    double sum[3] = {0};
     for (int k = 0; k < 3; k++) {
-        double e = (a[k] + 2 * b[k] + cc[k]) / 8;
-        sum += e * e;
+        double e[3];
+        shape_bounds(a[k], b[k], cc[k], e);
+        for (int q = 0; q < 3; q++)
+            sum[q] += e[q] * e[q];
     }
-    double d = SUBD_MARGIN * sqrt(sum);
-    c->delta = (float)d;
+    for (int q = 0; q < 3; q++)
+        d[q] = SUBD_MARGIN * sqrt(sum[q]);
+    for (int q = 0; q < 3; q++)
+        out->d[q] = (float)d[q];
     for (int k = 0; k < 3; k++) {
-        double l = lo[k] - 2 * d, h = hi[k] + 2 * d;
+        double l = lo[k] - 2 * d[1 + (d[2] > d[1])], h = hi[k] + 2 * d[1 + (d[2] > d[1])];
         l = l < p->lo[k] ? p->lo[k] : l;
         h = h > p->hi[k] ? p->hi[k] : h;
         if (l > h)
             l = h = 0.5 * (lo[k] + hi[k]);
-        c->lo[k] = nextafterf((float)l, -INFINITY);
-        c->hi[k] = nextafterf((float)h, INFINITY);
+        out->lo[k] = nextafterf((float)l, -INFINITY);
+        out->hi[k] = nextafterf((float)h, INFINITY);
+    }
+}
+
+/* The node's values, from the memo or computed and kept. */
+static const nodeval *node_info(pctx *c, tsr_qnode n)
+{
+    uint64_t key = tsr_qnode_key(n);
+    if (key + 1 == c->cur_key)
+        return &c->cur;
+    const uint32_t *have = tsr_keymap_find(&c->memo, key);
+    if (have) {
+        c->cur = c->nv[*have];
+    } else {
+        node_compute(c, n, &c->cur);
+        if (c->nnv == c->capnv) {
+            uint32_t cap = c->capnv ? 2 * c->capnv : 256;
+            nodeval *nv = cap > c->capnv ? tsr_realloc(c->alloc, c->nv, (size_t)cap * sizeof *nv) : NULL;
+            if (nv) {
+                c->nv = nv;
+                c->capnv = cap;
+            }
+        }
+        bool found;
+        uint32_t *slot = c->nnv < c->capnv ? tsr_keymap_slot(&c->memo, key, &found, c->alloc) : NULL;
+        if (slot) {
+            *slot = c->nnv;
+            c->nv[c->nnv++] = c->cur;
+        } else {
+            c->nomem = true; /* the answer stands, but forcing would fail */
+        }
+    }
+    c->cur_key = key + 1;
+    return &c->cur;
+}
+
+/* Marks a node and its ancestors to be split. */
+static void node_force(pctx *c, tsr_qnode n)
+{
+    for (;;) {
+        node_info(c, n);
+        const uint32_t *slot = tsr_keymap_find(&c->memo, tsr_qnode_key(n));
+        if (slot)
+            c->nv[*slot].force = 1;
+        else
+            c->nomem = true;
+        c->cur.force = 1;
+        if (!n.level)
+            return;
+        n = (tsr_qnode){n.x >> 1, n.y >> 1, (uint8_t)(n.level - 1)};
+        c->cur_key = 0;
     }
 }
 
@@ -836,16 +948,29 @@ static bool surf_evaluate(void *user, uint32_t i, uint32_t j, float pos[3], floa
 static void surf_bounds(void *user, tsr_qnode n, float lo[3], float hi[3])
 {
     pctx *c = user;
-    node_info(c, n);
-    memcpy(lo, c->lo, sizeof c->lo);
-    memcpy(hi, c->hi, sizeof c->hi);
+    const nodeval *v = node_info(c, n);
+    memcpy(lo, v->lo, sizeof v->lo);
+    memcpy(hi, v->hi, sizeof v->hi);
 }
 
+/* The error of the node's tile without stitching (tsr_ptess_run checks
+ * stitched tiles after selection, and splits their coarse neighbours where
+ * the stitched bound is beyond the tolerance), or the override. */
 static float surf_error(void *user, tsr_qnode n)
 {
     pctx *c = user;
-    node_info(c, n);
-    return c->delta;
+    return c->override >= 0 ? c->override : node_info(c, n)->d[0];
+}
+
+/* The node's error against the tolerance: model units or pixels. */
+static double node_measure(pctx *c, tsr_qnode n, float delta)
+{
+    if (!c->opt->camera)
+        return delta;
+    c->override = delta;
+    double e = tsr_camera_node_error(c->opt->camera, &c->surf, n);
+    c->override = -1;
+    return e;
 }
 
 /* Segment range [k0, k1) of edge e covered by node n, or false. */
@@ -861,23 +986,87 @@ static bool node_edge_range(const pctx *c, tsr_qnode n, int e, uint32_t *k0, uin
     return true;
 }
 
+/* The span logs required along an edge of 2^L segments, as caps on the
+ * dyadic ranges of a binary tree (node 1 the whole edge, node (1 << l) + x
+ * the x-th range of 2^(L-l) segments, the range of a quadtree node of level
+ * l along the edge): cap[] the cap put on a node's range, sub[] = cap[] + 2^(L+1)
+ * the smallest cap within its subtree. A segment's requirement is the
+ * smallest cap on its path; caps only go down. */
+static uint8_t req_query(const uint8_t *cap, uint32_t L, size_t node)
+{
+    const uint8_t *sub = cap + ((size_t)2 << L);
+    uint8_t m = sub[node];
+    for (size_t a = node >> 1; a; a >>= 1)
+        m = cap[a] < m ? cap[a] : m;
+    return m;
+}
+
+static void req_cap(uint8_t *cap, uint32_t L, size_t node, uint8_t v)
+{
+    uint8_t *sub = cap + ((size_t)2 << L);
+    if (cap[node] > v)
+        cap[node] = v;
+    for (; node && sub[node] > v; node >>= 1)
+        sub[node] = v;
+}
+
+/* Caps segments [lo, hi] of an edge at v, as dyadic ranges. */
+static void req_cap_range(uint8_t *cap, uint32_t L, uint32_t lo, uint32_t hi, uint8_t v)
+{
+    while (lo <= hi) {
+        uint32_t k = 0; /* the largest aligned block at lo within [lo, hi] */
+        while (k < L && !(lo & (1u << k)) && lo + (2u << k) - 1 <= hi)
+            k++;
+        req_cap(cap, L, ((size_t)1 << (L - k)) + (lo >> k), v);
+        if (hi - lo + 1 <= (1u << k))
+            break;
+        lo += 1u << k;
+    }
+}
+
 static bool refine(void *user, const tsr_surface *s, tsr_qnode n)
 {
     pctx *c = user;
     uint32_t sl = s->levels - n.level;
     for (int e = 0; e < 4; e++) {
         uint32_t k0, k1;
-        if (!c->req[e] || !node_edge_range(c, n, e, &k0, &k1))
-            continue;
-        for (uint32_t k = k0; k < k1; k++)
-            if (c->req[e][k] < sl)
-                return true;
+        if (c->req[e] && node_edge_range(c, n, e, &k0, &k1) &&
+            req_query(c->req[e], s->levels, ((size_t)1 << n.level) + (k0 >> sl)) < sl)
+            return true;
     }
-    double d = s->error(s->user, n);
-    bool split = c->opt->camera ? tsr_camera_node_error(c->opt->camera, s, n) > c->tol : d > c->tol;
-    if (!split && d > c->accepted)
-        c->accepted = d;
-    return split;
+    const nodeval *v = node_info(c, n);
+    return v->force || node_measure(c, n, v->d[0]) > c->tol;
+}
+
+/* After selection: every stitched tile's bound against the tolerance.
+ * Where it fails, the coarse neighbour is marked to split (the finer tile
+ * is then not stitched there); returns how many were marked. Adds the
+ * bound of every leaf as its tile is drawn to *bound. */
+static uint32_t check_stitched(pctx *c, double *bound)
+{
+    uint32_t nl = tsr_quadtree_leaf_count(c->qt), marked = 0;
+    const tsr_qleaf *lv = tsr_quadtree_leaves(c->qt);
+    for (uint32_t i = 0; i < nl; i++) {
+        tsr_qnode n = lv[i].node;
+        nodeval v = *node_info(c, n);
+        double d = v.d[0];
+        for (int e = 0; e < 4; e++) {
+            if (!(lv[i].stitch & (1u << e)))
+                continue;
+            float ds = v.d[e & 1 ? 2 : 1];
+            if (node_measure(c, n, ds) > c->tol && n.level > 0) {
+                tsr_qnode up = {n.x >> 1, n.y >> 1, (uint8_t)(n.level - 1)};
+                int dx = e == 1 ? 1 : e == 3 ? -1 : 0, dy = e == 0 ? -1 : e == 2 ? 1 : 0;
+                if ((dx < 0 && up.x == 0) || (dy < 0 && up.y == 0))
+                    continue; /* no neighbour: cannot be stitched */
+                node_force(c, (tsr_qnode){up.x + (uint32_t)dx, up.y + (uint32_t)dy, up.level});
+                marked++;
+            }
+            d = fmax(d, ds);
+        }
+        *bound = fmax(*bound, d);
+    }
+    return marked;
 }
 
 /* Fills act[] from the current leaves. */
@@ -1014,6 +1203,7 @@ typedef struct builder {
     double *tile_pos; /* 3 (N+1)^2 */
     double *tile_uv;  /* 2 (N+1)^2 */
     double *tile_tmp; /* 3 (N+1)^2, and 2 (N+1) (MAX_DEGREE+1) Bernstein values */
+    double *vert_uv;  /* 2 (N+1)^2: the source's (u, v) of the tile's vertices */
 } builder;
 
 static uint32_t new_vertex(builder *b, const piece *p, const double pos[3], const double *nrm)
@@ -1188,6 +1378,7 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
         double r[4];
         node_rect(c, n, r);
         bool pre = !b->opt->normals && tile_positions(b, p, r, N, used, b->tile_pos);
+        double *vuv = b->vert_uv;
         for (uint32_t j = 0; j <= N; j++)
             for (uint32_t i = 0; i <= N; i++) {
                 if (!used[j * row + i])
@@ -1201,6 +1392,10 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
                 if (v == UINT32_MAX)
                     return TSR_ERR_NOMEM;
                 local[j * row + i] = v;
+                double s = (double)(x0 + i * step) / Z, tt = (double)(y0 + j * step) / Z;
+                double *o = vuv + 2 * (j * row + i);
+                o[0] = s == 1 ? p->rect[1] : p->rect[0] + s * (p->rect[1] - p->rect[0]);
+                o[1] = tt == 1 ? p->rect[3] : p->rect[2] + tt * (p->rect[3] - p->rect[2]);
             }
         const uint32_t *tri = pat->tri[mask];
         for (uint32_t t = 0; t < pat->count[mask]; t++) {
@@ -1214,14 +1409,8 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
             double uv[6];
             for (int k = 0; k < 3; k++) {
                 v[k] = local[idx[k]];
-                uint32_t li2 = idx[k] % row, lj = idx[k] / row;
-                double s = (double)(x0 + li2 * step) / Z, tt = (double)(y0 + lj * step) / Z;
-                uv[2 * k] = p->rect[0] + s * (p->rect[1] - p->rect[0]);
-                uv[2 * k + 1] = p->rect[2] + tt * (p->rect[3] - p->rect[2]);
-                if (s == 1)
-                    uv[2 * k] = p->rect[1];
-                if (tt == 1)
-                    uv[2 * k + 1] = p->rect[3];
+                uv[2 * k] = vuv[2 * idx[k]];
+                uv[2 * k + 1] = vuv[2 * idx[k] + 1];
             }
             if (!add_tri(b, p->source, v, uv))
                 return TSR_ERR_NOMEM;
@@ -1508,6 +1697,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         c->scratch = scratch;
         c->uv = scratch + 3 * (size_t)row * row;
         c->evaluations = &evals;
+        c->alloc = a;
+        c->override = -1;
         uint32_t L = opt.max_level - (pc->kind == KIND_SUBD && pc->levels ? 1 : 0);
         c->surf = (tsr_surface){c, opt.tile_n, L, opt.tile_n << L, opt.tile_n << L, surf_evaluate, surf_bounds,
                                 surf_error, true};
@@ -1519,13 +1710,13 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         for (int e = 0; e < 4; e++) {
             if (!pc->nlinks[e])
                 continue;
-            c->req[e] = tsr_alloc(a, (size_t)1 << L);
+            c->req[e] = tsr_alloc(a, (size_t)4 << L);
             c->act[e] = tsr_alloc(a, (size_t)1 << L);
             if (!c->req[e] || !c->act[e]) {
                 st = TSR_ERR_NOMEM;
                 break;
             }
-            memset(c->req[e], (int)L, (size_t)1 << L);
+            memset(c->req[e], (int)L, (size_t)4 << L);
         }
     }
     /* select, then make linked edges agree */
@@ -1534,49 +1725,78 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         st = TSR_ERR_NOMEM;
     if (dirty)
         memset(dirty, 1, m->npieces);
-    bool changed = true;
-    while (st == TSR_OK && changed) {
-        out->passes++;
-        for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
-            if (!dirty[p])
-                continue;
-            ctx[p].cache_key = 0;
-            ctx[p].accepted = 0;
-            st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
-            collect_spans(&ctx[p]);
-            dirty[p] = 0;
-        }
-        changed = false;
-        for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
-            const piece *pc = &m->pieces[p];
-            uint32_t M = 1u << ctx[p].surf.levels;
-            for (int e = 0; e < 4; e++)
-                for (int k = 0; k < pc->nlinks[e]; k++) {
-                    const plink *l = &pc->link[e][k];
-                    pctx *q = &ctx[l->piece];
-                    if (!q->req[l->edge])
-                        continue;
-                    uint32_t Mq = 1u << q->surf.levels, k0 = l->t0 * M / 2, k1 = l->t1 * M / 2,
-                             s0 = l->s0 * Mq / 2;
-                    for (uint32_t g = k0; g < k1; g++) {
-                        uint32_t d = g - k0, h = l->reversed ? s0 - 1 - d : s0 + d;
-                        if (h >= Mq)
+    double bound = 0;
+    for (bool again = true; again && st == TSR_OK;) {
+        bool changed = true;
+        while (st == TSR_OK && changed) {
+            out->passes++;
+            for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
+                if (!dirty[p])
+                    continue;
+                ctx[p].cur_key = 0;
+                st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
+                collect_spans(&ctx[p]);
+                dirty[p] = 0;
+            }
+            changed = false;
+            for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
+                const piece *pc = &m->pieces[p];
+                uint32_t M = 1u << ctx[p].surf.levels;
+                for (int e = 0; e < 4; e++)
+                    for (int k = 0; k < pc->nlinks[e]; k++) {
+                        const plink *l = &pc->link[e][k];
+                        pctx *q = &ctx[l->piece];
+                        if (!q->req[l->edge])
                             continue;
-                        uint8_t want = ctx[p].act[e][g];
-                        if (q->req[l->edge][h] > want) {
-                            q->req[l->edge][h] = want;
-                            if (q->act[l->edge][h] > want) {
-                                dirty[l->piece] = 1;
-                                changed = true;
+                        uint32_t Mq = 1u << q->surf.levels, k0 = l->t0 * M / 2, k1 = l->t1 * M / 2,
+                                 s0 = l->s0 * Mq / 2;
+                        /* run by run of this side's leaves: a leaf of span
+                         * log w covers an aligned run of 2^w segments */
+                        for (uint32_t g = k0; g < k1;) {
+                            uint8_t want = ctx[p].act[e][g];
+                            uint32_t end = ((g >> want) + 1) << want;
+                            end = end < k1 ? end : k1;
+                            int64_t a0 = l->reversed ? (int64_t)s0 - (end - k0) : (int64_t)s0 + (g - k0);
+                            int64_t a1 = a0 + (end - g) - 1;
+                            g = end;
+                            a0 = a0 < 0 ? 0 : a0;
+                            a1 = a1 >= Mq ? (int64_t)Mq - 1 : a1;
+                            if (a0 > a1)
+                                continue;
+                            req_cap_range(q->req[l->edge], q->surf.levels, (uint32_t)a0, (uint32_t)a1, want);
+                            /* a leaf there coarser than want covers a whole
+                             * aligned run, or it is finer everywhere */
+                            for (int64_t h = a0; h <= a1;) {
+                                uint8_t have = q->act[l->edge][h];
+                                if (have > want) {
+                                    dirty[l->piece] = 1;
+                                    changed = true;
+                                    break;
+                                }
+                                h = ((h >> have) + 1) << have;
                             }
                         }
                     }
-                }
+            }
+        }
+        /* stitched tiles within the bound, or their coarse neighbours split */
+        again = false;
+        bound = 0;
+        for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
+            double pb = 0; /* the bound holds for Bézier pieces only */
+            if (check_stitched(&ctx[p], &pb)) {
+                dirty[p] = 1;
+                again = true;
+            }
+            if (ctx[p].nomem)
+                st = TSR_ERR_NOMEM;
+            if (m->pieces[p].kind == KIND_BEZIER)
+                bound = fmax(bound, pb);
         }
     }
     tsr_free(a, dirty);
     /* assemble */
-    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL};
+    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL, NULL};
     tsr_tile_patterns pat;
     bool pat_ok = false;
     uint32_t *local = NULL;
@@ -1588,7 +1808,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         b.tile_pos = tsr_alloc(a, (size_t)3 * row * row * sizeof(double));
         b.tile_uv = tsr_alloc(a, (size_t)2 * row * row * sizeof(double));
         b.tile_tmp = tsr_alloc(a, ((size_t)3 * row * row + 2 * (size_t)row * (TSR_PATCH_MAX_DEGREE + 1)) * sizeof(double));
-        if (st == TSR_OK && (!local || !b.used || !b.tile_pos || !b.tile_uv || !b.tile_tmp))
+        b.vert_uv = tsr_alloc(a, (size_t)2 * row * row * sizeof(double));
+        if (st == TSR_OK && (!local || !b.used || !b.tile_pos || !b.tile_uv || !b.tile_tmp || !b.vert_uv))
             st = TSR_ERR_NOMEM;
         if (st == TSR_OK) {
             memset(b.used, 0, (size_t)16 * row * row);
@@ -1626,21 +1847,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         if (st == TSR_OK && !tsr_keymap_reserve(&b.map, border, a))
             st = TSR_ERR_NOMEM;
     }
-    double bound = 0;
     for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
         out->leaves += tsr_quadtree_leaf_count(ctx[p].qt);
-        if (m->pieces[p].kind == KIND_BEZIER) {
-            /* leaves are kept nodes, their descendants (balancing), or at
-             * the deepest level, which the refinement never asks about */
-            const tsr_qleaf *lv = tsr_quadtree_leaves(ctx[p].qt);
-            bound = ctx[p].accepted > bound ? ctx[p].accepted : bound;
-            for (uint32_t i = 0; i < tsr_quadtree_leaf_count(ctx[p].qt); i++) {
-                if (lv[i].node.level < ctx[p].surf.levels)
-                    continue;
-                double d = surf_error(&ctx[p], lv[i].node);
-                bound = d > bound ? d : bound;
-            }
-        }
         if (m->sources[m->pieces[p].source].trimmed)
             continue;
         st = emit_piece(&b, p, &pat, local);
@@ -1710,12 +1918,15 @@ done:
     tsr_free(a, b.tile_pos);
     tsr_free(a, b.tile_uv);
     tsr_free(a, b.tile_tmp);
+    tsr_free(a, b.vert_uv);
     if (pat_ok)
         tsr_tile_patterns_free(&pat);
     tsr_keymap_free(&b.map, a);
     tsr_free(a, b.cb.p);
     for (uint32_t p = 0; ctx && p < m->npieces; p++) {
         tsr_quadtree_destroy(ctx[p].qt);
+        tsr_keymap_free(&ctx[p].memo, a);
+        tsr_free(a, ctx[p].nv);
         for (int e = 0; e < 4; e++) {
             tsr_free(a, ctx[p].req[e]);
             tsr_free(a, ctx[p].act[e]);

@@ -33,17 +33,24 @@
  * with max_level levels (lattice size tile_n << max_level); a node's error
  * delta is:
  *  - for a Bézier piece (polynomial or rational), a bound that holds: the
- *    node's Bézier sub-patch (blossoming) gives bounds of the second
- *    derivatives (control-net differences; for rational pieces through
- *    the quotient rule with the smallest weight), and linear
- *    interpolation on the tile's triangles, stitched or not, is within
- *    (h_s^2 M_ss + 2 h_s h_t M_st + h_t^2 M_tt) / 8 per coordinate of the
- *    surface (h doubled along a stitched edge), so no point of the tile
- *    lies farther than delta from S at the same (s, t); bounds are the box
- *    of the sub-patch's control points (convex hull);
- *  - for a subd piece, an estimate: the interior-triangle term of the
- *    same formula, with the second differences of the tile's vertices
- *    (evaluated by Bfr) for h^2 M; bounds are the box of those vertices
+ *    node's Bézier sub-patch (blossoming) gives bounds M of the second
+ *    derivatives' lengths (control-net differences as vectors; for
+ *    rational pieces through the quotient rule with the smallest weight,
+ *    about the centre of the sub-net's box), and linear interpolation on
+ *    the tile's triangles is within (h_s^2 M_ss + 2 h_s h_t M_st + h_t^2
+ *    M_tt) / 8 for its interior (right) triangles, and within a larger
+ *    figure (ptess.c, shape_bounds) for a stitched triangle (base 2h on a
+ *    tile edge); a child's bounds are at most a quarter of its parent's.
+ *    A node is split while the interior figure is beyond the tolerance;
+ *    after selection every stitched tile is checked with the stitched
+ *    figure, and where it fails the coarse neighbour is split too (until
+ *    none fails), so no point of any drawn triangle lies farther than
+ *    delta from S at the same (s, t); bounds are the box of the
+ *    sub-patch's control points (convex hull);
+ *  - for a subd piece, an estimate: the same figures (interior, and
+ *    stitched, checked the same way) with the second differences of the
+ *    tile's vertices (evaluated by Bfr) per coordinate for h^2 M; bounds
+ *    are the box of those vertices
  *    padded by twice the estimate, within the face's box
  *    (tsr_subd_face_bounds). Not a proof (on OpenSubdiv's 81 Catmull-
  *    Clark shapes it measures up to 1.7x beyond the tolerance on 8): the
@@ -155,10 +162,12 @@ typedef struct tsr_ptess_result {
     uint32_t *tri_source;
     double *tri_uv;
     uint32_t leaves;        /* tiles over all pieces */
-    uint32_t passes;        /* rounds of making linked edges agree */
+    uint32_t passes;        /* selections: rounds of making linked edges agree, again after
+                               stitched tiles split their coarse neighbours */
     uint32_t evaluations;   /* surface points evaluated (vertices of the mesh and error estimates) */
     double bound;           /* a bound of delta over the leaves of Bézier pieces, model units:
-                               the largest delta the refinement accepted, or of a deepest leaf */
+                               the largest of the leaves' figures for their tiles as drawn
+                               (interior, or stitched along the stitched edges) */
     double seconds;
     tsr_allocator alloc;
 } tsr_ptess_result;

@@ -65,6 +65,17 @@ uint32_t *tsr_keymap_slot(tsr_keymap *m, uint64_t key, bool *found, const tsr_al
     return &m->vals[h];
 }
 
+uint32_t *tsr_keymap_find(const tsr_keymap *m, uint64_t key)
+{
+    if (!m->keys)
+        return NULL;
+    uint64_t k = key + 1;
+    size_t h = mix64(k) & m->mask;
+    while (m->keys[h] && m->keys[h] != k)
+        h = (h + 1) & m->mask;
+    return m->keys[h] == k ? &m->vals[h] : NULL;
+}
+
 void tsr_keymap_free(tsr_keymap *m, const tsr_allocator *a)
 {
     tsr_free(a, m->keys);

@@ -205,6 +205,8 @@ bool tsr_keymap_reserve(tsr_keymap *m, size_t n, const tsr_allocator *a);
 /* The value slot of key, inserted (uninitialised) when absent; *found
  * says whether it was there. NULL when out of memory. */
 uint32_t *tsr_keymap_slot(tsr_keymap *m, uint64_t key, bool *found, const tsr_allocator *a);
+/* The value of key, or NULL when absent. */
+uint32_t *tsr_keymap_find(const tsr_keymap *m, uint64_t key);
 void tsr_keymap_free(tsr_keymap *m, const tsr_allocator *a);
 
 /* ---- Validation -------------------------------------------------------- */

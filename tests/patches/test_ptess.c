@@ -1237,6 +1237,78 @@ static void vcyl_truth(void *ctx, uint32_t src, const double *uv, uint32_t n, do
     }
 }
 
+/* ---- stitched tiles ----------------------------------------------------------- */
+
+/* z = K s^2 t^7 over the unit square (a Bézier patch of degrees 2 and
+ * 7): curvature along s growing fast with t, so leaves deepen along t and
+ * tiles next to coarser ones are stitched along s, where a stitched
+ * triangle's base (2h along s) lies farther from the surface than any
+ * unstitched triangle does. */
+typedef struct graded {
+    double K;
+} graded;
+
+static void graded_truth(void *ctx, uint32_t src, const double *uv, uint32_t n, double *pos)
+{
+    const graded *g = ctx;
+    (void)src;
+    for (uint32_t k = 0; k < n; k++) {
+        double s = uv[2 * k], t = uv[2 * k + 1];
+        pos[3 * k] = s;
+        pos[3 * k + 1] = t;
+        pos[3 * k + 2] = g->K * s * s * pow(t, 7);
+    }
+}
+
+TEST(stitched_tiles_within_bound)
+{
+    graded g = {0.75};
+    sbuf b = {0};
+    /* s^2 = B_2^2(s), t^7 = B_7^7(t), s = sum i/2 B_i^2(s), t likewise */
+    for (int j = 0; j < 8; j++)
+        for (int i = 0; i < 3; i++)
+            sb_printf(&b, "v %.17g %.17g %.17g\n", i / 2.0, j / 7.0, i == 2 && j == 7 ? g.K : 0.0);
+    sb_printf(&b, "cstype bezier\ndeg 2 7\nsurf 0 1 0 1");
+    for (int k = 1; k <= 24; k++)
+        sb_printf(&b, " %d", k);
+    sb_printf(&b, "\nend\n");
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "graded.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        double worst = 0;
+        for (uint32_t tile = 2; tile <= 8; tile *= 2)
+            for (double E = 3e-2; E >= 1e-5; E /= 1.7) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                o.tile_n = tile;
+                tsr_ptess_result r;
+                if (!run_ptess(m, &o, &r)) {
+                    tsr_ptess_result_free(&r);
+                    continue;
+                }
+                sampling sm = {graded_truth, &g, NULL, NULL, NULL, 6, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+                sample_result(&r, &sm);
+                double sl = fslack(mesh_maxabs(&r.mesh));
+                CHECK_MSG(sm.param_error <= E + sl, "tile %u E %g: error %g at (%.9g, %.9g)", tile, E, sm.param_error,
+                          sm.worst_uv[0], sm.worst_uv[1]);
+                CHECK_MSG(sm.param_error <= r.bound + sl && r.bound <= E, "tile %u E %g: error %g, bound %g", tile, E,
+                          sm.param_error, r.bound);
+                worst = fmax(worst, sm.param_error / E);
+                tsr_validation v = validate(&r.mesh);
+                check_conforming("graded", &v);
+                tsr_ptess_result_free(&r);
+            }
+        fprintf(stderr, "  worst sampled error / tolerance %.3f\n", worst);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
 TEST(camera_near_finer)
 {
     sbuf b = {0};
@@ -1903,4 +1975,4 @@ TEST(data_osd_cages)
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
-          T(camera_near_finer), T(bad_options), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
+          T(stitched_tiles_within_bound), T(camera_near_finer), T(bad_options), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
