@@ -476,9 +476,40 @@ tsr_status tsr_pmodel_from_subd(const tsr_subd *subd, const tsr_allocator *alloc
         }
     }
     first[nf] = k;
+    /* collapsed edges (a cage face with a repeated vertex): the limit along
+     * the patch edge is one point, as a Bézier edge whose control points
+     * coincide; sampled at 9 points, within 1e-9 of the diagonal. Only a
+     * piece with one such edge (a triangle in space, like the teapot's
+     * lid) gets it; one with more has no area to speak of and is left as
+     * it is (cages of faces like 1 1 2 2) */
+    double ctol = 1e-9 * model_diag(m);
+    for (uint32_t p = 0; p < m->npieces; p++) {
+        piece *pc = &m->pieces[p];
+        uint8_t mask = 0;
+        for (int e = 0; e < 4; e++) {
+            double uv[18], pos[27];
+            for (int i = 0; i < 9; i++) {
+                double t = i / 8.0;
+                uv[2 * i] = e == 0 ? t : e == 1 ? 1 : e == 2 ? 1 - t : 0;
+                uv[2 * i + 1] = e == 0 ? 0 : e == 1 ? t : e == 2 ? 1 : 1 - t;
+            }
+            if (tsr_subd_eval(subd, pc->face, pc->sub, uv, 9, pos, NULL, NULL) != TSR_OK)
+                continue;
+            bool one = true;
+            for (int i = 1; i < 9 && one; i++)
+                one = dist3(pos, pos + 3 * i) <= ctol;
+            mask |= (uint8_t)(one << e);
+        }
+        if (mask && !(mask & (mask - 1))) {
+            pc->collapsed = mask;
+            m->collapsed++;
+        }
+    }
     for (uint32_t p = 0; p < m->npieces; p++) {
         piece *pc = &m->pieces[p];
         for (int e = 0; e < 4; e++) {
+            if (pc->collapsed >> e & 1)
+                continue; /* a collapsed edge takes no links */
             tsr_subd_link l[2];
             uint32_t c = tsr_subd_patch_neighbours(subd, pc->face, pc->sub, (uint32_t)e, l);
             for (uint32_t i = 0; i < c; i++) {

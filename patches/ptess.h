@@ -23,8 +23,10 @@
  *  - subd patches as tsr_subd_patch_neighbours says (a quad edge meeting
  *    an N-gon links each half to one sub-patch).
  * A piece edge whose control points all coincide (within the same
- * tolerance: the teapot's lid top and bottom centre) is *collapsed*: all
- * its points are one vertex. Pieces are oriented consistently through
+ * tolerance: the teapot's lid top and bottom centre), or a subd patch
+ * edge whose limit is one point at 9 samples (a cage face with a repeated
+ * vertex), when it is the piece's only such edge, is *collapsed*: all its
+ * points are one vertex and it takes no links. Pieces are oriented consistently through
  * their links (a piece whose (s, t) orientation disagrees with the first
  * piece of its connected part is *mirrored*: its triangles are emitted
  * reversed and its normals negated), so the welded mesh is oriented.
@@ -174,7 +176,8 @@ typedef struct tsr_ptess_result {
 
 /* Tessellates m into *out (zeroed first; free with tsr_ptess_result_free
  * also after a failure). TSR_ERR_ARGUMENT (err says which) for NULL
- * pointers, a non-positive or non-finite max_error without camera, a
+ * pointers, a non-positive or non-finite max_error without camera or
+ * pixel_error with one, a
  * tile_n or max_level out of range, a piece_scale outside (0, 1];
  * TSR_ERR_TOO_LARGE when the mesh would pass 2^32 - 2 vertices or
  * triangles; TSR_ERR_NOMEM. A trimmed source whose triangulation fails
@@ -202,9 +205,12 @@ typedef struct tsr_ptess_measure_result {
     double *source_error;      /* per source max error (num sources), or NULL when not asked */
 } tsr_ptess_measure_result;
 
-/* Measures r against m at a grid of per_side x per_side samples over every
- * piece (cell centres and corners alike: (k / (per_side - 1)) of the
- * piece, k = 0..per_side-1) plus the midpoint of every triangle edge.
+/* Measures r against m at a grid of samples over every source, spread
+ * evenly over its (u, v) domain, ends included: (per_side pieces_u) x
+ * (per_side pieces_v) points, the density of per_side x per_side per piece
+ * (measure.c says why not per piece), plus the midpoint of every triangle
+ * edge. The mesh's positions are floats, so expect rounding of a few ulps
+ * of the coordinates' magnitude in the figures.
  * camera: NULL for model units. per_source_error: when true, fills
  * out->source_error (allocated with alloc; caller frees with tsr_free).
  * Independent of how r was built: it reads only the mesh, tri_source,

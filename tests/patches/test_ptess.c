@@ -1966,6 +1966,9 @@ TEST(data_osd_cages)
         {"catmark_nonquads.obj", false, true, true, 99},  /* N-gons next to quads, open */
         {"catmark_hole_test1.obj", false, true, true, 1}, /* a cube less one face: a disc */
         {"catmark_fan.obj", false, false, true, 99},      /* non-manifold: error only */
+        /* faces with a repeated vertex (4 3 5 5): collapsed patch edges, whose
+         * triangles must go without a gap: a conforming disc */
+        {"catmark_nonman_quadpole8.obj", false, true, false, 1},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++)
         for (double E = 1e-2; E >= 0.99e-3; E /= 10)
