@@ -14,6 +14,7 @@
  * from tv[3t+k] to tv[3t+(k+1)%3] and tn[3t+k] is the triangle across it. */
 #include "tessellate/cdt_internal.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -235,11 +236,36 @@ static bool link_big(tsr_cdt *d, const uint32_t *slots, uint32_t n, const link_r
     return true;
 }
 
+/* Marked edges inside a cavity (both triangles in it), to be kept. */
+typedef struct slit {
+    uint32_t a, b, m;
+} slit;
+
+/* Marks again, in the new triangles out[0..n), the edges of slits[] that
+ * are still edges. */
+static void remark_slits(tsr_cdt *d, const uint32_t *out, uint32_t n, const slit *slits, uint32_t ns)
+{
+    for (uint32_t e = 0; e < ns; e++)
+        for (uint32_t i = 0; i < n; i++) {
+            int k = edge_index(d, out[i], slits[e].a, slits[e].b);
+            if (k < 0)
+                k = edge_index(d, out[i], slits[e].b, slits[e].a);
+            if (k >= 0) {
+                tsr__cdt_mark_edge(d, out[i], k, slits[e].m);
+                break;
+            }
+        }
+}
+
 /* Replaces the triangles old[0..nold) (a cavity) by the triangles given as
  * vertex triples in nw[0..nnew) (nnew >= nold), reusing the old slots
  * first, and links every edge: to the other new triangles, or to what was
  * across that edge of the cavity before. Marks on the cavity's boundary are
- * kept, interior edges are unmarked; new triangles take old[0]'s flag.
+ * kept; so are marks on edges inside it (a constrained edge dangling into
+ * the region a segment sweeps: the segment passes by it, through the
+ * triangles on both its sides, and the pseudo-polygon walks along both
+ * sides of it) where the new triangles still have that edge; other
+ * interior edges are unmarked. New triangles take old[0]'s flag.
  * Out: the new triangles' slots. */
 static bool retriangulate(tsr_cdt *d, const uint32_t *old, uint32_t nold, const uint32_t (*nw)[3], uint32_t nnew,
                           uint32_t *out)
@@ -250,16 +276,29 @@ static bool retriangulate(tsr_cdt *d, const uint32_t *old, uint32_t nold, const 
          * membership by binary search in a sorted copy of old */
         link_rec *bnd = tsr_alloc(da(d), 3 * (size_t)nold * sizeof *bnd);
         uint32_t *sorted = tsr_alloc(da(d), (size_t)nold * sizeof *sorted);
+        slit *slits = NULL;
         bool ok = bnd && sorted;
-        uint32_t nb = 0;
+        uint32_t nb = 0, nsl = 0;
         if (ok) {
             memcpy(sorted, old, (size_t)nold * sizeof *sorted);
             qsort(sorted, nold, sizeof *sorted, u32_cmp);
-            for (uint32_t i = 0; i < nold; i++)
+            for (uint32_t i = 0; i < nold && ok; i++)
                 for (int k = 0; k < 3; k++) {
                     uint32_t nbr = d->tn[3 * (size_t)old[i] + k];
-                    if (bsearch(&nbr, sorted, nold, sizeof *sorted, u32_cmp))
+                    if (bsearch(&nbr, sorted, nold, sizeof *sorted, u32_cmp)) {
+                        uint32_t m = cdt_mark(d, old[i], k);
+                        if (m && old[i] < nbr) { /* once per edge */
+                            if (!slits)
+                                slits = tsr_alloc(da(d), 3 * (size_t)nold * sizeof *slits);
+                            if (!slits) {
+                                ok = false;
+                                break;
+                            }
+                            const uint32_t *v = d->tv + 3 * (size_t)old[i];
+                            slits[nsl++] = (slit){v[k], v[(k + 1) % 3], m};
+                        }
                         continue;
+                    }
                     const uint32_t *v = d->tv + 3 * (size_t)old[i];
                     bnd[nb].key = cdt_edge_key(v[k], v[(k + 1) % 3]);
                     bnd[nb].t = nbr;
@@ -288,8 +327,11 @@ static bool retriangulate(tsr_cdt *d, const uint32_t *old, uint32_t nold, const 
                 if (j >= 0)
                     d->tc[3 * (size_t)in + j] = d->tc[3 * (size_t)bnd[e].t + bnd[e].k];
             }
+        if (ok && nsl)
+            remark_slits(d, out, nnew, slits, nsl);
         tsr_free(da(d), bnd);
         tsr_free(da(d), sorted);
+        tsr_free(da(d), slits);
         if (!ok)
             return false;
     } else {
@@ -297,13 +339,20 @@ static bool retriangulate(tsr_cdt *d, const uint32_t *old, uint32_t nold, const 
             uint32_t a, b, t, m;
         } bedge;
         bedge bnd[15];
+        slit slits[8];
         int nb = 0;
+        uint32_t nsl = 0;
         for (uint32_t i = 0; i < nold; i++)
             for (int k = 0; k < 3; k++) {
                 uint32_t nbr = d->tn[3 * (size_t)old[i] + k];
                 bool inside = false;
                 for (uint32_t j = 0; j < nold; j++)
                     inside |= nbr == old[j];
+                uint32_t m = inside && old[i] < nbr ? cdt_mark(d, old[i], k) : 0;
+                if (m && nsl < 8) {
+                    const uint32_t *v = d->tv + 3 * (size_t)old[i];
+                    slits[nsl++] = (slit){v[k], v[(k + 1) % 3], m};
+                }
                 if (!inside) {
                     bnd[nb].a = d->tv[3 * (size_t)old[i] + k];
                     bnd[nb].b = d->tv[3 * (size_t)old[i] + (k + 1) % 3];
@@ -344,6 +393,8 @@ static bool retriangulate(tsr_cdt *d, const uint32_t *old, uint32_t nold, const 
                 if (d->tc)
                     d->tc[3 * (size_t)out[i] + k] = m;
             }
+        if (nsl)
+            remark_slits(d, out, nnew, slits, nsl);
     }
     for (uint32_t i = 0; i < nnew; i++) {
         if (d->tf)
@@ -792,31 +843,37 @@ static bool restore_delaunay(tsr_cdt *d, uint32_t t, int k)
     return ok;
 }
 
-static double dist2(const double *p, double x, double y)
-{
-    return (p[0] - x) * (p[0] - x) + (p[1] - y) * (p[1] - y);
-}
-
 /* Segment a-b crosses the constrained edge k of t (x-y): splits that edge
  * at (about) the crossing point, and pushes the new vertex as the next
  * target. Where the rounded crossing cannot be used (it falls on or
- * within rounding of a vertex, or would invert a triangle), the vertex
- * nearest the true crossing takes its place: an end of the crossed edge
- * (the segment is routed through it), or an end of the segment (the
+ * within rounding of a vertex, or would invert a triangle: a sliver beside
+ * the edge), the vertex whose use moves the geometry least takes its
+ * place: an end of the crossed edge (the segment is routed through it), or
+ * an end of the segment or the apex of a triangle beside the edge (the
  * crossed edge is bent through it: its constraint is replaced by two
- * constrained edges to that vertex). Either moves the geometry by no more
- * than the rounding that made the crossing unusable. */
+ * constrained edges to that vertex). */
 static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uint32_t b, int depth)
 {
     const uint32_t *v = d->tv + 3 * (size_t)t;
     uint32_t x = v[k], y = v[(k + 1) % 3];
     const double *A = P(d, a), *B = P(d, b), *X = P(d, x), *Y = P(d, y);
-    double ux = B[0] - A[0], uy = B[1] - A[1];
-    double num = ux * (A[1] - X[1]) - uy * (A[0] - X[0]);
-    double den = ux * (Y[1] - X[1]) - uy * (Y[0] - X[0]);
-    double sp = den != 0 ? num / den : 0.5;
-    if (sp > 0 && sp < 1) {
-        uint32_t pv = add_vertex(d, X[0] + sp * (Y[0] - X[0]), X[1] + sp * (Y[1] - X[1]));
+    /* the crossing, computed from whichever of the four ends is nearest to
+     * it: its error is then a few ulps of that distance, where a parameter
+     * along the whole edge would carry an error of the edge's length (an
+     * end at 1e30 moves a crossing near 1 by 1e14). x and y lie strictly on
+     * either side of a-b, a and b of x-y. */
+    double ox = tsr_orient2d(A, B, X), oy = tsr_orient2d(A, B, Y);
+    double oa = tsr_orient2d(X, Y, A), ob = tsr_orient2d(X, Y, B);
+    double lab = hypot(B[0] - A[0], B[1] - A[1]), lxy = hypot(Y[0] - X[0], Y[1] - X[1]);
+    const double *from[4] = {X, Y, A, B}, *to[4] = {Y, X, B, A};
+    double f[4] = {ox / (ox - oy), oy / (oy - ox), oa / (oa - ob), ob / (ob - oa)};
+    int e = 0;
+    for (int i = 1; i < 4; i++)
+        if (f[i] * (i < 2 ? lxy : lab) < f[e] * (e < 2 ? lxy : lab))
+            e = i;
+    if (f[e] > 0 && f[e] < 1) {
+        const double *E = from[e], *F = to[e];
+        uint32_t pv = add_vertex(d, E[0] + f[e] * (F[0] - E[0]), E[1] + f[e] * (F[1] - E[1]));
         if (pv == NONE)
             return STEP_NOMEM;
         bool nomem;
@@ -830,13 +887,36 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
         A = P(d, a), B = P(d, b), X = P(d, x), Y = P(d, y); /* add_vertex may move the array */
     }
     d->snapped++;
-    double s = sp > 0 ? (sp < 1 ? sp : 1) : 0;
-    double cx = X[0] + s * (Y[0] - X[0]), cy = X[1] + s * (Y[1] - X[1]);
-    uint32_t cand[4] = {x, y, a, b}, best = 0;
-    for (uint32_t i = 1; i < 4; i++)
-        if (dist2(P(d, cand[i]), cx, cy) < dist2(P(d, cand[best]), cx, cy))
-            best = i;
-    if (best >= 2 && depth < 8) {
+    /* the vertex that moves the geometry least: an end of the crossed edge
+     * (the segment bends through it: it moves by its distance from a-b), or
+     * a vertex strictly beside the crossed edge's span, within the two
+     * triangles' corners or the segment's ends (the crossed constraint
+     * bends through it). Nearness to the rounded crossing alone can pick an
+     * end of a long crossed edge far from the segment, where the split
+     * failed on a sliver beside the edge, whose apex is the vertex to use. */
+    uint32_t c = v[(k + 2) % 3], q = apex(d, d->tn[3 * (size_t)t + k], x, y);
+    uint32_t cand[6] = {x, y, a, b, c, q}, best = NONE;
+    double best_dev = INFINITY;
+    for (uint32_t i = 0; i < 6; i++) {
+        uint32_t w = cand[i];
+        if (w == GHOST || (i >= 2 && (depth >= 8 || w == x || w == y)))
+            continue;
+        const double *W = P(d, w);
+        double dev;
+        if (i < 2)
+            dev = fabs(tsr_orient2d(A, B, W)) / lab;
+        else {
+            /* from either end: one sum near |x-y|^2 would round away a
+             * vertex just inside the far end */
+            if (!((W[0] - X[0]) * (Y[0] - X[0]) + (W[1] - X[1]) * (Y[1] - X[1]) > 0 &&
+                  (W[0] - Y[0]) * (X[0] - Y[0]) + (W[1] - Y[1]) * (X[1] - Y[1]) > 0))
+                continue;
+            dev = fabs(tsr_orient2d(X, Y, W)) / lxy;
+        }
+        if (dev < best_dev)
+            best = i, best_dev = dev;
+    }
+    if (best >= 2) {
         uint32_t m = cdt_mark(d, t, k), w = cand[best];
         tsr__cdt_mark_edge(d, t, k, 0);
         if (!restore_delaunay(d, t, k))
@@ -846,8 +926,7 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
             st = insert_chain(d, w, y, m, depth + 1);
         return st == TSR_OK ? STEP_AGAIN : STEP_NOMEM;
     }
-    uint32_t through = best < 2 ? cand[best] : fabs(tsr_orient2d(A, B, X)) <= fabs(tsr_orient2d(A, B, Y)) ? x : y;
-    return append(d, &d->targets, &d->ntargets, &d->cap_targets, through) ? STEP_AGAIN : STEP_NOMEM;
+    return append(d, &d->targets, &d->ntargets, &d->cap_targets, cand[best]) ? STEP_AGAIN : STEP_NOMEM;
 }
 
 /* Is q exactly on the open input segment oa-ob, and strictly between a
@@ -860,6 +939,26 @@ static bool on_original(const tsr_cdt *d, uint32_t oa, uint32_t ob, uint32_t a, 
     double ux = B[0] - A[0], uy = B[1] - A[1];
     double t = (Q[0] - A[0]) * ux + (Q[1] - A[1]) * uy;
     return t > 0 && t < ux * ux + uy * uy;
+}
+
+/* Is q, not exactly on the input segment oa-ob, within rounding of it (a
+ * few units in the last place of the coordinates: where a rounded crossing
+ * of that segment or of one collinear with it lies) and strictly between a
+ * and b along it? */
+static bool near_original(const tsr_cdt *d, uint32_t oa, uint32_t ob, uint32_t a, uint32_t b, uint32_t q)
+{
+    const double *OA = P(d, oa), *OB = P(d, ob), *Q = P(d, q), *A = P(d, a), *B = P(d, b);
+    if (q == oa || q == ob || q == GHOST)
+        return false;
+    /* a crossing is computed from the end nearest to it (split_crossing):
+     * its error is a few ulps of its coordinates and of that distance */
+    double lx = OB[0] - OA[0], ly = OB[1] - OA[1];
+    double m =
+        fmax(fabs(Q[0]), fabs(Q[1])) + fmin(hypot(Q[0] - OA[0], Q[1] - OA[1]), hypot(Q[0] - OB[0], Q[1] - OB[1]));
+    if (fabs(tsr_orient2d(OA, OB, Q)) > 4 * DBL_EPSILON * m * sqrt(lx * lx + ly * ly))
+        return false;
+    double ux = B[0] - A[0], uy = B[1] - A[1];
+    return (Q[0] - A[0]) * ux + (Q[1] - A[1]) * uy > 0 && (B[0] - Q[0]) * ux + (B[1] - Q[1]) * uy > 0;
 }
 
 /* May the piece end at q instead: is every chain vertex strictly on its
@@ -905,8 +1004,30 @@ static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa
                 *reached = x;
                 return STEP_DONE;
             }
-            if (y != GHOST && ox < 0 && tsr_orient2d(A, B, P(d, y)) > 0)
+            if (y != GHOST && ox < 0 && tsr_orient2d(A, B, P(d, y)) > 0) {
+                /* a constrained edge beside the direction to b whose far
+                 * end lies within rounding of the input segment: the chain
+                 * of a segment given before along the same line, through
+                 * its rounded crossings (a segment given twice, or
+                 * overlapping collinear ones). Following it covers that
+                 * chain again; walking past it would cross the same
+                 * constraint again and make a second crossing vertex an
+                 * ulp from the first. */
+                int ky = (ia + 2) % 3;
+                bool nx = cdt_mark(d, t, ia) && near_original(d, oa, ob, a, b, x);
+                bool ny = cdt_mark(d, t, ky) && near_original(d, oa, ob, a, b, y);
+                if (nx && ny) /* both: the one nearer the line */
+                    nx = fabs(ox) <= fabs(tsr_orient2d(A, B, P(d, y)));
+                if (nx || ny) {
+                    int k = nx ? ia : ky;
+                    uint32_t old = cdt_mark(d, t, k);
+                    uint32_t lo = CDT_LABEL(old) < CDT_LABEL(mark) ? CDT_LABEL(old) : CDT_LABEL(mark);
+                    tsr__cdt_mark_edge(d, t, k, lo | (~(old ^ mark) & CDT_EVEN));
+                    *reached = nx ? x : y;
+                    return STEP_DONE;
+                }
                 break;
+            }
         }
         t = d->tn[3 * (size_t)t + (ia + 2) % 3];
         const uint32_t *w = d->tv + 3 * (size_t)t;
@@ -1237,4 +1358,34 @@ tsr_status tsr_cdt_insert_points(tsr_cdt *d, const double *xy, uint32_t n, uint3
     }
     tsr_free(da(d), order);
     return st;
+}
+
+/* ---- edge flips (data-dependent triangulations) ------------------------- */
+
+uint32_t tsr_cdt_neighbor(const tsr_cdt *d, uint32_t h, int k, bool *constrained)
+{
+    if (constrained)
+        *constrained = false;
+    if (h >= d->nt || k < 0 || k > 2 || is_ghost(d, h))
+        return NONE;
+    uint32_t n = d->tn[3 * (size_t)h + k];
+    if (constrained)
+        *constrained = cdt_mark(d, h, k) != 0;
+    return is_ghost(d, n) ? NONE : n;
+}
+
+tsr_status tsr_cdt_flip(tsr_cdt *d, uint32_t h, int k)
+{
+    uint32_t n = tsr_cdt_neighbor(d, h, k, NULL);
+    if (n == NONE || cdt_mark(d, h, k) || (d->tf && d->tf[h] != d->tf[n]))
+        return TSR_ERR_ARGUMENT;
+    const uint32_t *v = d->tv + 3 * (size_t)h;
+    int i = (k + 2) % 3;
+    uint32_t p = v[i], x = v[(i + 1) % 3], y = v[(i + 2) % 3];
+    if (edge_index(d, n, y, x) < 0)
+        return TSR_ERR_ARGUMENT;
+    uint32_t q = apex(d, n, x, y);
+    if (tsr_orient2d(P(d, p), P(d, x), P(d, q)) <= 0 || tsr_orient2d(P(d, p), P(d, q), P(d, y)) <= 0)
+        return TSR_ERR_ARGUMENT;
+    return flip(d, h, i, n) ? TSR_OK : TSR_ERR_NOMEM;
 }

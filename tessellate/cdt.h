@@ -88,6 +88,25 @@ void tsr_cdt_track_changes(tsr_cdt *d, bool on);
 const uint32_t *tsr_cdt_changes(const tsr_cdt *d, uint32_t *n);
 void tsr_cdt_clear_changes(tsr_cdt *d);
 
+/* ---- Edge flips (data-dependent triangulations, the heightmap mesher) --- */
+
+/* The slot of the triangle across edge k (from v[k] to v[(k+1) % 3] as
+ * tsr_cdt_triangle lists them) of the triangle in slot h, or UINT32_MAX
+ * when that side is the hull (a ghost), h holds no finite triangle or k is
+ * not 0..2. *constrained (may be NULL) says whether the edge is
+ * constrained. */
+uint32_t tsr_cdt_neighbor(const tsr_cdt *d, uint32_t h, int k, bool *constrained);
+/* Flips edge k of the triangle (p, x, y) in slot h (edge k from x to y, p
+ * the third vertex) shared with (y, x, q): slot h then holds (p, x, q) and
+ * the neighbour's slot (p, q, y), both recorded while tracking changes.
+ * Returns TSR_OK, TSR_ERR_ARGUMENT (nothing changed) for a hull edge, a
+ * constrained edge or a quad that is not strictly convex (exact test), or
+ * TSR_ERR_NOMEM (the flip is done, the change list short). The result
+ * need not be Delaunay: later insertions keep it a valid triangulation
+ * (Lawson's flips only meet convex quads) but may flip such edges back;
+ * point location may be slower unless started near the point. */
+tsr_status tsr_cdt_flip(tsr_cdt *d, uint32_t h, int k);
+
 #ifdef __cplusplus
 }
 #endif

@@ -93,8 +93,8 @@ bool tsr__cdt_split_edge(tsr_cdt *d, uint32_t t, int k, uint32_t pv, bool *nomem
 /* Conforming / quality refinement (refine.c) of the triangles with tf 0,
  * whose boundary edges must all be marked. ninput: vertices [1, ninput]
  * are input vertices; segends: the internal ids of input segment s's ends
- * at 2s, 2s+1 (nseg segments). Updates the result's quality_limited and
- * small_angle_exempt. */
+ * at 2s, 2s+1 (nseg segments). Updates the result's quality_limited,
+ * steiner_limited, unrefined, small_angle_exempt and below_resolution. */
 tsr_status tsr__cdt_refine(tsr_cdt *d, const tsr_tri_options *opt, uint32_t ninput, const uint32_t *segends,
                            uint32_t nseg, tsr_triangulation *res);
 

@@ -28,9 +28,12 @@
  *  - the terminator (see edge_excused): a skinny triangle caused by a
  *    small input angle is left alone, by the same rule as the independent
  *    checker's (tricheck.c) so that what is left is what the checker
- *    excuses; so is one flatter than the resolution of doubles (features
- *    closer than a few units in the last place that do not meet: no vertex
- *    can go between them). Both are counted in small_angle_exempt.
+ *    excuses (counted in small_angle_exempt); so is one below the
+ *    resolution of doubles (tsr_tri_below_resolution, the definition the
+ *    checker uses: features closer than a few units in the last place that
+ *    do not meet, where no vertex can go between them), counted in
+ *    below_resolution and reported by quality_limited, since the bound is
+ *    not met there.
  * Only triangles with tf 0 (the domain) are refined; the domain's
  * boundary is constrained, so walks and flips never leave it. */
 #include "tessellate/cdt_internal.h"
@@ -234,7 +237,9 @@ static bool edge_excused(const refiner *r, uint32_t pa, uint32_t pb, uint32_t pc
 
 /* Bad: 1 for quality (smallest angle), 2 for area, 0 good. Exempt
  * triangles (the terminator, or below the resolution of doubles) are 0
- * and counted when count is set. */
+ * and counted when count is set: in small_angle_exempt (the terminator,
+ * which the contract allows) or below_resolution (which sets
+ * quality_limited: the bound is not met there). */
 static int bad(refiner *r, uint32_t t, bool count)
 {
     const tsr_cdt *d = r->d;
@@ -261,21 +266,20 @@ static int bad(refiner *r, uint32_t t, bool count)
     for (int k = 0; k < 3 && excused; k++)
         if (l[k] == l[s])
             excused = edge_excused(r, v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
-    /* below the resolution of doubles: a vertex closer to the opposite edge
-     * than a few units in the last place of the coordinates (features of
-     * the input nearer than that, not meeting) cannot be separated by
-     * vertices between them; splitting would cascade until the Steiner
-     * limit */
-    if (!excused) {
-        double lmax = fmax(l[0], fmax(l[1], l[2])), m = 0;
-        for (int k = 0; k < 3; k++)
-            m = fmax(m, fmax(fabs(p[k][0]), fabs(p[k][1])));
-        excused = area2 < 8 * DBL_EPSILON * m * sqrt(lmax);
+    if (excused) {
+        if (count)
+            r->res->small_angle_exempt++;
+        return 0;
     }
-    if (!excused)
+    /* below the resolution of doubles (the checker's definition): a vertex
+     * closer to the opposite edge than a few units in the last place of the
+     * coordinates (features of the input nearer than that, not meeting)
+     * cannot be separated by vertices between them; splitting would
+     * cascade until the Steiner limit */
+    if (!tsr_tri_below_resolution(p[0], p[1], p[2]))
         return 1;
     if (count)
-        r->res->small_angle_exempt++;
+        r->res->below_resolution++;
     return 0;
 }
 
@@ -717,7 +721,7 @@ tsr_status tsr__cdt_refine(tsr_cdt *d, const tsr_tri_options *opt, uint32_t ninp
     bool quality = opt->min_angle > 0 || opt->max_area > 0;
     for (;;) {
         if (r.steiner >= r.limit) {
-            res->quality_limited = true;
+            res->quality_limited = res->steiner_limited = true;
             break;
         }
         if (r.hsq < r.nsq) {
@@ -747,18 +751,24 @@ tsr_status tsr__cdt_refine(tsr_cdt *d, const tsr_tri_options *opt, uint32_t ninp
         }
         break;
     }
-    /* count what stays bad because of small input angles; what stays bad
-     * otherwise (a split that rounding made impossible), or encroached
-     * when conforming, is reported as degraded, not hidden */
+    /* count what stays bad because of small input angles, what stays
+     * below the resolution of doubles, and what stays bad otherwise (a
+     * split that rounding made impossible: a flat triangle on the far side
+     * of the edge to cut) or encroached when conforming; all but the first
+     * are reported as degraded (quality_limited), not hidden */
     for (uint32_t t = 0; t < d->nt; t++) {
         if (!in_domain(&r, t) || cdt_is_ghost(d, t))
             continue;
         if ((opt->min_angle > 0 || opt->max_area > 0) && bad(&r, t, opt->min_angle > 0))
-            res->quality_limited = true;
-        for (int k = 0; k < 3 && r.eager; k++)
-            if (cdt_mark(d, t, k) && encroached(&r, t, k))
-                res->quality_limited = true;
+            res->unrefined++;
+        for (int k = 0; k < 3 && r.eager; k++) {
+            uint32_t n = d->tn[3 * (size_t)t + k]; /* each edge once */
+            if (cdt_mark(d, t, k) && (t < n || !in_domain(&r, n)) && encroached(&r, t, k))
+                res->unrefined++;
+        }
     }
+    if (res->steiner_limited || res->unrefined || res->below_resolution)
+        res->quality_limited = true;
     st = TSR_OK;
 done:
     tsr_cdt_track_changes(d, was_tracking);

@@ -66,7 +66,7 @@ typedef struct tsr_tri_options {
     double max_area;
     /* refinement stops after this many Steiner points (0: 20 * nv +
      * 100,000, plus 4 * domain area / max_area when max_area is set);
-     * quality_limited says so */
+     * steiner_limited (and quality_limited) say so */
     uint32_t max_steiner;
     /* quadtree method: deepest level (0: 24) */
     uint32_t max_depth;
@@ -90,14 +90,27 @@ typedef struct tsr_triangulation {
     uint32_t fallback_cells;   /* quadtree: cells given to the Delaunay path */
     bool fell_back;            /* quadtree: the whole input went to Delaunay */
     const char *fallback_reason; /* static text, or NULL */
-    bool quality_limited;      /* refinement stopped at max_steiner, or got stuck
-                                  (a triangle still bad and not exempt, or, when
-                                  conforming, an edge still encroached) */
+    bool quality_limited;      /* the bounds asked for are not met everywhere:
+                                  refinement stopped at max_steiner
+                                  (steiner_limited), got stuck (unrefined),
+                                  or left triangles below the resolution of
+                                  doubles (below_resolution) */
+    bool steiner_limited;      /* refinement stopped at max_steiner */
+    uint32_t unrefined;        /* triangles still bad and not exempt, and,
+                                  when conforming, constrained edges still
+                                  encroached, where refinement stopped (at
+                                  max_steiner, or where rounding left no
+                                  usable position for a new vertex, such as
+                                  an edge with a flat triangle beyond it) */
     uint32_t small_angle_exempt; /* triangles below min_angle left because an
-                                    input angle is smaller (terminator rule), or
-                                    because they are flatter than the rounding
-                                    of their coordinates (features closer than
-                                    a few ulps that do not meet) */
+                                    input angle is smaller (terminator rule);
+                                    the contract allows them */
+    uint32_t below_resolution; /* triangles below min_angle left because they
+                                  are below the resolution of doubles
+                                  (tsr_tri_below_resolution: features closer
+                                  than a few ulps that do not meet, where no
+                                  vertex can be placed to mend them); they
+                                  set quality_limited */
     tsr_allocator alloc;
 } tsr_triangulation;
 
@@ -129,11 +142,30 @@ typedef struct tsr_tri_check {
     long euler, expected_euler; /* expected LONG_MIN when not known */
     double min_angle;          /* degrees, smallest in the output */
     uint32_t below_min_angle;  /* triangles below opt->min_angle not
-                                  excused by a small input angle */
+                                  excused by a small input angle, nor below
+                                  the resolution of doubles and reported */
+    uint32_t below_resolution_excused; /* triangles below opt->min_angle
+                                  excused as below the resolution of doubles
+                                  (tsr_tri_below_resolution), which the
+                                  result reports (quality_limited, and at
+                                  least this many in below_resolution) */
     uint32_t above_max_area;   /* triangles above opt->max_area */
     bool ok;
     char first_problem[256];   /* a sentence on the first failure */
 } tsr_tri_check;
+
+/* Is the triangle a, b, c below the resolution of doubles: is its height
+ * over its longest edge less than 8 DBL_EPSILON times the largest
+ * magnitude of its coordinates (8 to 16 units in the last place)? A vertex
+ * placed to mend its angles would be rounded by a good part of its height;
+ * such triangles arise where input features lie a few ulps apart without
+ * meeting (a vertex or segment that close to a segment or hull edge), and
+ * the angle bound cannot be met there at double resolution. The one definition used
+ * by refinement (which leaves such triangles, counts them in
+ * below_resolution and sets quality_limited) and by the checker (which
+ * excuses them only when the result reports them). Orientation-agnostic;
+ * thread-safe. */
+bool tsr_tri_below_resolution(const double a[2], const double b[2], const double c[2]);
 
 /* Checks out against in and opt (method, region, conforming, min_angle,
  * max_area). Returns TSR_OK when it could run (then res->ok is the

@@ -67,13 +67,22 @@
  *    shortest edge joins a vertex lying on input feature f1 and a vertex on
  *    feature f2 != f1, where f1 and f2 meet (a shared endpoint, a crossing
  *    or a touch) at an angle below 60 degrees. Features are the input
- *    segments (a vertex lies on those whose chains pass through it) and,
+ *    segments (a vertex lies on those whose chains pass through it, and on
+ *    the segment named by a listed constrained edge ending at it, once that
+ *    edge is found to lie on it: where nearly coincident segments leave
+ *    several chains within tolerance, the search records only one) and,
  *    for region HULL, the convex hull's edges. This covers both a small
  *    input angle inside the triangle and Shewchuk's terminator / Miller-
  *    Pav-Walkington rule (skinny triangles whose shortest edge subtends a
  *    small input angle are left alone). A triangle whose three corners
  *    all lie on two such features (it lies inside the small wedge) is
- *    excused too.
+ *    excused too. So is a triangle below the resolution of doubles
+ *    (tsr_tri_below_resolution: height under 8 DBL_EPSILON times its
+ *    largest coordinate), but only when the result reports such triangles
+ *    (quality_limited, and below_resolution at least as many as found
+ *    here); more than it reports all count as failing. The one definition
+ *    is shared with refinement, which leaves them; the rule itself is
+ *    plain geometry, so the check stays independent of how they arose.
  *  - Maximum area: triangles whose area exceeds opt->max_area by more than
  *    1e-9 relative.
  *
@@ -646,6 +655,15 @@ typedef struct line {
     double a[2], b[2], dx, dy, len2, len, tol;
 } line;
 
+/* The largest coordinate magnitude of a and b: the scale of the rounding
+ * of points computed on the segment a-b (its crossings and splits are
+ * computed from its ends or from nearer points), so that one far point
+ * elsewhere does not loosen every segment's tolerance. */
+static double seg_scale(const double *a, const double *b)
+{
+    return fmax(fmax(fabs(a[0]), fabs(a[1])), fmax(fabs(b[0]), fabs(b[1])));
+}
+
 static void line_init(line *l, const double *a, const double *b, double maxabs)
 {
     l->a[0] = a[0], l->a[1] = a[1], l->b[0] = b[0], l->b[1] = b[1];
@@ -784,7 +802,7 @@ static bool push_frame(ck *c, uint32_t v, pos t)
 static int walk_segment(ck *c, uint32_t s, uint32_t va, uint32_t vb, bool gaps)
 {
     line l;
-    line_init(&l, vxy(c, va), vxy(c, vb), c->maxabs);
+    line_init(&l, vxy(c, va), vxy(c, vb), seg_scale(vxy(c, va), vxy(c, vb)));
     c->stamp++;
     c->nstack = 0;
     if (!push_frame(c, va, pos_start(&l)))
@@ -939,6 +957,21 @@ static uint32_t features_at(ck *c, uint32_t v, const double *hull_xy, uint32_t n
     return n;
 }
 
+/* ---- Below the resolution of doubles ----------------------------------------- */
+
+bool tsr_tri_below_resolution(const double a[2], const double b[2], const double c[2])
+{
+    const double *p[3] = {a, b, c};
+    double l2 = 0, m = 0;
+    for (int k = 0; k < 3; k++) {
+        double dx = p[(k + 1) % 3][0] - p[k][0], dy = p[(k + 1) % 3][1] - p[k][1];
+        l2 = fmax(l2, dx * dx + dy * dy);
+        m = fmax(m, fmax(fabs(p[k][0]), fabs(p[k][1])));
+    }
+    /* twice the area over the longest edge: the height, times that edge */
+    return fabs(tsr_orient2d(a, b, c)) < 8 * DBL_EPSILON * m * sqrt(l2);
+}
+
 /* ---- The check -------------------------------------------------------------- */
 
 static tsr_status run_check(ck *c, geom *g)
@@ -1088,8 +1121,8 @@ static tsr_status run_check(ck *c, geom *g)
             continue;
         }
         line l;
-        line_init(&l, in->xy + 2 * (size_t)in->seg[2 * (size_t)s], in->xy + 2 * (size_t)in->seg[2 * (size_t)s + 1],
-                  c->maxabs);
+        const double *sa = in->xy + 2 * (size_t)in->seg[2 * (size_t)s], *sb = in->xy + 2 * (size_t)in->seg[2 * (size_t)s + 1];
+        line_init(&l, sa, sb, seg_scale(sa, sb));
         pos ta, tb;
         double d, slack = l.tol * l.len;
         bool ok = l.len2 > 0 && line_near(&l, vxy(c, a), &ta, &d) && line_near(&l, vxy(c, b), &tb, &d);
@@ -1097,7 +1130,8 @@ static tsr_status run_check(ck *c, geom *g)
             res->bad_topology++;
             problem(res, "constrained edge %u (%.17g, %.17g)-(%.17g, %.17g) does not lie on input segment %u", e,
                     vxy(c, a)[0], vxy(c, a)[1], vxy(c, b)[0], vxy(c, b)[1], s);
-        }
+        } else if (!feat_add(c, a, s) || !feat_add(c, b, s)) /* its ends lie on s */
+            return TSR_ERR_NOMEM;
     }
 
     /* Adjacency: vertex -> neighbours, vertex -> ccw triangle corners. */
@@ -1161,8 +1195,14 @@ static tsr_status run_check(ck *c, geom *g)
         if (r == 0)
             res->missing_segments++;
     }
-    if (c->nfeat)
+    if (c->nfeat) { /* sorted, each (vertex, segment) once */
         qsort(c->feat, c->nfeat, sizeof *c->feat, cmp_u64);
+        size_t n = 1;
+        for (size_t i = 1; i < c->nfeat; i++)
+            if (c->feat[i] != c->feat[n - 1])
+                c->feat[n++] = c->feat[i];
+        c->nfeat = n;
+    }
 
     /* Expected area and Euler characteristic from the input alone. */
     double expected = NAN;
@@ -1232,6 +1272,7 @@ static tsr_status run_check(ck *c, geom *g)
     }
     double min_angle = nt ? 180 : 0;
     uint32_t below = 0, excused = 0, above = 0, first_below = UINT32_MAX, first_above = UINT32_MAX;
+    uint32_t sub = 0, first_sub = UINT32_MAX; /* below the resolution of doubles */
     double bound = opt->min_angle * (1 - 1e-9), area_bound = opt->max_area * (1 + 1e-9);
     uint32_t faces = 0;
     double bx0 = INFINITY, bx1 = -INFINITY, by0 = INFINITY, by1 = -INFINITY;
@@ -1296,13 +1337,25 @@ static tsr_status run_check(ck *c, geom *g)
                 }
             if (ok)
                 excused++;
-            else if (below++ == 0)
+            else if (tsr_tri_below_resolution(p[0], p[1], p[2]) && out->quality_limited) {
+                if (sub++ == 0)
+                    first_sub = t;
+            } else if (below++ == 0)
                 first_below = t;
         }
+    }
+    /* excused only as far as the result reports them */
+    bool unreported = sub > out->below_resolution;
+    if (unreported) {
+        if (below == 0)
+            first_below = first_sub;
+        below += sub;
+        sub = 0;
     }
     res->area = kval(&area);
     res->min_angle = min_angle;
     res->below_min_angle = below;
+    res->below_resolution_excused = sub;
     res->above_max_area = above;
 
     uint32_t vcount = 0;
@@ -1347,10 +1400,11 @@ static tsr_status run_check(ck *c, geom *g)
     if (below) {
         const uint32_t *v = tri + 3 * (size_t)first_below;
         problem(res,
-                "%u triangle%s an angle below %g degrees (%u more excused by small input angles); first: "
-                "triangle %u (%.17g, %.17g) (%.17g, %.17g) (%.17g, %.17g)",
-                below, below == 1 ? " has" : "s have", opt->min_angle, excused, first_below, vxy(c, v[0])[0], vxy(c, v[0])[1], vxy(c, v[1])[0],
-                vxy(c, v[1])[1], vxy(c, v[2])[0], vxy(c, v[2])[1]);
+                "%u triangle%s an angle below %g degrees (%u more excused by small input angles, %u as below the "
+                "resolution of doubles%s); first: triangle %u (%.17g, %.17g) (%.17g, %.17g) (%.17g, %.17g)",
+                below, below == 1 ? " has" : "s have", opt->min_angle, excused, sub,
+                unreported ? "; more below it than the result reports" : "", first_below, vxy(c, v[0])[0],
+                vxy(c, v[0])[1], vxy(c, v[1])[0], vxy(c, v[1])[1], vxy(c, v[2])[0], vxy(c, v[2])[1]);
     }
     if (above) {
         const uint32_t *v = tri + 3 * (size_t)first_above;

@@ -86,8 +86,16 @@ static void print_check(FILE *f, const tsr_tri_options *opt, const tsr_triangula
         fprintf(f, "check: Euler characteristic %ld, expected %ld: %s\n", c->euler, c->expected_euler,
                 c->euler == c->expected_euler ? "ok" : "FAIL");
     if (opt->min_angle > 0)
-        fprintf(f, "check: smallest angle %.6g degrees; %u triangles below %g not excused by a small input angle: %s\n",
-                c->min_angle, c->below_min_angle, opt->min_angle, c->below_min_angle ? "FAIL" : "ok");
+        fprintf(f,
+                "check: smallest angle %.6g degrees; %u triangles below %g not excused by a small input angle%s: %s\n",
+                c->min_angle, c->below_min_angle, opt->min_angle,
+                c->below_resolution_excused ? " or as below the resolution of doubles" : "",
+                c->below_min_angle ? "FAIL" : "ok");
+    if (c->below_resolution_excused)
+        fprintf(f,
+                "check: %u triangles below %g degrees excused as below the resolution of doubles (height under 8 "
+                "ulps; reported by the result: quality limited)\n",
+                c->below_resolution_excused, opt->min_angle);
     else
         fprintf(f, "check: smallest angle %.6g degrees (no bound asked)\n", c->min_angle);
     if (opt->max_area > 0)
@@ -147,7 +155,10 @@ static void print_json(const char *in_path, const cli_pslg *g, const tsr_tri_opt
     else
         cJSON_AddNullToObject(j, "fallback_reason");
     cJSON_AddBoolToObject(j, "quality_limited", t->quality_limited);
+    cJSON_AddBoolToObject(j, "steiner_limited", t->steiner_limited);
+    add_count(j, "unrefined", t->unrefined);
     add_count(j, "small_angle_exempt", t->small_angle_exempt);
+    add_count(j, "below_resolution", t->below_resolution);
     add_count(j, "min_angle", c ? c->min_angle : smallest_angle(t));
     add_count(j, "seconds", seconds);
     if (c) {
@@ -171,6 +182,7 @@ static void print_json(const char *in_path, const cli_pslg *g, const tsr_tri_opt
             add_count(k, "expected_euler", (double)c->expected_euler);
         add_count(k, "min_angle", c->min_angle);
         add_count(k, "below_min_angle", c->below_min_angle);
+        add_count(k, "below_resolution_excused", c->below_resolution_excused);
         add_count(k, "above_max_area", c->above_max_area);
         cJSON_AddStringToObject(k, "first_problem", c->first_problem);
         add_count(k, "seconds", check_seconds);
@@ -348,8 +360,16 @@ static int run(int argc, char **argv)
                                   t.fallback_reason ? t.fallback_reason : "no reason given");
         else if (t.fallback_cells)
             n += (size_t)snprintf(extra, sizeof extra, "; %u quadtree cells went to Delaunay", t.fallback_cells);
-        if (t.quality_limited && n < sizeof extra)
+        if (t.steiner_limited && n < sizeof extra)
             n += (size_t)snprintf(extra + n, sizeof extra - n, "; refinement stopped at the Steiner limit");
+        if (t.below_resolution && n < sizeof extra)
+            n += (size_t)snprintf(extra + n, sizeof extra - n,
+                                  "; %u triangle%s below the angle bound, below the resolution of doubles",
+                                  t.below_resolution, t.below_resolution == 1 ? "" : "s");
+        if (t.unrefined && !t.steiner_limited && n < sizeof extra)
+            n += (size_t)snprintf(extra + n, sizeof extra - n,
+                                  "; %u triangle%s or edge%s refinement could not mend (no usable vertex position)",
+                                  t.unrefined, t.unrefined == 1 ? "" : "s", t.unrefined == 1 ? "" : "s");
         if (check && n < sizeof extra)
             snprintf(extra + n, sizeof extra - n, "; check %s", c.ok ? "passed" : "FAILED");
         fprintf(stderr,

@@ -43,7 +43,9 @@ void fuzz_limited_allocator(tsr_allocator *a, const size_t *limit);
  * look for the segments among the edges of no triangle); otherwise
  * tsr_triangulation_check must pass, with min_angle, max_area and
  * conforming not required when refinement stopped at max_steiner
- * (quality_limited).
+ * (steiner_limited) or got stuck (unrefined); triangles below the
+ * resolution of doubles are excused by the checker only as far as the
+ * result reports them (below_resolution).
  * abort()s naming what on a failure. */
 void fuzz_check_triangulation(const tsr_pslg *in, const tsr_tri_options *opt, const tsr_triangulation *t,
                               const char *what);

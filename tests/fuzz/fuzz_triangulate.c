@@ -84,7 +84,7 @@ int fuzz_triangulate(const uint8_t *data, size_t size)
     o.min_angle = flags & 16 ? (angle % 61) / 2.0 : 0;
     o.max_area = flags & 32 ? areas[area & 15] : 0;
     o.max_depth = flags & 64 ? 2 + (area >> 4) % 8 : 0;
-    o.max_steiner = 4000; /* keeps every run short; quality_limited says when it bit */
+    o.max_steiner = 4000; /* keeps every run short; steiner_limited says when it bit */
 
     double xy[2 * MAX_POINTS + 1], holes[2 * MAX_HOLES + 1];
     uint32_t seg[2 * MAX_SEGMENTS + 1];

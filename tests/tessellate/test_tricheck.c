@@ -449,6 +449,44 @@ TEST(small_input_angle_excuses_triangle)
     CHECK(strstr(r.first_problem, "triangle 0") != NULL);
 }
 
+/* Below the resolution of doubles (tsr_tri_below_resolution, the rule
+ * refinement shares): a square fanned around (5, 1e-15), whose triangle
+ * on the bottom edge is 1e-15 high, under 8 ulps of 10. It is excused only
+ * when the result reports such triangles (quality_limited and
+ * below_resolution); a triangle of ordinary size below the bound is never
+ * excused, whatever the result says. */
+TEST(below_resolution_excused_only_when_reported)
+{
+    static double flat[] = {0, 0, 10, 0, 10, 10, 0, 10, 5, 1e-15};
+    static double skinny[] = {0, 0, 10, 0, 10, 10, 0, 10, 5, 0.3};
+    static uint32_t tri[] = {0, 1, 4, 1, 2, 4, 2, 3, 4, 3, 0, 4};
+    CHECK(tsr_tri_below_resolution(flat, flat + 2, flat + 8));
+    CHECK(tsr_tri_below_resolution(flat + 2, flat, flat + 8)); /* either orientation */
+    CHECK(!tsr_tri_below_resolution(skinny, skinny + 2, skinny + 8));
+    CHECK(!tsr_tri_below_resolution(flat + 2, flat + 4, flat + 8));
+    static const double far[6] = {1e10, 0, 1e10 + 10, 0, 1e10 + 5, 1e-5}; /* relative to the coordinates */
+    CHECK(tsr_tri_below_resolution(far, far + 2, far + 4));
+    tsr_pslg in = {flat, 5, NULL, 0, NULL, 0};
+    tsr_tri_options opt = {.min_angle = 20};
+    tsr_triangulation out = output(flat, 5, 5, tri, 4, NULL, NULL, 0);
+    tsr_tri_check r = run(&in, &opt, &out);
+    CHECK(!r.ok && r.below_min_angle == 1 && r.below_resolution_excused == 0);
+    out.quality_limited = true;
+    out.below_resolution = 1;
+    r = run(&in, &opt, &out);
+    CHECK(r.ok && r.below_min_angle == 0 && r.below_resolution_excused == 1);
+    out.below_resolution = 0; /* limited, but not for this reason */
+    r = run(&in, &opt, &out);
+    CHECK(!r.ok && r.below_min_angle == 1);
+    CHECK(strstr(r.first_problem, "more below it than the result reports") != NULL);
+    /* a real violation stays one */
+    in.xy = skinny;
+    out.xy = skinny;
+    out.below_resolution = 4;
+    r = run(&in, &opt, &out);
+    CHECK(!r.ok && r.below_min_angle >= 1 && r.below_resolution_excused == 0);
+}
+
 TEST(rejects_area_above_bound)
 {
     tsr_pslg in = {rhombus, 4, NULL, 0, NULL, 0};
@@ -491,5 +529,6 @@ TEST_MAIN(T(accepts_delaunay_rhombus), T(rejects_non_delaunay_edge), T(constrain
           T(rejects_even_odd_ring_with_hole_filled), T(even_odd_area_of_a_bowtie), T(even_odd_open_chain_not_checked),
           T(accepts_rounded_crossing_point), T(rejects_chain_off_the_segment), T(accepts_splits_next_to_segment_end), T(accepts_point_exactly_on_segment),
           T(enclosed_allows_segment_outside_region), T(enclosed_rejects_segment_missing_inside),
-          T(rejects_angle_below_bound), T(small_input_angle_excuses_triangle), T(rejects_area_above_bound),
+          T(rejects_angle_below_bound), T(small_input_angle_excuses_triangle),
+          T(below_resolution_excused_only_when_reported), T(rejects_area_above_bound),
           T(empty_output_of_collinear_points), T(hole_seeds_leave_area_unchecked))

@@ -57,20 +57,6 @@ data)
     fi
     for opts in "--method delaunay" "--method quadtree" "--method delaunay -q 25"; do
       runs=$((runs + 1))
-      # known limitation, kept visible: in guitar-no-box.txt the segment
-      # (33.6, 8.17)-(33.4, 8.25) lies 3e-16 and 1.3e-15 inside the hull
-      # edge (34.2, 7.93)-(31.0, 9.21), under a unit in the last place,
-      # without touching it. Every triangle between the two is flat, no
-      # vertex fits between them, and the checker's excuse (features that
-      # meet at a small angle) does not cover features that do not meet;
-      # refinement stops at once (2 such triangles; test_triangulate's
-      # segment_ulps_inside_hull_edge) and the check fails on them alone
-      case "$name:$opts" in
-      guitar-no-box.txt:*-q*)
-        echo "KNOWN $name [$opts]: 2 flat triangles between a segment and a hull edge 1e-15 apart (not meeting)" \
-          > "$dir/r.$(printf %04d $runs)"
-        continue ;;
-      esac
       while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n; done
       one "$f" "$opts" "$dir/r.$(printf %04d $runs)" &
     done
