@@ -8,6 +8,17 @@
  * candidate overall is inserted, and only the triangles the insertion
  * created are scanned again (the kernel lists the slots it rewrote).
  *
+ * Beyond the greedy baseline (on by default, tsr_tin_options.no_flip turns
+ * it off): after each insertion, the new triangles' edges are flipped
+ * where that lowers the error above the target of the two triangles
+ * sharing the edge: a data-dependent triangulation (N. Dyn, D. Levin and
+ * S. Rippa 1990; Garland and Heckbert offer it beside Delaunay updates),
+ * interleaved with the insertions, so that the loop, which stops once every triangle
+ * is within the target, stops sooner: a fifth fewer triangles for the
+ * same bound on real terrains. Both new triangles are scanned before a
+ * flip, so the queue's keys stay exact and the bound as real as before;
+ * constrained edges (the fixed boundaries) and hull edges never flip.
+ *
  * Before the greedy pass, the outer border and the boundaries of no-data
  * (the union of cells whose four corners are valid is the domain) are
  * fixed: each straight run of boundary is simplified by Douglas-Peucker
@@ -180,6 +191,12 @@ typedef struct tin {
     bool fixed_border;
     uint32_t seen[64]; /* the slots rescanned for the current insertion */
     bool nomem;        /* the queue could not grow */
+    /* the data-dependent flips: edges to test, 3 words each (slot, and the
+     * edge's vertices as that slot lists them) */
+    bool flip;
+    uint32_t *fstack;
+    uint32_t nfs, cap_fs;
+    uint32_t flips;
 } tin;
 
 static inline bool excluded(const tin *t, uint32_t s)
@@ -218,31 +235,27 @@ static double row_max(const float *restrict rp, int64_t n, double base, double g
     return m;
 }
 
-/* Scans the triangle in slot s: its worst candidate sample into the queue,
- * or out of the queue when it has none. */
-static void scan(tin *t, uint32_t s)
+/* The lattice positions and heights of vertices v[3]; false when one is
+ * no-data (the triangle is outside the domain). */
+static inline bool tri_load(const tin *t, const uint32_t v[3], int64_t c[3], int64_t r[3], double z[3])
 {
-    uint32_t v[3];
-    if (!tsr_cdt_triangle(t->cdt, s, v)) {
-        heap_remove(&t->q, s);
-        return;
-    }
-    int64_t c[3], r[3];
-    double z[3];
     for (int k = 0; k < 3; k++) {
         c[k] = t->vc[2 * (size_t)v[k]];
         r[k] = t->vc[2 * (size_t)v[k] + 1];
         z[k] = t->data[(size_t)r[k] * t->w + (size_t)c[k]];
     }
-    if (isnan(z[0]) || isnan(z[1]) || isnan(z[2])) { /* outside the domain */
-        heap_remove(&t->q, s);
-        return;
-    }
+    return !isnan(z[0]) && !isnan(z[1]) && !isnan(z[2]);
+}
+
+/* The worst candidate sample of the triangle (c, r, z), counter-clockwise
+ * and not degenerate: its error into *best (-1 when the triangle has no
+ * candidate), its index into *best_s. Stops early once a row's error
+ * exceeds stop (then *best > stop, *best_s may be any sample of it); stop
+ * = INFINITY scans it all. */
+static void tri_worst(const tin *t, const int64_t c[3], const int64_t r[3], const double z[3], double stop,
+                      double *best_out, uint32_t *best_s_out)
+{
     int64_t det = (c[1] - c[0]) * (r[2] - r[0]) - (c[2] - c[0]) * (r[1] - r[0]);
-    if (det <= 0) {
-        heap_remove(&t->q, s);
-        return;
-    }
     double ga = ((z[1] - z[0]) * (double)(r[2] - r[0]) - (z[2] - z[0]) * (double)(r[1] - r[0])) / (double)det;
     double gb = ((double)(c[1] - c[0]) * (z[2] - z[0]) - (double)(c[2] - c[0]) * (z[1] - z[0])) / (double)det;
     int64_t r0 = r[0] < r[1] ? r[0] : r[1], r1 = r[0] > r[1] ? r[0] : r[1];
@@ -264,7 +277,7 @@ static void scan(tin *t, uint32_t s)
     }
     double best = -1;
     uint32_t best_s = UINT32_MAX;
-    for (int64_t y = r0; y <= r1; y++) {
+    for (int64_t y = r0; y <= r1 && best <= stop; y++) {
         int64_t lo = cmin, hi = cmax;
         for (int k = 0; k < 3 && lo <= hi; k++) {
             int64_t x0 = c[k], y0 = r[k], x1 = c[(k + 1) % 3], y1 = r[(k + 1) % 3];
@@ -310,6 +323,14 @@ static void scan(tin *t, uint32_t s)
             }
         }
     }
+    *best_out = best;
+    *best_s_out = best_s;
+}
+
+/* Puts slot s in the queue with error best at sample best_s, or takes it
+ * out when it has no candidate. */
+static void queue_set(tin *t, uint32_t s, double best, uint32_t best_s)
+{
     if (best_s == UINT32_MAX) {
         heap_remove(&t->q, s);
         return;
@@ -319,6 +340,175 @@ static void scan(tin *t, uint32_t s)
         key = nextafterf(key, INFINITY);
     if (!heap_set(&t->q, t->a, s, key, best_s))
         t->nomem = true;
+}
+
+/* Scans the triangle in slot s: its worst candidate sample into the queue,
+ * or out of the queue when it has none. */
+static void scan(tin *t, uint32_t s)
+{
+    uint32_t v[3];
+    int64_t c[3], r[3];
+    double z[3];
+    if (!tsr_cdt_triangle(t->cdt, s, v) || !tri_load(t, v, c, r, z)) { /* a ghost, or outside the domain */
+        heap_remove(&t->q, s);
+        return;
+    }
+    int64_t det = (c[1] - c[0]) * (r[2] - r[0]) - (c[2] - c[0]) * (r[1] - r[0]);
+    if (det <= 0) {
+        heap_remove(&t->q, s);
+        return;
+    }
+    double best;
+    uint32_t best_s;
+    tri_worst(t, c, r, z, INFINITY, &best, &best_s);
+    queue_set(t, s, best, best_s);
+}
+
+/* ---- data-dependent flips ------------------------------------------------ */
+
+/* Which edges are worth a flip test: those whose worse triangle's error e
+ * lies in (target, FLIP_WINDOW target]. Triangles far above the target
+ * are split again soon whatever their shape, and testing them (big quads,
+ * early in the pass) costs more than it saves: against no window, 4 made
+ * as many triangles (-3 % to +4 % on the bench inputs) in 0.6-0.8x the
+ * time. */
+#define FLIP_WINDOW 4.0
+/* Flips per insertion at most (the cascade is short: about 1.3 a point). */
+#define FLIP_MAX 64
+
+static bool in_domain(const tin *t, const uint32_t v[3]);
+
+static void push_edge(tin *t, uint32_t s, uint32_t a, uint32_t b)
+{
+    if (t->nfs + 3 > t->cap_fs && !grow_u32(t->a, (void **)&t->fstack, &t->cap_fs, t->nfs + 3, sizeof *t->fstack)) {
+        t->nomem = true;
+        return;
+    }
+    t->fstack[t->nfs++] = s;
+    t->fstack[t->nfs++] = a;
+    t->fstack[t->nfs++] = b;
+}
+
+/* The queue's error of slot s (its key, rounded up), 0 without candidate. */
+static inline double slot_error(const tin *t, uint32_t s)
+{
+    uint32_t i = s < t->q.nslots ? t->q.pos[s] : UINT32_MAX;
+    return i == UINT32_MAX ? 0 : t->q.e[i].key;
+}
+
+/* The height at lattice point (x, y) of the plane through (c, r, z). */
+static inline double plane_at(const int64_t c[3], const int64_t r[3], const double z[3], int64_t x, int64_t y)
+{
+    double det = (double)((c[1] - c[0]) * (r[2] - r[0]) - (c[2] - c[0]) * (r[1] - r[0]));
+    double ga = ((z[1] - z[0]) * (double)(r[2] - r[0]) - (z[2] - z[0]) * (double)(r[1] - r[0])) / det;
+    double gb = ((double)(c[1] - c[0]) * (z[2] - z[0]) - (double)(c[2] - c[0]) * (z[1] - z[0])) / det;
+    return z[0] + ga * (double)(x - c[0]) + gb * (double)(y - r[0]);
+}
+
+/* Twice the signed area of lattice points i, j, k (exact). */
+static inline int64_t orient(const int64_t *c, const int64_t *r, int i, int j, int k)
+{
+    return (c[j] - c[i]) * (r[k] - r[i]) - (c[k] - c[i]) * (r[j] - r[i]);
+}
+
+/* The flip cost of a triangle: its error above the target. */
+static inline double excess(double e, double target)
+{
+    return e > target ? e - target : 0;
+}
+
+/* Tests the edges on the stack. An edge shared by two triangles (p, x, y)
+ * and (y, x, q) of the domain, not constrained, whose quad is strictly
+ * convex and whose worse triangle's error is in (target, FLIP_WINDOW
+ * target], is flipped to (p, x, q), (p, q, y) when that lowers the sum of
+ * the two triangles' errors above the target (a data-dependent
+ * triangulation, after N. Dyn, D. Levin and S. Rippa, "Data dependent
+ * triangulations for piecewise linear interpolation", IMA J. Numer. Anal.
+ * 10, 1990, with a cost made for the greedy pass: what is above the target
+ * is what more insertions must remove; the max error, or the plain sum,
+ * made up to 6 % more triangles). The quad's four sides are then tested in
+ * turn. Every flip lowers the sum over all triangles by a margin, so the
+ * pass ends; FLIP_MAX bounds its work. The queue's keys stay exact: both
+ * new triangles are scanned in full before a flip is made. */
+static void flip_pass(tin *t, double target)
+{
+    uint32_t done = 0;
+    double window = FLIP_WINDOW * target;
+    while (t->nfs && done < FLIP_MAX && !t->nomem) {
+        t->nfs -= 3;
+        uint32_t s = t->fstack[t->nfs], a = t->fstack[t->nfs + 1], b = t->fstack[t->nfs + 2];
+        uint32_t v[3], w[3];
+        if (!tsr_cdt_triangle(t->cdt, s, v))
+            continue;
+        int k = v[0] == a && v[1] == b ? 0 : v[1] == a && v[2] == b ? 1 : v[2] == a && v[0] == b ? 2 : -1;
+        if (k < 0)
+            continue; /* the slot was rewritten since */
+        bool constrained;
+        uint32_t n = tsr_cdt_neighbor(t->cdt, s, k, &constrained);
+        if (n == UINT32_MAX || constrained || !tsr_cdt_triangle(t->cdt, n, w))
+            continue;
+        double es = slot_error(t, s), en = slot_error(t, n), cur = fmax(es, en);
+        if (cur <= target || cur > window)
+            continue;
+        /* the quad: 0 p, 1 x, 2 y, 3 q; after the flip (0 1 3) and (0 3 2) */
+        uint32_t id[4] = {v[(k + 2) % 3], a, b, w[0] != a && w[0] != b ? w[0] : w[1] != a && w[1] != b ? w[1] : w[2]};
+        int64_t c[4], r[4];
+        double z[4];
+        bool valid = true;
+        for (int i = 0; i < 4; i++) {
+            c[i] = t->vc[2 * (size_t)id[i]];
+            r[i] = t->vc[2 * (size_t)id[i] + 1];
+            z[i] = t->data[(size_t)r[i] * t->w + (size_t)c[i]];
+            valid = valid && !isnan(z[i]);
+        }
+        if (!valid || orient(c, r, 0, 1, 3) <= 0 || orient(c, r, 0, 3, 2) <= 0)
+            continue;
+        if (t->nodata && (!in_domain(t, v) || !in_domain(t, w)))
+            continue;
+        int64_t c1[3] = {c[0], c[1], c[3]}, r1[3] = {r[0], r[1], r[3]}, c2[3] = {c[0], c[3], c[2]},
+                r2[3] = {r[0], r[3], r[2]};
+        double z1[3] = {z[0], z[1], z[3]}, z2[3] = {z[0], z[3], z[2]};
+        /* the flip must beat the cost by a hair (no cycling on ties) */
+        double cost = (excess(es, target) + excess(en, target)) * (1 - 1e-6);
+        /* first, in O(1): the two worst samples' errors after the flip
+         * bound the new cost from below */
+        double lb[2] = {0, 0};
+        for (int j = 0; j < 2; j++) {
+            uint32_t i = t->q.pos[j ? n : s];
+            if (i == UINT32_MAX)
+                continue;
+            uint32_t smp = t->q.e[i].cand;
+            int64_t cc[3] = {c[0], c[3], smp % t->w}, rr[3] = {r[0], r[3], smp / t->w};
+            int side = orient(cc, rr, 0, 1, 2) > 0; /* left of p->q: in (0 3 2) */
+            double e = fabs(t->data[smp] - plane_at(side ? c2 : c1, side ? r2 : r1, side ? z2 : z1, cc[2], rr[2]));
+            lb[side] = fmax(lb[side], excess(e, target));
+        }
+        if (lb[0] + lb[1] >= cost)
+            continue;
+        double e1, e2;
+        uint32_t s1, s2;
+        tri_worst(t, c1, r1, z1, target + cost - lb[1], &e1, &s1);
+        double left = cost - excess(e1, target);
+        if (left <= lb[1])
+            continue;
+        tri_worst(t, c2, r2, z2, target + left, &e2, &s2);
+        if (excess(e2, target) >= left)
+            continue;
+        tsr_status st = tsr_cdt_flip(t->cdt, s, k);
+        if (st == TSR_ERR_NOMEM)
+            t->nomem = true;
+        if (st != TSR_OK)
+            continue;
+        done++;
+        t->flips++;
+        queue_set(t, s, e1, s1); /* s holds (p, x, q) now, n (p, q, y) */
+        queue_set(t, n, e2, s2);
+        push_edge(t, s, id[0], id[1]);
+        push_edge(t, s, id[1], id[3]);
+        push_edge(t, n, id[3], id[2]);
+        push_edge(t, n, id[2], id[0]);
+    }
+    t->nfs = 0;
 }
 
 /* Inserts sample smp (hint: a slot near it); its vertex id, or UINT32_MAX
@@ -522,6 +712,7 @@ static void tin_free(tin *t)
     heap_free(&t->q, t->a);
     tsr_free(t->a, t->vc);
     tsr_free(t->a, t->excl);
+    tsr_free(t->a, t->fstack);
 }
 
 /* Counts the triangles inside the domain and the vertices they use. */
@@ -565,6 +756,7 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
 {
     tin t = {0};
     t.fixed_border = fixed_border;
+    t.flip = !o->no_flip;
     t.data = hf->data;
     t.w = hf->width;
     t.h = hf->height;
@@ -669,6 +861,27 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
             scan(&t, cs);
         }
         tsr_cdt_clear_changes(t.cdt);
+        if (t.flip) {
+            /* the new triangles' edges: the star's outer edges and its
+             * spokes (once each) */
+            for (uint32_t i = 0; i < nseen; i++) {
+                uint32_t v[3];
+                if (!tsr_cdt_triangle(t.cdt, t.seen[i], v))
+                    continue;
+                for (int k = 0; k < 3; k++) {
+                    uint32_t nb = tsr_cdt_neighbor(t.cdt, t.seen[i], k, NULL);
+                    bool inner = false;
+                    for (uint32_t j = 0; j < nseen && !inner; j++)
+                        inner = t.seen[j] == nb;
+                    if (!inner || v[k] < v[(k + 1) % 3])
+                        push_edge(&t, t.seen[i], v[k], v[(k + 1) % 3]);
+                }
+            }
+            /* with a budget alone, the target is unknown: half the worst
+             * error so far stands for it */
+            flip_pass(&t, target > 0 ? target : 0.5 * (t.q.n ? t.q.e[0].key : 0));
+            tsr_cdt_clear_changes(t.cdt);
+        }
         if (t.nomem)
             goto fail;
         if (o->progress && (++steps & 4095) == 0) {
@@ -682,6 +895,7 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
             o->progress(o->progress_user, f < 1 ? f : 1);
         }
     }
+    rep->flips = t.flips;
     rep->estimated_error = fmax(t.q.n ? fmax(t.q.e[0].key, 0) : 0, 0) * hf->dz;
     heap_free(&t.q, t.a); /* before the output, to lower the peak */
     memset(&t.q, 0, sizeof t.q);

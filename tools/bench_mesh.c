@@ -5,7 +5,7 @@
  * the mesher), seconds (best of R) and peak heap bytes (a counting
  * allocator under the heightfield copy, the mesher and the mesh), with the
  * quadtree's triangles and speed as ratios against delaunay's in the same
- * run. */
+ * run, and plain greedy Delaunay (no_flip) beside delaunay with its flips. */
 #include "bench.h"
 
 #include <math.h>
@@ -19,7 +19,9 @@ static void help(FILE *f)
                "of error bounds\n"
                "(fractions of each input's height range) and prints a table: triangles, the measured\n"
                "max error, seconds (best of R) and peak heap memory; quadtree's triangles and time as\n"
-               "ratios to delaunay's at the same bound.\n\n"
+               "ratios to delaunay's at the same bound; then delaunay without its data-dependent flips\n"
+               "(--no-flip: plain greedy Delaunay insertion) and delaunay's triangles and time as ratios\n"
+               "to that.\n\n"
                "inputs: the demo terrain (generated, 1025 x 1025, seed 1, 1200 m relief, dx 30) and every\n"
                "file of $TESSERA_DATA/terrain (default ../shared/data; skipped when absent).\n\n"
                "options:\n"
@@ -37,7 +39,7 @@ typedef struct row {
     bool ok;
 } row;
 
-static row one(const tsr_heightfield *src, tsr_tin_method m, double e, uint32_t repeat)
+static row one(const tsr_heightfield *src, tsr_tin_method m, double e, bool no_flip, uint32_t repeat)
 {
     row r = {0};
     r.seconds = INFINITY;
@@ -53,6 +55,7 @@ static row one(const tsr_heightfield *src, tsr_tin_method m, double e, uint32_t 
         tsr_tin_options o = {0};
         o.method = m;
         o.max_error = m == TSR_TIN_GRID ? 0 : e;
+        o.no_flip = no_flip;
         tsr_error err;
         double t0 = cli_now();
         tsr_status st = tsr_terrain_mesh(hf, &o, &mesh, NULL, &err);
@@ -82,15 +85,19 @@ static void bench_input(const char *name, const tsr_heightfield *hf, const doubl
     double dx, dy, dz;
     tsr_heightfield_spacing(hf, &dx, &dy, &dz);
     double range = (st.max - st.min) * dz;
-    row g = one(hf, TSR_TIN_GRID, 0, repeat);
+    row g = one(hf, TSR_TIN_GRID, 0, false, repeat);
     printf("%-34s %9s | %10u %9.4g %8.3f %8.1f |  (grid: every sample; the baseline of the triangle counts)\n", name,
            "grid", g.triangles, g.max_error, g.seconds, g.peak / 1048576.0);
     for (int i = 0; i < nfr; i++) {
         double e = fr[i] * range;
-        row d = one(hf, TSR_TIN_DELAUNAY, e, repeat), q = one(hf, TSR_TIN_QUADTREE, e, repeat);
-        printf("%-34s %9.4g | %10u %9.4g %8.3f %8.1f | %10u %9.4g %8.3f %8.1f | %6.2fx %6.2fx\n", name, e, d.triangles,
-               d.max_error, d.seconds, d.peak / 1048576.0, q.triangles, q.max_error, q.seconds, q.peak / 1048576.0,
-               d.triangles ? (double)q.triangles / d.triangles : 0, q.seconds > 0 ? d.seconds / q.seconds : 0);
+        row d = one(hf, TSR_TIN_DELAUNAY, e, false, repeat), q = one(hf, TSR_TIN_QUADTREE, e, false, repeat);
+        row p = one(hf, TSR_TIN_DELAUNAY, e, true, repeat);
+        printf("%-34s %9.4g | %10u %9.4g %8.3f %8.1f | %10u %9.4g %8.3f %8.1f | %6.2fx %6.2fx | %10u %9.4g %8.3f | "
+               "%6.2fx %6.2fx\n",
+               name, e, d.triangles, d.max_error, d.seconds, d.peak / 1048576.0, q.triangles, q.max_error, q.seconds,
+               q.peak / 1048576.0, d.triangles ? (double)q.triangles / d.triangles : 0,
+               q.seconds > 0 ? d.seconds / q.seconds : 0, p.triangles, p.max_error, p.seconds,
+               p.triangles ? (double)d.triangles / p.triangles : 0, p.seconds > 0 ? d.seconds / p.seconds : 0);
         fflush(stdout);
     }
 }
@@ -144,8 +151,9 @@ int cli_bench_mesh(int argc, char **argv)
     }
     printf("tessera bench mesh: best of %u; bound = fraction x height range; max err = measured independently\n",
            repeat);
-    printf("%-34s %9s | %10s %9s %8s %8s | %10s %9s %8s %8s | %7s %7s\n", "input", "bound", "delaunay", "max err",
-           "seconds", "peak MB", "quadtree", "max err", "seconds", "peak MB", "q/d tri", "q speed");
+    printf("%-34s %9s | %10s %9s %8s %8s | %10s %9s %8s %8s | %7s %7s | %10s %9s %8s | %7s %7s\n", "input", "bound",
+           "delaunay", "max err", "seconds", "peak MB", "quadtree", "max err", "seconds", "peak MB", "q/d tri",
+           "q speed", "no-flip", "max err", "seconds", "d/n tri", "d/n s");
     if (input) {
         tsr_heightfield *hf = cli_load_heightfield("bench", input, &o);
         if (!hf)

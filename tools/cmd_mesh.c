@@ -29,9 +29,14 @@ static void help(FILE *f)
             "                        achieved is reported)\n"
             "  --vertices N          a budget: at most N vertices\n"
             "  --method M            delaunay (default): greedy insertion of the worst sample\n"
-            "                        (Garland-Heckbert) on the constrained-Delaunay kernel;\n"
+            "                        (Garland-Heckbert) on the constrained-Delaunay kernel, with\n"
+            "                        data-dependent edge flips after each insertion;\n"
             "                        quadtree: the restricted quadtree's grid tiles, fast;\n"
             "                        grid: every --step-th sample\n"
+            "  --no-flip             delaunay: no data-dependent flips: a Delaunay triangulation,\n"
+            "                        1.3-2x faster, about a quarter more triangles for the bound\n"
+            "                        (--flip, the default, flips an edge when that lowers its two\n"
+            "                        triangles' error above the bound)\n"
             "  --step N              grid: keep every N-th column and row (default 1)\n"
             "  --tile N              quadtree: tile size 2, 4, 8, 16, 32, 64 or 128 (default 2)\n"
             "  --border-error E      delaunay: tolerance of the border and no-data boundary\n"
@@ -143,8 +148,10 @@ static int write_stats(const char *path, const tsr_mesh *mesh, const tsr_error_r
     if (to->max_vertices)
         cJSON_AddNumberToObject(j, "budget_vertices", to->max_vertices);
     cJSON_AddBoolToObject(j, "budget_reached", rep->budget_reached);
-    if (to->method == TSR_TIN_DELAUNAY)
+    if (to->method == TSR_TIN_DELAUNAY) {
         cJSON_AddNumberToObject(j, "border_error", rep->border_error);
+        cJSON_AddNumberToObject(j, "flips", rep->flips);
+    }
     cJSON_AddNumberToObject(j, "uncovered_samples", (double)er->uncovered);
     cJSON *inp = cJSON_AddObjectToObject(j, "input");
     cJSON_AddNumberToObject(inp, "width", tsr_heightfield_width(hf));
@@ -189,7 +196,7 @@ static int run(int argc, char **argv)
     const char *in = NULL, *out = NULL, *stats = NULL, *normal_map = NULL, *hillshade = NULL;
     tsr_tin_options to = {0};
     double max_error = 0, base = 0;
-    bool quiet = false, has_base = false, has_window = false;
+    bool quiet = false, has_base = false, has_window = false, no_flip_given = false;
     uint32_t win[4] = {0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -266,6 +273,10 @@ static int run(int argc, char **argv)
             has_window = true;
         } else if (!strcmp(a, "--normals"))
             to.normals = true;
+        else if (!strcmp(a, "--flip") || !strcmp(a, "--no-flip")) {
+            to.no_flip = !strcmp(a, "--no-flip");
+            no_flip_given = to.no_flip;
+        }
         else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = true;
         else if (a[0] == '-' && a[1] != '\0') {
@@ -288,6 +299,10 @@ static int run(int argc, char **argv)
     }
     if (to.grid_step && to.method != TSR_TIN_GRID) {
         cli_error("mesh", "--step applies to --method grid only");
+        return CLI_USAGE;
+    }
+    if (no_flip_given && to.method != TSR_TIN_DELAUNAY) {
+        cli_error("mesh", "--no-flip applies to --method delaunay only");
         return CLI_USAGE;
     }
     if (to.tile_n && to.method != TSR_TIN_QUADTREE) {

@@ -2,6 +2,8 @@
 # mesh_cli.sh TESSERA NODE_MODULES [DATA]: `tessera mesh` end to end.
 #  - every method: the stats' measured max_error within --max-error (the
 #    stats' figure is the independent measurement), the stats keys present;
+#  - --no-flip (plain Delaunay): within the bound, not fewer triangles than
+#    the default flips;
 #  - budgets: --triangles / --vertices never exceeded;
 #  - --window: two adjacent windows of a real heightfield (or a generated
 #    one without the data) write identical vertices on their shared column
@@ -35,6 +37,21 @@ for m in delaunay quadtree; do
     echo "ok $m --max-error $e: measured $got, $(json_num "$dir/s.json" triangles) triangles"
   done
 done
+
+# --no-flip: plain greedy Delaunay, within the bound too, with more
+# triangles than the default data-dependent flips; delaunay only
+for e in 0.5 5; do
+  "$tessera" mesh "$dir/t.png" --dx 10 --max-error $e -o "$dir/m.ply" --stats "$dir/f.json" --quiet || fail "mesh $e"
+  "$tessera" mesh "$dir/t.png" --dx 10 --max-error $e --no-flip -o "$dir/m.ply" --stats "$dir/n.json" --quiet \
+    || fail "mesh --no-flip $e"
+  got=$(json_num "$dir/n.json" max_error)
+  le "$got" "$e" || fail "--no-flip: measured max error $got > $e"
+  tf=$(json_num "$dir/f.json" triangles) tn=$(json_num "$dir/n.json" triangles)
+  [ "$(json_num "$dir/n.json" flips)" = 0 ] && [ "$(json_num "$dir/f.json" flips)" -gt 0 ] || fail "flips in the stats"
+  [ "$tf" -le "$tn" ] || fail "--max-error $e: $tf triangles with flips, $tn with --no-flip"
+  echo "ok --max-error $e: $tf triangles with flips, $tn with --no-flip (measured $got)"
+done
+"$tessera" mesh "$dir/t.png" --method quadtree --no-flip -o "$dir/m.ply" 2>/dev/null && fail "--no-flip with quadtree"
 
 # budgets
 for m in delaunay quadtree grid; do
