@@ -42,7 +42,6 @@ typedef struct piece {
     tsr_patch bez;     /* KIND_BEZIER: the piece over [0,1]^2 */
     uint32_t face, sub;
     double rect[4];    /* in the source's (u, v) */
-    double centre[3];
     double lo[3], hi[3];
 } piece;
 
@@ -379,8 +378,6 @@ tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *al
             }
             for (uint32_t j = 0; j < per; j++)
                 box_add(pc->lo, pc->hi, pc->bez.ctrl + 3 * j);
-            for (int q = 0; q < 3; q++)
-                pc->centre[q] = 0.5 * (pc->lo[q] + pc->hi[q]);
             box_add(m->lo, m->hi, pc->lo);
             box_add(m->lo, m->hi, pc->hi);
         }
@@ -462,8 +459,6 @@ tsr_status tsr_pmodel_from_subd(const tsr_subd *subd, const tsr_allocator *alloc
             pc->rect[1] = pc->rect[3] = 1;
             pc->levels = np != 1; /* marks N-gon sub-patches (one level less deep) */
             tsr_subd_face_bounds(subd, f, s, pc->lo, pc->hi);
-            for (int q = 0; q < 3; q++)
-                pc->centre[q] = 0.5 * (pc->lo[q] + pc->hi[q]);
             box_add(m->lo, m->hi, pc->lo);
             box_add(m->lo, m->hi, pc->hi);
             psource *src = &m->sources[k];
