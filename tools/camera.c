@@ -101,6 +101,26 @@ void flight_camera(const tsr_terrain *t, int f, int n, const view_options *v, ts
     tsr_camera_prepare(c);
 }
 
+int view_option(const char *cmd, const char *a, const char *value, view_options *v)
+{
+    double *dst = !strcmp(a, "--pixel-error") ? &v->pixel_error
+                  : !strcmp(a, "--width")     ? &v->width
+                  : !strcmp(a, "--height")    ? &v->height
+                  : !strcmp(a, "--fov")       ? &v->fovy_deg
+                  : !strcmp(a, "--near")      ? &v->near_dist
+                                              : NULL;
+    if (!dst || !value)
+        return 0; /* a missing value is the caller's "missing value" error */
+    double d;
+    bool fov = dst == &v->fovy_deg;
+    if (!cli_parse_double(value, &d) || !(d > 0) || (fov && d >= 179)) {
+        cli_error(cmd, "%s %s: must be a positive number%s", a, value, fov ? " below 179" : "");
+        return -1;
+    }
+    *dst = d;
+    return 1;
+}
+
 bool parse_camera(const char *s, const view_options *v, tsr_camera *c)
 {
     double x[6];

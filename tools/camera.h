@@ -22,6 +22,12 @@ void random_camera(const tsr_terrain *t, uint64_t *rng, int index, const view_op
  * curve), kept above the ground by picking. */
 void flight_camera(const tsr_terrain *t, int f, int n, const view_options *v, tsr_camera *c);
 
+/* If a is --pixel-error, --width, --height, --fov or --near, parses its
+ * value (NULL: missing) into v and returns 1: a positive number, --fov
+ * below 179; returns 0 when a is none of them; prints cmd's error and
+ * returns -1 on a bad value. */
+int view_option(const char *cmd, const char *a, const char *value, view_options *v);
+
 /* Parses "EX,EY,EZ,TX,TY,TZ"; false when malformed. */
 bool parse_camera(const char *s, const view_options *v, tsr_camera *c);
 

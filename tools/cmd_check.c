@@ -99,7 +99,7 @@ static int run_terrain(int argc, char **argv)
         if (r > 0)
             continue;
         bool has_value = i + 1 < argc;
-        double d;
+        int vo;
         uint32_t u;
         if (!strcmp(a, "--json"))
             json = true;
@@ -123,20 +123,12 @@ static int run_terrain(int argc, char **argv)
                 break;
             }
             *(!strcmp(a, "--cameras") ? &ncams : !strcmp(a, "--seed") ? &seed : &tile) = u;
-        } else if ((!strcmp(a, "--pixel-error") || !strcmp(a, "--width") || !strcmp(a, "--height") ||
-                    !strcmp(a, "--fov") || !strcmp(a, "--near")) &&
-                   has_value) {
-            if (!cli_parse_double(argv[++i], &d) || !(d > 0) || (!strcmp(a, "--fov") && d >= 179)) {
-                cli_error("check", "%s %s: must be a positive number%s", a, argv[i],
-                          !strcmp(a, "--fov") ? " below 179" : "");
+        } else if ((vo = view_option("check", a, has_value ? argv[i + 1] : NULL, &v)) != 0) {
+            if (vo < 0) {
                 rc = CLI_USAGE;
                 break;
             }
-            *(!strcmp(a, "--pixel-error") ? &v.pixel_error
-              : !strcmp(a, "--width")     ? &v.width
-              : !strcmp(a, "--height")    ? &v.height
-              : !strcmp(a, "--fov")       ? &v.fovy_deg
-                                          : &v.near_dist) = d;
+            i++;
         } else if (a[0] == '-' && a[1] != '\0') {
             cli_error("check", "%s '%s' (see tessera check --help)", has_value ? "unknown option" : "missing value for", a);
             rc = CLI_USAGE;
@@ -747,7 +739,7 @@ static int run_patches(int argc, char **argv)
     for (int i = 2; i < argc && rc == CLI_OK; i++) {
         const char *a = argv[i];
         bool has_value = i + 1 < argc;
-        double d;
+        int vo;
         uint32_t u;
         if (cli_is_help(a)) {
             help_patches(stdout);
@@ -778,21 +770,18 @@ static int run_patches(int argc, char **argv)
                 break;
             }
             *(cams ? &ncams : sd ? &seed : tl ? &tile : ml ? &max_level : sm ? &per_side : &retries) = u;
-        } else if ((!strcmp(a, "--max-error") || !strcmp(a, "--pixel-error") || !strcmp(a, "--width") ||
-                    !strcmp(a, "--height") || !strcmp(a, "--fov") || !strcmp(a, "--near")) &&
-                   has_value) {
-            if (!cli_parse_double(argv[++i], &d) || !(d > 0) || (!strcmp(a, "--fov") && d >= 179)) {
-                cli_error("check", "%s %s: must be a positive number%s", a, argv[i],
-                          !strcmp(a, "--fov") ? " below 179" : "");
+        } else if (!strcmp(a, "--max-error") && has_value) {
+            if (!cli_parse_double(argv[++i], &max_error) || !(max_error > 0)) {
+                cli_error("check", "%s %s: must be a positive number", a, argv[i]);
                 rc = CLI_USAGE;
                 break;
             }
-            *(!strcmp(a, "--max-error")     ? &max_error
-              : !strcmp(a, "--pixel-error") ? &v.pixel_error
-              : !strcmp(a, "--width")       ? &v.width
-              : !strcmp(a, "--height")      ? &v.height
-              : !strcmp(a, "--fov")         ? &v.fovy_deg
-                                            : &v.near_dist) = d;
+        } else if ((vo = view_option("check", a, has_value ? argv[i + 1] : NULL, &v)) != 0) {
+            if (vo < 0) {
+                rc = CLI_USAGE;
+                break;
+            }
+            i++;
         } else if (a[0] == '-' && a[1] != '\0') {
             cli_error("check", "%s '%s' (see tessera check --help)", has_value ? "unknown option" : "missing value for",
                       a);

@@ -88,14 +88,14 @@ static int write_stats(const char *path, const char *in, const cli_patch_model *
 static int run(int argc, char **argv)
 {
     const char *in = NULL, *out = NULL, *stats = NULL, *cam_arg = NULL, *scheme = NULL;
-    double max_error = 0, near = 0;
+    double max_error = 0;
     view_options v = {60, 1920, 1080, 0, 0};
     uint32_t tile = 4, max_level = 10;
     bool normals = false, quiet = false, verify = true;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         bool has_value = i + 1 < argc;
-        double d;
+        int vo;
         if (cli_is_help(a)) {
             help(stdout);
             return CLI_OK;
@@ -126,20 +126,15 @@ static int run(int argc, char **argv)
                 return CLI_USAGE;
             }
             *(tile_opt ? &tile : &max_level) = u;
-        } else if ((!strcmp(a, "--max-error") || !strcmp(a, "--pixel-error") || !strcmp(a, "--width") ||
-                    !strcmp(a, "--height") || !strcmp(a, "--fov") || !strcmp(a, "--near")) &&
-                   has_value) {
-            if (!cli_parse_double(argv[++i], &d) || !(d > 0) || (!strcmp(a, "--fov") && d >= 179)) {
-                cli_error("patch", "%s %s: must be a positive number%s", a, argv[i],
-                          !strcmp(a, "--fov") ? " below 179" : "");
+        } else if (!strcmp(a, "--max-error") && has_value) {
+            if (!cli_parse_double(argv[++i], &max_error) || !(max_error > 0)) {
+                cli_error("patch", "%s %s: must be a positive number", a, argv[i]);
                 return CLI_USAGE;
             }
-            *(!strcmp(a, "--max-error")     ? &max_error
-              : !strcmp(a, "--pixel-error") ? &v.pixel_error
-              : !strcmp(a, "--width")       ? &v.width
-              : !strcmp(a, "--height")      ? &v.height
-              : !strcmp(a, "--fov")         ? &v.fovy_deg
-                                            : &near) = d;
+        } else if ((vo = view_option("patch", a, has_value ? argv[i + 1] : NULL, &v)) != 0) {
+            if (vo < 0)
+                return CLI_USAGE;
+            i++;
         } else if (a[0] == '-' && a[1] != '\0') {
             cli_error("patch", "%s '%s' (see tessera patch --help)", has_value ? "unknown option" : "missing value for",
                       a);
@@ -180,7 +175,8 @@ static int run(int argc, char **argv)
     opt.max_level = max_level;
     opt.normals = normals;
     if (cam_arg) {
-        v.near_dist = near > 0 ? near : 1e-3 * pm.diag;
+        if (!(v.near_dist > 0))
+            v.near_dist = 1e-3 * pm.diag;
         if (!parse_camera(cam_arg, &v, &cam)) {
             cli_error("patch", "--camera %s: expected EX,EY,EZ,TX,TY,TZ with eye != target, not looking straight "
                       "up or down", cam_arg);
