@@ -458,7 +458,7 @@ static tsr_status find_gaps(measurer *M)
                     }
                 }
                 double dx = (o[0] - e[0]) / len, dy = (o[1] - e[1]) / len;
-                double best_cos = -2;
+                double best_cos = -2, best_ql = INFINITY;
                 int best = -1;
                 for (int k = 0; k < nc; k++) {
                     double qx = cand[k][0] - e[0], qy = cand[k][1] - e[1], ql = sqrt(qx * qx + qy * qy);
@@ -467,9 +467,12 @@ static tsr_status find_gaps(measurer *M)
                     double s_q = orient(e, o, cand[k]);
                     if (!(s_q * s_third < 0) || fabs(s_q) <= M->tol * len)
                         continue;
+                    /* of candidates in one direction (collinear along the
+                     * collapsed side: equal angles up to rounding), the
+                     * nearest */
                     double cosang = (qx * dx + qy * dy) / ql;
-                    if (cosang > best_cos)
-                        best_cos = cosang, best = k;
+                    if (cosang > best_cos + 1e-9 || (cosang >= best_cos - 1e-9 && ql < best_ql))
+                        best_cos = cosang, best_ql = ql, best = k;
                 }
                 if (best < 0)
                     continue;

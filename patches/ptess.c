@@ -1,15 +1,15 @@
 /* ptess.c: the patch tessellator of ptess.h. One restricted quadtree per
- * piece; linked edges made to agree by exchanging per-segment leaf sizes
- * until nothing changes; vertices welded through the links; trimmed
- * sources triangulated in (u, v) by tsr_triangulate.
+ * piece, with the piece's own tile size; linked edges sampled by both
+ * sides' border samples (fans); vertices welded through the links;
+ * trimmed sources triangulated in (u, v) by tsr_triangulate.
  *
- * Units along an edge. A piece of quadtree depth L has a lattice of
- * Z = tile_n << L points per side; its edge is cut into 2^L *segments* of
- * tile_n lattice units, the span of a deepest node. A leaf of level l
- * covers 2^(L-l) segments of each edge it touches; its "span log" is
- * L - l. Links are isometric in lattice units: an N-gon's sub-patches
- * have depth L - 1, so a quad's half edge (Z/2 of its units) meets a
- * sub-patch's whole edge (Z/2 of its own). */
+ * Units along an edge. A piece of quadtree depth L and tile size N has a
+ * lattice of Z = N << L points per side; its edge is cut into 2^L
+ * *segments* of N lattice units, the span of a deepest node. A leaf of
+ * level l covers 2^(L-l) segments of each edge it touches; its "span log"
+ * is L - l. A link maps its range of one side's edge linearly onto the
+ * other's; where the lattices differ (other N or depth), a point of one
+ * is a point of the other only where the map gives an integer. */
 #define _POSIX_C_SOURCE 200809L
 #include "patches/ptess.h"
 
@@ -618,6 +618,10 @@ static void shape_bounds(double a, double b, double c, double out[3])
     out[2] = 0.5 * (gt + 0.7698004 * b); /* stitched along t (east, west edges) */
 }
 
+/* max and min for finite values, inlined (fmax and fmin are calls) */
+static inline double dmax(double a, double b) { return a > b ? a : b; }
+static inline double dmin(double a, double b) { return a < b ? a : b; }
+
 static double norm3(double x, double y, double z) { return sqrt(x * x + y * y + z * z); }
 
 /* The bounds of ptess.h for a Bézier net over its own [0,1]^2, tiles of N
@@ -632,21 +636,21 @@ static void bezier_delta(int du, int dv, const double *P, const double *W, doubl
 {
     int nu = du + 1, nv = dv + 1;
     double c[3], lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int k = 0; k < nu * nv; k++)
+    for (int k = 0; W && k < nu * nv; k++)
         for (int q = 0; q < 3; q++) {
-            lo[q] = fmin(lo[q], P[3 * k + q]);
-            hi[q] = fmax(hi[q], P[3 * k + q]);
+            lo[q] = dmin(lo[q], P[3 * k + q]);
+            hi[q] = dmax(hi[q], P[3 * k + q]);
         }
     for (int q = 0; q < 3; q++)
         c[q] = W ? 0.5 * (lo[q] + hi[q]) : 0;
     double Q[3 * TSR_BEZIER_MAX_POINTS], A = 0, wmin = INFINITY;
     for (int k = 0; k < nu * nv; k++) {
         double w = W ? W[k] : 1;
-        wmin = fmin(wmin, w);
+        wmin = dmin(wmin, w);
         for (int q = 0; q < 3; q++)
             Q[3 * k + q] = w * (P[3 * k + q] - c[q]);
         if (W)
-            A = fmax(A, norm3(P[3 * k] - c[0], P[3 * k + 1] - c[1], P[3 * k + 2] - c[2]));
+            A = dmax(A, norm3(P[3 * k] - c[0], P[3 * k + 1] - c[1], P[3 * k + 2] - c[2]));
     }
 #define QD(i, j, q) Q[3 * ((j) * nu + (i)) + (q)]
 #define WW(i, j) (W ? W[(j) * nu + (i)] : 1.0)
@@ -655,34 +659,34 @@ static void bezier_delta(int du, int dv, const double *P, const double *W, doubl
         for (int i = 0; i < nu; i++) {
             double w = WW(i, j), d[3];
             if (i + 1 < nu) {
-                ws = fmax(ws, fabs(WW(i + 1, j) - w));
+                ws = dmax(ws, fabs(WW(i + 1, j) - w));
                 for (int q = 0; q < 3; q++)
                     d[q] = QD(i + 1, j, q) - QD(i, j, q);
-                qs = fmax(qs, norm3(d[0], d[1], d[2]));
+                qs = dmax(qs, norm3(d[0], d[1], d[2]));
             }
             if (j + 1 < nv) {
-                wt = fmax(wt, fabs(WW(i, j + 1) - w));
+                wt = dmax(wt, fabs(WW(i, j + 1) - w));
                 for (int q = 0; q < 3; q++)
                     d[q] = QD(i, j + 1, q) - QD(i, j, q);
-                qt = fmax(qt, norm3(d[0], d[1], d[2]));
+                qt = dmax(qt, norm3(d[0], d[1], d[2]));
             }
             if (i + 2 < nu) {
-                wss = fmax(wss, fabs(WW(i + 2, j) - 2 * WW(i + 1, j) + w));
+                wss = dmax(wss, fabs(WW(i + 2, j) - 2 * WW(i + 1, j) + w));
                 for (int q = 0; q < 3; q++)
                     d[q] = QD(i + 2, j, q) - 2 * QD(i + 1, j, q) + QD(i, j, q);
-                qss = fmax(qss, norm3(d[0], d[1], d[2]));
+                qss = dmax(qss, norm3(d[0], d[1], d[2]));
             }
             if (j + 2 < nv) {
-                wtt = fmax(wtt, fabs(WW(i, j + 2) - 2 * WW(i, j + 1) + w));
+                wtt = dmax(wtt, fabs(WW(i, j + 2) - 2 * WW(i, j + 1) + w));
                 for (int q = 0; q < 3; q++)
                     d[q] = QD(i, j + 2, q) - 2 * QD(i, j + 1, q) + QD(i, j, q);
-                qtt = fmax(qtt, norm3(d[0], d[1], d[2]));
+                qtt = dmax(qtt, norm3(d[0], d[1], d[2]));
             }
             if (i + 1 < nu && j + 1 < nv) {
-                wst = fmax(wst, fabs(WW(i + 1, j + 1) - WW(i + 1, j) - WW(i, j + 1) + w));
+                wst = dmax(wst, fabs(WW(i + 1, j + 1) - WW(i + 1, j) - WW(i, j + 1) + w));
                 for (int q = 0; q < 3; q++)
                     d[q] = QD(i + 1, j + 1, q) - QD(i + 1, j, q) - QD(i, j + 1, q) + QD(i, j, q);
-                qst = fmax(qst, norm3(d[0], d[1], d[2]));
+                qst = dmax(qst, norm3(d[0], d[1], d[2]));
             }
         }
 #undef QD
@@ -787,7 +791,9 @@ static void bez_interval(const tsr_patch *p, const double r[4], double *out, dou
  * select each piece's tree again and again. */
 typedef struct nodeval {
     float lo[3], hi[3];
-    float d[3];    /* interior, stitched along s, stitched along t */
+    float d[3];    /* interior, stitched along s, stitched along t: for a
+                      Bézier piece per unit tile (N = 1; node_d scales), for
+                      a subd piece at the piece's N */
     uint8_t force; /* split it: a finer neighbour's stitched tile needs it */
 } nodeval;
 
@@ -795,11 +801,10 @@ typedef struct pctx {
     const tsr_pmodel *m;
     const tsr_ptess_options *opt;
     uint32_t piece;
-    uint32_t N;
+    uint32_t N;      /* quads per tile side: the piece's own (choose_tile) */
+    double inv_n2;   /* 1 / N^2 */
     double tol; /* max_error or pixel_error, times the piece's scale */
-    uint8_t *req[4]; /* per edge, the largest span log allowed, as a tree over
-                        the 2^L segments (req_cap, req_query) */
-    uint8_t *act[4]; /* per edge segment: span log of the leaf there */
+    uint8_t *act[4]; /* per segment of a linked edge: span log of the leaf there */
     tsr_surface surf;
     tsr_quadtree *qt;
     const tsr_allocator *alloc;
@@ -847,7 +852,7 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
             out->lo[k] = nextafterf((float)lo[k], -INFINITY);
             out->hi[k] = nextafterf((float)hi[k], INFINITY);
         }
-        bezier_delta(sub.degree_u, sub.degree_v, sub.ctrl, sub.weights, c->N, d);
+        bezier_delta(sub.degree_u, sub.degree_v, sub.ctrl, sub.weights, 1, d);
         /* the parent's bounds hold for the child at a quarter (the same
          * derivative bounds over a part, half the spacing): monotone */
         if (n.level > 0) {
@@ -855,7 +860,7 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
             const uint32_t *slot = tsr_keymap_find(&c->memo, tsr_qnode_key(up));
             if (slot)
                 for (int k = 0; k < 3; k++)
-                    d[k] = fmin(d[k], 0.25 * c->nv[*slot].d[k]);
+                    d[k] = dmin(d[k], 0.25 * c->nv[*slot].d[k]);
         }
         for (int k = 0; k < 3; k++)
             out->d[k] = nextafterf((float)d[k], INFINITY);
@@ -886,11 +891,11 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
             box_add(lo, hi, p0);
             for (int k = 0; k < 3; k++) {
                 if (i + 2 <= N)
-                    a[k] = fmax(a[k], fabs(p0[6 + k] - 2 * p0[3 + k] + p0[k]));
+                    a[k] = dmax(a[k], fabs(p0[6 + k] - 2 * p0[3 + k] + p0[k]));
                 if (j + 2 <= N)
-                    cc[k] = fmax(cc[k], fabs(p0[6 * row + k] - 2 * p0[3 * row + k] + p0[k]));
+                    cc[k] = dmax(cc[k], fabs(p0[6 * row + k] - 2 * p0[3 * row + k] + p0[k]));
                 if (i + 1 <= N && j + 1 <= N)
-                    b[k] = fmax(b[k], fabs(p0[3 * row + 3 + k] - p0[3 * row + k] - p0[3 + k] + p0[k]));
+                    b[k] = dmax(b[k], fabs(p0[3 * row + 3 + k] - p0[3 * row + k] - p0[3 + k] + p0[k]));
             }
         }
     double sum[3] = {0};
@@ -965,6 +970,14 @@ static void node_force(pctx *c, tsr_qnode n)
     }
 }
 
+/* Figure k of a node's values at the piece's tile size. */
+static float node_d(const pctx *c, const nodeval *v, int k)
+{
+    if (c->m->pieces[c->piece].kind != KIND_BEZIER)
+        return v->d[k];
+    return nextafterf((float)((double)v->d[k] * c->inv_n2), INFINITY);
+}
+
 static bool surf_evaluate(void *user, uint32_t i, uint32_t j, float pos[3], float normal[3])
 {
     (void)user, (void)i, (void)j, (void)pos, (void)normal;
@@ -985,7 +998,7 @@ static void surf_bounds(void *user, tsr_qnode n, float lo[3], float hi[3])
 static float surf_error(void *user, tsr_qnode n)
 {
     pctx *c = user;
-    return c->override >= 0 ? c->override : node_info(c, n)->d[0];
+    return c->override >= 0 ? c->override : node_d(c, node_info(c, n), 0);
 }
 
 /* The node's error against the tolerance: model units or pixels. */
@@ -1012,56 +1025,40 @@ static bool node_edge_range(const pctx *c, tsr_qnode n, int e, uint32_t *k0, uin
     return true;
 }
 
-/* The span logs required along an edge of 2^L segments, as caps on the
- * dyadic ranges of a binary tree (node 1 the whole edge, node (1 << l) + x
- * the x-th range of 2^(L-l) segments, the range of a quadtree node of level
- * l along the edge): cap[] the cap put on a node's range, sub[] = cap[] + 2^(L+1)
- * the smallest cap within its subtree. A segment's requirement is the
- * smallest cap on its path; caps only go down. */
-static uint8_t req_query(const uint8_t *cap, uint32_t L, size_t node)
-{
-    const uint8_t *sub = cap + ((size_t)2 << L);
-    uint8_t m = sub[node];
-    for (size_t a = node >> 1; a; a >>= 1)
-        m = cap[a] < m ? cap[a] : m;
-    return m;
-}
-
-static void req_cap(uint8_t *cap, uint32_t L, size_t node, uint8_t v)
-{
-    uint8_t *sub = cap + ((size_t)2 << L);
-    if (cap[node] > v)
-        cap[node] = v;
-    for (; node && sub[node] > v; node >>= 1)
-        sub[node] = v;
-}
-
-/* Caps segments [lo, hi] of an edge at v, as dyadic ranges. */
-static void req_cap_range(uint8_t *cap, uint32_t L, uint32_t lo, uint32_t hi, uint8_t v)
-{
-    while (lo <= hi) {
-        uint32_t k = 0; /* the largest aligned block at lo within [lo, hi] */
-        while (k < L && !(lo & (1u << k)) && lo + (2u << k) - 1 <= hi)
-            k++;
-        req_cap(cap, L, ((size_t)1 << (L - k)) + (lo >> k), v);
-        if (hi - lo + 1 <= (1u << k))
-            break;
-        lo += 1u << k;
-    }
-}
-
 static bool refine(void *user, const tsr_surface *s, tsr_qnode n)
 {
     pctx *c = user;
-    uint32_t sl = s->levels - n.level;
-    for (int e = 0; e < 4; e++) {
-        uint32_t k0, k1;
-        if (c->req[e] && node_edge_range(c, n, e, &k0, &k1) &&
-            req_query(c->req[e], s->levels, ((size_t)1 << n.level) + (k0 >> sl)) < sl)
-            return true;
-    }
+    (void)s;
     const nodeval *v = node_info(c, n);
-    return v->force || node_measure(c, n, v->d[0]) > c->tol;
+    return v->force || node_measure(c, n, node_d(c, v, 0)) > c->tol;
+}
+
+/* A Bézier piece's tile size N: of tile, tile + 2, ... up to maxN (2 tile
+ * - 2), the one whose selection (without the stitched check) has the
+ * fewest quads. The rates N 2^l of the pieces then step by (N + 2) / N,
+ * not by 2, and linked edges of different rates meet through fans
+ * (emit_piece). Node values are per unit tile, so the memo serves every
+ * N. */
+static tsr_status choose_tile(pctx *c, uint32_t tile, uint32_t maxN)
+{
+    uint64_t best = UINT64_MAX;
+    uint32_t bestN = tile;
+    for (uint32_t N = tile; N <= maxN && tile < maxN; N += 2) {
+        c->N = N;
+        c->inv_n2 = 1.0 / ((double)N * N);
+        c->cur_key = 0;
+        tsr_status st = tsr_quadtree_select(c->qt, refine, c);
+        if (st != TSR_OK)
+            return st;
+        uint64_t cost = (uint64_t)tsr_quadtree_leaf_count(c->qt) * N * N;
+        if (cost < best) {
+            best = cost;
+            bestN = N;
+        }
+    }
+    c->N = bestN;
+    c->inv_n2 = 1.0 / ((double)bestN * bestN);
+    return TSR_OK;
 }
 
 /* After selection: every stitched tile's bound against the tolerance.
@@ -1075,11 +1072,11 @@ static uint32_t check_stitched(pctx *c, double *bound)
     for (uint32_t i = 0; i < nl; i++) {
         tsr_qnode n = lv[i].node;
         nodeval v = *node_info(c, n);
-        double d = v.d[0];
+        double d = node_d(c, &v, 0);
         for (int e = 0; e < 4; e++) {
             if (!(lv[i].stitch & (1u << e)))
                 continue;
-            float ds = v.d[e & 1 ? 2 : 1];
+            float ds = node_d(c, &v, e & 1 ? 2 : 1);
             if (node_measure(c, n, ds) > c->tol && n.level > 0) {
                 tsr_qnode up = {n.x >> 1, n.y >> 1, (uint8_t)(n.level - 1)};
                 int dx = e == 1 ? 1 : e == 3 ? -1 : 0, dy = e == 0 ? -1 : e == 2 ? 1 : 0;
@@ -1192,8 +1189,15 @@ static bool canonical(const tsr_pmodel *m, const pctx *ctx, lpoint start, canon_
                 uint32_t t0 = l->t0 * Zq / 2, t1 = l->t1 * Zq / 2;
                 if (T < t0 || T > t1)
                     continue;
+                /* the neighbour's lattice point there, if there is one (the
+                 * two lattices may differ in density) */
                 uint32_t Zn = lattice_size(ctx, l->piece), s0 = l->s0 * Zn / 2;
-                uint32_t S = l->reversed ? s0 - (T - t0) : s0 + (T - t0);
+                uint64_t B = (uint64_t)(l->s0 > l->s1 ? l->s0 - l->s1 : l->s1 - l->s0) * Zn / 2,
+                         num = (uint64_t)(T - t0) * B;
+                if (num % (t1 - t0))
+                    continue;
+                uint32_t d = (uint32_t)(num / (t1 - t0));
+                uint32_t S = l->reversed ? s0 - d : s0 + d;
                 if (!canon_push(b, edge_point(ctx, l->piece, l->edge, S), a))
                     return false;
             }
@@ -1230,6 +1234,10 @@ typedef struct builder {
     double *tile_uv;  /* 2 (N+1)^2 */
     double *tile_tmp; /* 3 (N+1)^2, and 2 (N+1) (MAX_DEGREE+1) Bernstein values */
     double *vert_uv;  /* 2 (N+1)^2: the source's (u, v) of the tile's vertices */
+    struct fpoint *fp; /* a neighbour's samples on a border segment (edge_foreign) */
+    uint32_t nfp, capfp;
+    struct pvert *pv;  /* their vertices */
+    uint32_t cappv;
 } builder;
 
 static uint32_t new_vertex(builder *b, const piece *p, const double pos[3], const double *nrm)
@@ -1389,6 +1397,125 @@ static bool add_tri(builder *b, uint32_t source, const uint32_t v[3], const doub
     return true;
 }
 
+/* ---- linked borders: the neighbour's samples too --------------------------- */
+
+/* A sample of a linked neighbour strictly inside a border segment of a
+ * tile: its lattice point, and its parameter T along the edge in this
+ * piece's lattice units (not an integer where the lattices differ). */
+typedef struct fpoint {
+    double T;
+    lpoint q;
+} fpoint;
+
+static bool fp_push(builder *b, fpoint x)
+{
+    if (b->nfp == b->capfp) {
+        uint32_t cap = b->capfp ? 2 * b->capfp : 64;
+        fpoint *np = tsr_realloc(b->a, b->fp, (size_t)cap * sizeof *np);
+        if (!np)
+            return false;
+        b->fp = np;
+        b->capfp = cap;
+    }
+    b->fp[b->nfp++] = x;
+    return true;
+}
+
+/* Appends to b->fp, in increasing T, the samples of the leaves of the
+ * pieces linked along edge e of piece pi that lie strictly between Ta <
+ * Tb (lattice units of pi along e). A neighbour's edge samples are its
+ * border leaves' lattice points (a border leaf is never stitched there:
+ * it has no neighbour in its own tree), every 2^w units in a leaf of span
+ * log w (act[]). Exact: positions compare in integers. */
+static bool edge_foreign(builder *b, uint32_t pi, int e, uint32_t Ta, uint32_t Tb)
+{
+    const piece *p = &b->m->pieces[pi];
+    uint32_t Z = lattice_size(b->ctx, pi), start = b->nfp;
+    for (int k = 0; k < p->nlinks[e]; k++) {
+        const plink *l = &p->link[e][k];
+        const pctx *q = &b->ctx[l->piece];
+        const uint8_t *act = q->act[l->edge];
+        uint64_t t0 = (uint64_t)l->t0 * Z / 2, t1 = (uint64_t)l->t1 * Z / 2;
+        uint64_t lo = Ta > t0 ? Ta : t0, hi = Tb < t1 ? Tb : t1;
+        if (!act || lo >= hi)
+            continue;
+        uint64_t Zq = lattice_size(b->ctx, l->piece), Nq = q->N, Mq = (uint64_t)1 << q->surf.levels;
+        uint64_t A = t1 - t0, B = (uint64_t)(l->s0 > l->s1 ? l->s0 - l->s1 : l->s1 - l->s0) * Zq / 2,
+                 s0 = (uint64_t)l->s0 * Zq / 2;
+        /* d = (T - t0) B / A from s0 along the neighbour's edge */
+        uint64_t dlo = (lo - t0) * B / A, dhi = ((hi - t0) * B + A - 1) / A;
+        uint64_t Slo = l->reversed ? s0 - dhi : s0 + dlo, Shi = l->reversed ? s0 - dlo : s0 + dhi;
+        uint32_t before = b->nfp;
+        for (uint64_t S = Slo; S <= Shi;) {
+            uint64_t g = S / Nq < Mq ? S / Nq : Mq - 1, step = (uint64_t)1 << act[g];
+            if (S % step) {
+                S = (S / step + 1) * step;
+                continue;
+            }
+            uint64_t d = l->reversed ? s0 - S : S - s0;
+            if (d * A > (lo - t0) * B && d * A < (hi - t0) * B &&
+                !fp_push(b, (fpoint){(double)t0 + (double)d * (double)A / (double)B,
+                                     edge_point(b->ctx, l->piece, l->edge, (uint32_t)S)}))
+                return false;
+            S += step;
+        }
+        if (l->reversed)
+            for (uint32_t i = before, j = b->nfp; i + 1 < j; i++, j--) {
+                fpoint t = b->fp[i];
+                b->fp[i] = b->fp[j - 1];
+                b->fp[j - 1] = t;
+            }
+    }
+    for (uint32_t i = start + 1; i < b->nfp; i++) /* links in any order */
+        for (uint32_t j = i; j > start && b->fp[j - 1].T > b->fp[j].T; j--) {
+            fpoint t = b->fp[j];
+            b->fp[j] = b->fp[j - 1];
+            b->fp[j - 1] = t;
+        }
+    return true;
+}
+
+typedef struct pvert {
+    uint32_t v;
+    double uv[2];
+} pvert;
+
+typedef struct pchain {
+    const pvert *p;
+    uint32_t n;
+} pchain;
+
+/* Triangle t (emitted order) with extra points ch[k] on its edge t[k] ->
+ * t[k+1], in that order: split into a fan from the opposite corner, the
+ * first and last parts taking the chains of the other edges. Every part
+ * lies within t in (u, v), so its interpolation error is within t's
+ * bound (the barycentric variances of a part's corners are at most t's:
+ * each corner is a mean of t's). */
+static bool emit_split(builder *b, uint32_t source, const pvert t[3], const pchain ch[3])
+{
+    int k = 0;
+    while (k < 3 && !ch[k].n)
+        k++;
+    if (k == 3) {
+        uint32_t v[3] = {t[0].v, t[1].v, t[2].v};
+        double uv[6] = {t[0].uv[0], t[0].uv[1], t[1].uv[0], t[1].uv[1], t[2].uv[0], t[2].uv[1]};
+        return add_tri(b, source, v, uv);
+    }
+    const pchain *c = &ch[k];
+    pvert a = t[k], z = t[(k + 1) % 3], o = t[(k + 2) % 3];
+    pvert t1[3] = {a, c->p[0], o}, t2[3] = {c->p[c->n - 1], z, o};
+    pchain c1[3] = {{NULL, 0}, {NULL, 0}, ch[(k + 2) % 3]}, c2[3] = {{NULL, 0}, ch[(k + 1) % 3], {NULL, 0}};
+    if (!emit_split(b, source, t1, c1))
+        return false;
+    for (uint32_t i = 0; i + 1 < c->n; i++) {
+        pvert tm[3] = {c->p[i], c->p[i + 1], o};
+        pchain cm[3] = {{NULL, 0}, {NULL, 0}, {NULL, 0}};
+        if (!emit_split(b, source, tm, cm))
+            return false;
+    }
+    return emit_split(b, source, t2, c2);
+}
+
 static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *pat, uint32_t *local)
 {
     pctx *c = &b->ctx[pi];
@@ -1423,6 +1550,13 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
                 o[0] = s == 1 ? p->rect[1] : p->rect[0] + s * (p->rect[1] - p->rect[0]);
                 o[1] = tt == 1 ? p->rect[3] : p->rect[2] + tt * (p->rect[3] - p->rect[2]);
             }
+        /* tile edges on a linked border: the neighbour's samples there too */
+        unsigned lmask = 0;
+        for (int e = 0; e < 4; e++) {
+            uint32_t k0, k1;
+            if (c->act[e] && node_edge_range(c, n, e, &k0, &k1))
+                lmask |= 1u << e;
+        }
         const uint32_t *tri = pat->tri[mask];
         for (uint32_t t = 0; t < pat->count[mask]; t++) {
             uint32_t idx[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
@@ -1431,15 +1565,63 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
                 idx[1] = idx[2];
                 idx[2] = tmp;
             }
-            uint32_t v[3];
-            double uv[6];
-            for (int k = 0; k < 3; k++) {
-                v[k] = local[idx[k]];
-                uv[2 * k] = vuv[2 * idx[k]];
-                uv[2 * k + 1] = vuv[2 * idx[k] + 1];
+            pvert tv[3];
+            for (int k = 0; k < 3; k++)
+                tv[k] = (pvert){local[idx[k]], {vuv[2 * idx[k]], vuv[2 * idx[k] + 1]}};
+            uint32_t off[3] = {0}, cnt[3] = {0};
+            int ek[3] = {0, 0, 0};
+            b->nfp = 0;
+            for (int k = 0; lmask && k < 3; k++) {
+                uint32_t i0 = idx[k] % row, j0 = idx[k] / row, i1 = idx[(k + 1) % 3] % row, j1 = idx[(k + 1) % 3] / row;
+                int e = j0 == 0 && j1 == 0 ? 0 : i0 == N && i1 == N ? 1 : j0 == N && j1 == N ? 2 : i0 == 0 && i1 == 0 ? 3 : -1;
+                if (e < 0 || !(lmask >> e & 1))
+                    continue;
+                uint32_t T0 = e & 1 ? y0 + j0 * step : x0 + i0 * step, T1 = e & 1 ? y0 + j1 * step : x0 + i1 * step;
+                off[k] = b->nfp;
+                ek[k] = e;
+                if (!edge_foreign(b, pi, e, T0 < T1 ? T0 : T1, T0 < T1 ? T1 : T0))
+                    return TSR_ERR_NOMEM;
+                cnt[k] = b->nfp - off[k];
+                if (T0 > T1) /* ordered from corner k to corner k + 1 */
+                    for (uint32_t x = off[k], y = b->nfp; x + 1 < y; x++, y--) {
+                        fpoint tmp = b->fp[x];
+                        b->fp[x] = b->fp[y - 1];
+                        b->fp[y - 1] = tmp;
+                    }
             }
-            if (!add_tri(b, p->source, v, uv))
+            if (!b->nfp) {
+                uint32_t v[3] = {tv[0].v, tv[1].v, tv[2].v};
+                double uv[6] = {tv[0].uv[0], tv[0].uv[1], tv[1].uv[0], tv[1].uv[1], tv[2].uv[0], tv[2].uv[1]};
+                if (!add_tri(b, p->source, v, uv))
+                    return TSR_ERR_NOMEM;
+                continue;
+            }
+            if (b->nfp > b->cappv) {
+                pvert *np = tsr_realloc(b->a, b->pv, (size_t)b->nfp * sizeof *np);
+                if (!np)
+                    return TSR_ERR_NOMEM;
+                b->pv = np;
+                b->cappv = b->nfp;
+            }
+            for (uint32_t x = 0; x < b->nfp; x++) {
+                const fpoint *f = &b->fp[x];
+                pvert *o = &b->pv[x];
+                o->v = vertex_of(b, f->q, NULL);
+                if (o->v == UINT32_MAX)
+                    return TSR_ERR_NOMEM;
+                /* on the piece edge of its chain */
+                int k = x >= off[2] && cnt[2] ? 2 : x >= off[1] && cnt[1] ? 1 : 0, e = ek[k];
+                double T = f->T / Z, s = e == 1 ? 1 : e == 3 ? 0 : T, tt = e == 0 ? 0 : e == 2 ? 1 : T;
+                o->uv[0] = s == 1 ? p->rect[1] : p->rect[0] + s * (p->rect[1] - p->rect[0]);
+                o->uv[1] = tt == 1 ? p->rect[3] : p->rect[2] + tt * (p->rect[3] - p->rect[2]);
+            }
+            pchain ch[3];
+            for (int k = 0; k < 3; k++)
+                ch[k] = (pchain){b->pv + off[k], cnt[k]};
+            uint32_t before = b->out->mesh.triangle_count;
+            if (!emit_split(b, p->source, tv, ch))
                 return TSR_ERR_NOMEM;
+            b->out->fan_triangles += b->out->mesh.triangle_count - before - (b->out->mesh.triangle_count > before);
         }
     }
     return TSR_OK;
@@ -1705,7 +1887,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
     const tsr_allocator *a = alloc;
     tsr_mesh_init(&out->mesh, opt.normals ? TSR_MESH_NORMALS : 0, alloc);
     pctx *ctx = tsr_alloc(a, (size_t)m->npieces * sizeof *ctx);
-    uint32_t row = opt.tile_n + 1;
+    uint32_t row = opt.tile_n + 1, maxN = 2 * opt.tile_n - 2;
+    maxN = maxN < opt.tile_n ? opt.tile_n : maxN > TSR_TILE_MAX ? TSR_TILE_MAX : maxN;
     double *scratch = tsr_alloc(a, (size_t)row * row * 5 * sizeof *scratch);
     uint64_t evals = 0;
     tsr_status st = ctx && scratch ? TSR_OK : TSR_ERR_NOMEM;
@@ -1718,6 +1901,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         c->opt = &opt;
         c->piece = p;
         c->N = opt.tile_n;
+        c->inv_n2 = 1.0 / ((double)opt.tile_n * opt.tile_n);
         double scale = opt.piece_scale ? opt.piece_scale[p] : 1;
         c->tol = (opt.camera ? opt.camera->pixel_error : opt.max_error) * scale;
         c->scratch = scratch;
@@ -1736,76 +1920,35 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         for (int e = 0; e < 4; e++) {
             if (!pc->nlinks[e])
                 continue;
-            c->req[e] = tsr_alloc(a, (size_t)4 << L);
             c->act[e] = tsr_alloc(a, (size_t)1 << L);
-            if (!c->req[e] || !c->act[e]) {
+            if (!c->act[e]) {
                 st = TSR_ERR_NOMEM;
                 break;
             }
-            memset(c->req[e], (int)L, (size_t)4 << L);
         }
     }
-    /* select, then make linked edges agree */
+    /* select; then stitched tiles within the bound, or their coarse
+     * neighbours split, until none fails. Linked edges need no agreement:
+     * each side's border tiles take the other side's samples too (fans,
+     * emit_piece) */
     uint8_t *dirty = st == TSR_OK ? tsr_alloc(a, m->npieces) : NULL;
     if (st == TSR_OK && !dirty)
         st = TSR_ERR_NOMEM;
     if (dirty)
         memset(dirty, 1, m->npieces);
+    for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++)
+        if (m->pieces[p].kind == KIND_BEZIER && !m->sources[m->pieces[p].source].trimmed)
+            st = choose_tile(&ctx[p], opt.tile_n, maxN);
     double bound = 0;
     for (bool again = true; again && st == TSR_OK;) {
-        bool changed = true;
-        while (st == TSR_OK && changed) {
-            out->passes++;
-            for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
-                if (!dirty[p])
-                    continue;
-                ctx[p].cur_key = 0;
-                st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
-                collect_spans(&ctx[p]);
-                dirty[p] = 0;
-            }
-            changed = false;
-            for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
-                const piece *pc = &m->pieces[p];
-                uint32_t M = 1u << ctx[p].surf.levels;
-                for (int e = 0; e < 4; e++)
-                    for (int k = 0; k < pc->nlinks[e]; k++) {
-                        const plink *l = &pc->link[e][k];
-                        pctx *q = &ctx[l->piece];
-                        if (!q->req[l->edge])
-                            continue;
-                        uint32_t Mq = 1u << q->surf.levels, k0 = l->t0 * M / 2, k1 = l->t1 * M / 2,
-                                 s0 = l->s0 * Mq / 2;
-                        /* run by run of this side's leaves: a leaf of span
-                         * log w covers an aligned run of 2^w segments */
-                        for (uint32_t g = k0; g < k1;) {
-                            uint8_t want = ctx[p].act[e][g];
-                            uint32_t end = ((g >> want) + 1) << want;
-                            end = end < k1 ? end : k1;
-                            int64_t a0 = l->reversed ? (int64_t)s0 - (end - k0) : (int64_t)s0 + (g - k0);
-                            int64_t a1 = a0 + (end - g) - 1;
-                            g = end;
-                            a0 = a0 < 0 ? 0 : a0;
-                            a1 = a1 >= Mq ? (int64_t)Mq - 1 : a1;
-                            if (a0 > a1)
-                                continue;
-                            req_cap_range(q->req[l->edge], q->surf.levels, (uint32_t)a0, (uint32_t)a1, want);
-                            /* a leaf there coarser than want covers a whole
-                             * aligned run, or it is finer everywhere */
-                            for (int64_t h = a0; h <= a1;) {
-                                uint8_t have = q->act[l->edge][h];
-                                if (have > want) {
-                                    dirty[l->piece] = 1;
-                                    changed = true;
-                                    break;
-                                }
-                                h = ((h >> have) + 1) << have;
-                            }
-                        }
-                    }
-            }
+        out->passes++;
+        for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
+            if (!dirty[p])
+                continue;
+            ctx[p].cur_key = 0;
+            st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
+            dirty[p] = 0;
         }
-        /* stitched tiles within the bound, or their coarse neighbours split */
         again = false;
         bound = 0;
         for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
@@ -1820,42 +1963,62 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
                 bound = fmax(bound, pb);
         }
     }
+    for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++)
+        collect_spans(&ctx[p]);
     tsr_free(a, dirty);
     /* assemble */
-    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL, NULL};
-    tsr_tile_patterns pat;
-    bool pat_ok = false;
-    uint32_t *local = NULL;
-    if (st == TSR_OK) {
-        st = tsr_tile_patterns_init(&pat, opt.tile_n, a);
-        pat_ok = st == TSR_OK;
-        local = tsr_alloc(a, (size_t)row * row * sizeof *local);
-        b.used = tsr_alloc(a, (size_t)16 * row * row);
-        b.tile_pos = tsr_alloc(a, (size_t)3 * row * row * sizeof(double));
-        b.tile_uv = tsr_alloc(a, (size_t)2 * row * row * sizeof(double));
-        b.tile_tmp = tsr_alloc(a, ((size_t)3 * row * row + 2 * (size_t)row * (TSR_PATCH_MAX_DEGREE + 1)) * sizeof(double));
-        b.vert_uv = tsr_alloc(a, (size_t)2 * row * row * sizeof(double));
-        if (st == TSR_OK && (!local || !b.used || !b.tile_pos || !b.tile_uv || !b.tile_tmp || !b.vert_uv))
+    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0, NULL, 0};
+    /* the tile patterns of every tile size in use, and which of a tile's
+     * vertices each uses */
+    enum { NPAT = TSR_TILE_MAX / 2 + 1 };
+    tsr_tile_patterns *pats[NPAT] = {NULL};
+    uint8_t *pused[NPAT] = {NULL};
+    uint64_t used_n[NPAT][16];
+    uint32_t *local = NULL, mrow = maxN + 1;
+    for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
+        uint32_t N = ctx[p].N, r2 = (N + 1) * (N + 1);
+        if (pats[N / 2])
+            continue;
+        pats[N / 2] = tsr_alloc(a, sizeof **pats);
+        pused[N / 2] = tsr_alloc(a, (size_t)16 * r2);
+        if (!pats[N / 2] || !pused[N / 2]) {
             st = TSR_ERR_NOMEM;
-        if (st == TSR_OK) {
-            memset(b.used, 0, (size_t)16 * row * row);
-            for (unsigned mk = 0; mk < 16; mk++)
-                for (uint32_t t = 0; t < 3 * pat.count[mk]; t++)
-                    b.used[(size_t)mk * row * row + pat.tri[mk][t]] = 1;
+            break;
+        }
+        if ((st = tsr_tile_patterns_init(pats[N / 2], N, a)) != TSR_OK) {
+            tsr_free(a, pats[N / 2]);
+            pats[N / 2] = NULL;
+            break;
+        }
+        memset(pused[N / 2], 0, (size_t)16 * r2);
+        for (unsigned mk = 0; mk < 16; mk++) {
+            for (uint32_t t = 0; t < 3 * pats[N / 2]->count[mk]; t++)
+                pused[N / 2][(size_t)mk * r2 + pats[N / 2]->tri[mk][t]] = 1;
+            used_n[N / 2][mk] = 0;
+            for (uint32_t k = 0; k < r2; k++)
+                used_n[N / 2][mk] += pused[N / 2][(size_t)mk * r2 + k];
         }
     }
-    /* room for everything at once: triangles exactly, vertices at most */
-    uint64_t want_t = 0, want_v = 0, used_n[16] = {0};
-    for (unsigned mk = 0; st == TSR_OK && mk < 16; mk++)
-        for (uint32_t k = 0; k < row * row; k++)
-            used_n[mk] += b.used[(size_t)mk * row * row + k];
+    if (st == TSR_OK) {
+        local = tsr_alloc(a, (size_t)mrow * mrow * sizeof *local);
+        b.tile_pos = tsr_alloc(a, (size_t)3 * mrow * mrow * sizeof(double));
+        b.tile_uv = tsr_alloc(a, (size_t)2 * mrow * mrow * sizeof(double));
+        b.tile_tmp = tsr_alloc(a, ((size_t)3 * mrow * mrow + 2 * (size_t)mrow * (TSR_PATCH_MAX_DEGREE + 1)) * sizeof(double));
+        b.vert_uv = tsr_alloc(a, (size_t)2 * mrow * mrow * sizeof(double));
+        if (!local || !b.tile_pos || !b.tile_uv || !b.tile_tmp || !b.vert_uv)
+            st = TSR_ERR_NOMEM;
+    }
+    /* room for everything at once: triangles exactly (but fans), vertices at most */
+    uint64_t want_t = 0, want_v = 0, want_border = 0;
     for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
         if (m->sources[m->pieces[p].source].trimmed)
             continue;
+        uint32_t N = ctx[p].N;
         const tsr_qleaf *lv = tsr_quadtree_leaves(ctx[p].qt);
         for (uint32_t i = 0; i < tsr_quadtree_leaf_count(ctx[p].qt); i++) {
-            want_t += pat.count[lv[i].stitch & 15];
-            want_v += used_n[lv[i].stitch & 15];
+            want_t += pats[N / 2]->count[lv[i].stitch & 15];
+            want_v += used_n[N / 2][lv[i].stitch & 15];
+            want_border += 4 * N;
         }
     }
     if (st == TSR_OK && (want_t >= UINT32_MAX - 2 || want_v >= ((uint64_t)1 << 33)))
@@ -1863,21 +2026,24 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
     if (st == TSR_OK && want_t) {
         uint32_t vres = want_v >= UINT32_MAX - 2 ? UINT32_MAX - 2 : (uint32_t)(want_v / 2 + 16);
         st = tsr_mesh_reserve(&out->mesh, vres, (uint32_t)want_t);
-        out->tri_source = st == TSR_OK ? tsr_alloc(a, (size_t)want_t * sizeof *out->tri_source) : NULL;
-        out->tri_uv = out->tri_source ? tsr_alloc(a, (size_t)want_t * 6 * sizeof *out->tri_uv) : NULL;
+        /* and a quarter more for the fans at linked borders */
+        uint64_t cap = want_t + want_t / 4 + 64;
+        cap = cap > UINT32_MAX - 2 ? UINT32_MAX - 2 : cap;
+        out->tri_source = st == TSR_OK ? tsr_alloc(a, (size_t)cap * sizeof *out->tri_source) : NULL;
+        out->tri_uv = out->tri_source ? tsr_alloc(a, (size_t)cap * 6 * sizeof *out->tri_uv) : NULL;
         if (st == TSR_OK && !out->tri_uv)
             st = TSR_ERR_NOMEM;
-        b.tri_cap = (uint32_t)want_t;
-        /* tile-border vertices go through the map: 4N of (N+1)^2 */
-        size_t border = (size_t)(want_v * 4 * opt.tile_n / ((uint64_t)row * row)) + 64;
-        if (st == TSR_OK && !tsr_keymap_reserve(&b.map, border, a))
+        b.tri_cap = (uint32_t)cap;
+        /* tile-border vertices go through the map: 4N of a tile's */
+        if (st == TSR_OK && !tsr_keymap_reserve(&b.map, (size_t)(want_border / 2) + 64, a))
             st = TSR_ERR_NOMEM;
     }
     for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
         out->leaves += tsr_quadtree_leaf_count(ctx[p].qt);
         if (m->sources[m->pieces[p].source].trimmed)
             continue;
-        st = emit_piece(&b, p, &pat, local);
+        b.used = pused[ctx[p].N / 2];
+        st = emit_piece(&b, p, pats[ctx[p].N / 2], local);
     }
     /* trimmed sources: the loops sampled finely enough in (u, v) */
     for (uint32_t s = 0; s < m->nsources && st == TSR_OK; s++) {
@@ -1940,13 +2106,18 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         tsr_error_set(err, st, "tessellate patches: the mesh would pass 2^32 - 2 vertices or triangles");
 done:
     tsr_free(a, local);
-    tsr_free(a, b.used);
+    for (uint32_t k = 0; k < NPAT; k++) {
+        if (pats[k])
+            tsr_tile_patterns_free(pats[k]);
+        tsr_free(a, pats[k]);
+        tsr_free(a, pused[k]);
+    }
     tsr_free(a, b.tile_pos);
     tsr_free(a, b.tile_uv);
     tsr_free(a, b.tile_tmp);
     tsr_free(a, b.vert_uv);
-    if (pat_ok)
-        tsr_tile_patterns_free(&pat);
+    tsr_free(a, b.fp);
+    tsr_free(a, b.pv);
     tsr_keymap_free(&b.map, a);
     tsr_free(a, b.cb.p);
     for (uint32_t p = 0; ctx && p < m->npieces; p++) {
@@ -1954,7 +2125,6 @@ done:
         tsr_keymap_free(&ctx[p].memo, a);
         tsr_free(a, ctx[p].nv);
         for (int e = 0; e < 4; e++) {
-            tsr_free(a, ctx[p].req[e]);
             tsr_free(a, ctx[p].act[e]);
         }
     }

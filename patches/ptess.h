@@ -31,9 +31,12 @@
  * piece of its connected part is *mirrored*: its triangles are emitted
  * reversed and its normals negated), so the welded mesh is oriented.
  *
- * The tessellation. Every piece has a quadtree of tiles of tile_n quads
- * with max_level levels (lattice size tile_n << max_level); a node's error
- * delta is:
+ * The tessellation. Every piece has a quadtree of tiles of N quads with
+ * max_level levels (lattice size N << max_level). N is the piece's own:
+ * for a Bézier piece of an untrimmed source, of tile_n, tile_n + 2, ...,
+ * 2 tile_n - 2 (at most TSR_TILE_MAX) the one whose selection has the
+ * fewest quads, so rates N 2^l step by (N + 2) / N rather than by 2; for
+ * other pieces tile_n. A node's error delta is:
  *  - for a Bézier piece (polynomial or rational), a bound that holds: the
  *    node's Bézier sub-patch (blossoming) gives bounds M of the second
  *    derivatives' lengths (control-net differences as vectors; for
@@ -61,15 +64,18 @@
  *    (piece_scale) until they hold.
  * Refinement splits while delta > max_error (view-independent) or while
  * the screen error of delta exceeds the camera's pixel_error (any
- * direction of displacement, tsr_surface.error_isotropic). Then linked
- * edges are made to agree: along a shared edge both pieces' leaves get
- * the finer level of the two, repeated until nothing changes, so both
- * sides sample the edge at the same parameters (a quad's edge next to an
- * N-gon is one level finer than the sub-patches, whose depth is
- * max_level - 1). Vertices are welded by this correspondence (evaluated
- * once, by the lowest piece that owns the point), collapsed edges become
- * one vertex, and triangles with a repeated vertex are dropped, so a
- * closed model gives a closed, oriented, conforming mesh.
+ * direction of displacement, tsr_surface.error_isotropic). Each piece is
+ * selected on its own: along a linked edge both sides sample the union
+ * of the two sides' border samples. A border triangle of a tile whose
+ * edge holds samples of the neighbour is split into a fan at them; every
+ * part lies within the triangle in (s, t), so its interpolation error is
+ * within the triangle's (the barycentric variances of a part are at most
+ * the triangle's), and the bound stands (fan_triangles counts them).
+ * Vertices are welded through the links (a lattice point of one side that
+ * is a lattice point of the other is one vertex, evaluated once by the
+ * lowest piece that owns it), collapsed edges become one vertex, and
+ * triangles with a repeated vertex are dropped, so a closed model gives a
+ * closed, oriented, conforming mesh.
  *
  * Trimmed sources (patches with trim loops) are meshed differently: the
  * lattice points of their pieces' leaves that lie inside the trimmed
@@ -146,7 +152,8 @@ typedef struct tsr_ptess_options {
     /* View-dependent: a prepared camera (tsr_camera_prepare) whose
      * pixel_error is the screen error allowed. */
     const tsr_camera *camera;
-    uint32_t tile_n;    /* quads per tile side, even, 2..TSR_TILE_MAX; 0: 4 */
+    uint32_t tile_n;    /* quads per tile side, even, 2..TSR_TILE_MAX; 0: 4. Bézier pieces
+                           choose theirs in tile_n .. 2 tile_n - 2 (see above) */
     uint32_t max_level; /* quadtree depth per piece, 1..12; 0: 10 */
     bool normals;       /* per-vertex normals of the true surface */
     /* Optional per-piece factor (0 < f <= 1) on the tolerance (max_error
@@ -164,9 +171,11 @@ typedef struct tsr_ptess_result {
     uint32_t *tri_source;
     double *tri_uv;
     uint32_t leaves;        /* tiles over all pieces */
-    uint32_t passes;        /* selections: rounds of making linked edges agree, again after
-                               stitched tiles split their coarse neighbours */
+    uint32_t passes;        /* selection rounds: 1, and one more each time stitched tiles
+                               beyond the bound split their coarse neighbours */
     uint32_t evaluations;   /* surface points evaluated (vertices of the mesh and error estimates) */
+    uint32_t fan_triangles; /* triangles added by splitting border triangles at a linked
+                               neighbour's samples (linked edges of different rates) */
     double bound;           /* a bound of delta over the leaves of Bézier pieces, model units:
                                the largest of the leaves' figures for their tiles as drawn
                                (interior, or stitched along the stitched edges) */

@@ -55,14 +55,21 @@ bool tsr_quadtree_node_exists(const tsr_surface *s, tsr_qnode n)
     return (uint64_t)n.x * w < s->extent_x && (uint64_t)n.y * w < s->extent_y;
 }
 
+/* The low 28 bits of v, spread to the even bits. */
+static uint64_t spread_bits(uint64_t v)
+{
+    v &= 0xFFFFFFFull;
+    v = (v | v << 16) & 0x0000FFFF0000FFFFull;
+    v = (v | v << 8) & 0x00FF00FF00FF00FFull;
+    v = (v | v << 4) & 0x0F0F0F0F0F0F0F0Full;
+    v = (v | v << 2) & 0x3333333333333333ull;
+    v = (v | v << 1) & 0x5555555555555555ull;
+    return v;
+}
+
 uint64_t tsr_qnode_key(tsr_qnode n)
 {
-    uint64_t k = 0;
-    for (unsigned b = 0; b < 28; b++) {
-        k |= (uint64_t)((n.x >> b) & 1) << (2 * b);
-        k |= (uint64_t)((n.y >> b) & 1) << (2 * b + 1);
-    }
-    return (uint64_t)n.level << 56 | k;
+    return (uint64_t)n.level << 56 | spread_bits(n.x) | spread_bits(n.y) << 1;
 }
 
 tsr_quadtree *tsr_quadtree_create(const tsr_surface *s, const tsr_allocator *alloc)
@@ -78,17 +85,7 @@ tsr_quadtree *tsr_quadtree_create(const tsr_surface *s, const tsr_allocator *all
     qt->s = *s;
     if (alloc)
         qt->alloc = *alloc;
-    for (uint32_t l = 0; l < s->levels; l++) {
-        size_t bits = (size_t)1 << (2 * l);
-        size_t words = (bits + 63) / 64;
-        qt->split[l] = tsr_alloc(alloc, words * sizeof(uint64_t));
-        if (!qt->split[l]) {
-            tsr_quadtree_destroy(qt);
-            return NULL;
-        }
-        memset(qt->split[l], 0, words * sizeof(uint64_t));
-    }
-    return qt;
+    return qt; /* split flags are allocated per level on first use (mark_split) */
 }
 
 void tsr_quadtree_destroy(tsr_quadtree *qt)
@@ -115,7 +112,7 @@ bool tsr_quadtree_is_split(const tsr_quadtree *qt, tsr_qnode n)
     if (n.x >= side || n.y >= side)
         return false;
     size_t b = bit_index(n);
-    return (qt->split[n.level][b >> 6] >> (b & 63)) & 1;
+    return qt->split[n.level] && (qt->split[n.level][b >> 6] >> (b & 63)) & 1;
 }
 
 /* Sets the split flag; appends the node to its level's list when new.
@@ -123,6 +120,13 @@ bool tsr_quadtree_is_split(const tsr_quadtree *qt, tsr_qnode n)
 static int mark_split(tsr_quadtree *qt, tsr_qnode n)
 {
     size_t b = bit_index(n);
+    if (!qt->split[n.level]) {
+        size_t words = (((size_t)1 << (2 * n.level)) + 63) / 64;
+        qt->split[n.level] = tsr_alloc(qa(qt), words * sizeof(uint64_t));
+        if (!qt->split[n.level])
+            return -1;
+        memset(qt->split[n.level], 0, words * sizeof(uint64_t));
+    }
     uint64_t *w = &qt->split[n.level][b >> 6], m = 1ull << (b & 63);
     if (*w & m)
         return 0;

@@ -1309,6 +1309,71 @@ TEST(stitched_tiles_within_bound)
     free(b.s);
 }
 
+/* Linked edges of different rates: a flat patch (one root tile) beside a
+ * curved one (deep leaves, its own tile size) sharing the edge x = 1.
+ * The flat side's border triangles take the curved side's samples (fans),
+ * so the mesh conforms; the error holds by the measurement and the bound
+ * (fans lie within the triangles they split). z = K (x - 1)^2 on the
+ * curved patch: u^2 = sum c_i B_i^3(u), c = 0, 0, 1/3, 1. */
+TEST(linked_rates_differ_conform)
+{
+    const double K = 0.6, c[4] = {0, 0, 1.0 / 3, 1};
+    sbuf b = {0};
+    for (int side = 0; side < 2; side++)
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 4; i++)
+                sb_printf(&b, "v %.17g %.17g %.17g\n", side + i / 3.0, j / 3.0, side ? K * c[i] : 0.0);
+    sb_printf(&b, "cstype bezier\ndeg 3 3\n");
+    for (int side = 0; side < 2; side++) {
+        sb_printf(&b, "surf 0 1 0 1");
+        for (int k = 1; k <= 16; k++)
+            sb_printf(&b, " %d", 16 * side + k);
+        sb_printf(&b, "\nend\n");
+    }
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "rates.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        CHECK_MSG(info.pieces == 2 && info.links == 2, "pieces %u links %u", info.pieces, info.links);
+        uint32_t fans = 0;
+        for (uint32_t tile = 2; tile <= 8; tile *= 2)
+            for (double E = 1e-2; E >= 1e-5; E /= 3.3) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                o.tile_n = tile;
+                tsr_ptess_result r;
+                if (!run_ptess(m, &o, &r)) {
+                    tsr_ptess_result_free(&r);
+                    continue;
+                }
+                tsr_validation v = validate(&r.mesh);
+                check_conforming("rates", &v);
+                CHECK_MSG(v.boundary_loops == 1 && v.euler == 1 && v.coincident_vertices == 0,
+                          "tile %u E %g: loops %u euler %lld coincident %u", tile, E, v.boundary_loops,
+                          (long long)v.euler, v.coincident_vertices);
+                tsr_ptess_measure_result mr;
+                memset(&mr, 0, sizeof mr);
+                CHECK(tsr_ptess_measure(m, &r, 33, NULL, false, NULL, &mr) == TSR_OK);
+                double sl = fslack(mesh_maxabs(&r.mesh));
+                CHECK_MSG(mr.uncovered == 0, "tile %u E %g: %llu samples uncovered", tile, E,
+                          (unsigned long long)mr.uncovered);
+                CHECK_MSG(mr.max_error <= E + sl && mr.max_error <= r.bound + sl, "tile %u E %g: measured %g, bound %g",
+                          tile, E, mr.max_error, r.bound);
+                fans += r.fan_triangles;
+                tsr_ptess_result_free(&r);
+            }
+        CHECK_MSG(fans > 0, "no fans: the two sides never differed");
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
 TEST(camera_near_finer)
 {
     sbuf b = {0};
@@ -1978,4 +2043,4 @@ TEST(data_osd_cages)
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
-          T(stitched_tiles_within_bound), T(camera_near_finer), T(bad_options), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
+          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(camera_near_finer), T(bad_options), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
