@@ -662,35 +662,37 @@ static void bezier_delta(int du, int dv, const double *P, const double *W, doubl
                 ws = dmax(ws, fabs(WW(i + 1, j) - w));
                 for (int q = 0; q < 3; q++)
                     d[q] = QD(i + 1, j, q) - QD(i, j, q);
-                qs = dmax(qs, norm3(d[0], d[1], d[2]));
+                qs = dmax(qs, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             }
             if (j + 1 < nv) {
                 wt = dmax(wt, fabs(WW(i, j + 1) - w));
                 for (int q = 0; q < 3; q++)
                     d[q] = QD(i, j + 1, q) - QD(i, j, q);
-                qt = dmax(qt, norm3(d[0], d[1], d[2]));
+                qt = dmax(qt, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             }
             if (i + 2 < nu) {
                 wss = dmax(wss, fabs(WW(i + 2, j) - 2 * WW(i + 1, j) + w));
                 for (int q = 0; q < 3; q++)
                     d[q] = QD(i + 2, j, q) - 2 * QD(i + 1, j, q) + QD(i, j, q);
-                qss = dmax(qss, norm3(d[0], d[1], d[2]));
+                qss = dmax(qss, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             }
             if (j + 2 < nv) {
                 wtt = dmax(wtt, fabs(WW(i, j + 2) - 2 * WW(i, j + 1) + w));
                 for (int q = 0; q < 3; q++)
                     d[q] = QD(i, j + 2, q) - 2 * QD(i, j + 1, q) + QD(i, j, q);
-                qtt = dmax(qtt, norm3(d[0], d[1], d[2]));
+                qtt = dmax(qtt, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             }
             if (i + 1 < nu && j + 1 < nv) {
                 wst = dmax(wst, fabs(WW(i + 1, j + 1) - WW(i + 1, j) - WW(i, j + 1) + w));
                 for (int q = 0; q < 3; q++)
                     d[q] = QD(i + 1, j + 1, q) - QD(i + 1, j, q) - QD(i, j + 1, q) + QD(i, j, q);
-                qst = dmax(qst, norm3(d[0], d[1], d[2]));
+                qst = dmax(qst, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             }
         }
 #undef QD
 #undef WW
+    /* the largest lengths, from the largest squares */
+    qs = sqrt(qs), qt = sqrt(qt), qss = sqrt(qss), qtt = sqrt(qtt), qst = sqrt(qst);
     double fu = du, fv = dv, fuu = du * (du - 1.0), fvv = dv * (dv - 1.0), fuv = fu * fv, Mss, Mst, Mtt;
     if (!W) {
         Mss = fuu * qss;
@@ -1033,10 +1035,10 @@ static bool refine(void *user, const tsr_surface *s, tsr_qnode n)
     return v->force || node_measure(c, n, node_d(c, v, 0)) > c->tol;
 }
 
-/* A Bézier piece's tile size N: of tile, tile + 2, ... up to maxN (2 tile
+/* A Bézier piece's tile size N: of tile, tile + 2, ... up to maxN (4 tile
  * - 2), the one whose selection (without the stitched check) has the
- * fewest quads. The rates N 2^l of the pieces then step by (N + 2) / N,
- * not by 2, and linked edges of different rates meet through fans
+ * fewest quads (ties: the smallest). The rates N 2^l of the pieces then
+ * step by (N + 2) / N, not by 2, and linked edges of different rates meet through fans
  * (emit_piece). Node values are per unit tile, so the memo serves every
  * N. */
 static tsr_status choose_tile(pctx *c, uint32_t tile, uint32_t maxN)
@@ -1238,6 +1240,7 @@ typedef struct builder {
     uint32_t nfp, capfp;
     struct pvert *pv;  /* their vertices */
     uint32_t cappv;
+    uint8_t *onmask;   /* per tile vertex: bit e set when on the tile's edge e */
 } builder;
 
 static uint32_t new_vertex(builder *b, const piece *p, const double pos[3], const double *nrm)
@@ -1523,6 +1526,9 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
     uint32_t N = c->N, row = N + 1, Z = lattice_size(b->ctx, pi);
     uint32_t nl = tsr_quadtree_leaf_count(c->qt);
     const tsr_qleaf *lv = tsr_quadtree_leaves(c->qt);
+    for (uint32_t j = 0; j <= N; j++)
+        for (uint32_t i = 0; i <= N; i++)
+            b->onmask[j * row + i] = (uint8_t)((j == 0) | (i == N) << 1 | (j == N) << 2 | (i == 0) << 3);
     for (uint32_t li = 0; li < nl; li++) {
         tsr_qnode n = lv[li].node;
         uint32_t w = N << (c->surf.levels - n.level), step = w / N, x0 = n.x * w, y0 = n.y * w;
@@ -1572,10 +1578,11 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
             int ek[3] = {0, 0, 0};
             b->nfp = 0;
             for (int k = 0; lmask && k < 3; k++) {
-                uint32_t i0 = idx[k] % row, j0 = idx[k] / row, i1 = idx[(k + 1) % 3] % row, j1 = idx[(k + 1) % 3] / row;
-                int e = j0 == 0 && j1 == 0 ? 0 : i0 == N && i1 == N ? 1 : j0 == N && j1 == N ? 2 : i0 == 0 && i1 == 0 ? 3 : -1;
-                if (e < 0 || !(lmask >> e & 1))
+                unsigned on = b->onmask[idx[k]] & b->onmask[idx[(k + 1) % 3]] & lmask;
+                if (!on)
                     continue;
+                int e = on & 1 ? 0 : on & 2 ? 1 : on & 4 ? 2 : 3;
+                uint32_t i0 = idx[k] % row, j0 = idx[k] / row, i1 = idx[(k + 1) % 3] % row, j1 = idx[(k + 1) % 3] / row;
                 uint32_t T0 = e & 1 ? y0 + j0 * step : x0 + i0 * step, T1 = e & 1 ? y0 + j1 * step : x0 + i1 * step;
                 off[k] = b->nfp;
                 ek[k] = e;
@@ -1887,7 +1894,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
     const tsr_allocator *a = alloc;
     tsr_mesh_init(&out->mesh, opt.normals ? TSR_MESH_NORMALS : 0, alloc);
     pctx *ctx = tsr_alloc(a, (size_t)m->npieces * sizeof *ctx);
-    uint32_t row = opt.tile_n + 1, maxN = 2 * opt.tile_n - 2;
+    uint32_t row = opt.tile_n + 1, maxN = 4 * opt.tile_n - 2;
     maxN = maxN < opt.tile_n ? opt.tile_n : maxN > TSR_TILE_MAX ? TSR_TILE_MAX : maxN;
     double *scratch = tsr_alloc(a, (size_t)row * row * 5 * sizeof *scratch);
     uint64_t evals = 0;
@@ -1967,7 +1974,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         collect_spans(&ctx[p]);
     tsr_free(a, dirty);
     /* assemble */
-    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0, NULL, 0};
+    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0, NULL, 0, NULL};
     /* the tile patterns of every tile size in use, and which of a tile's
      * vertices each uses */
     enum { NPAT = TSR_TILE_MAX / 2 + 1 };
@@ -2005,7 +2012,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         b.tile_uv = tsr_alloc(a, (size_t)2 * mrow * mrow * sizeof(double));
         b.tile_tmp = tsr_alloc(a, ((size_t)3 * mrow * mrow + 2 * (size_t)mrow * (TSR_PATCH_MAX_DEGREE + 1)) * sizeof(double));
         b.vert_uv = tsr_alloc(a, (size_t)2 * mrow * mrow * sizeof(double));
-        if (!local || !b.tile_pos || !b.tile_uv || !b.tile_tmp || !b.vert_uv)
+        b.onmask = tsr_alloc(a, (size_t)mrow * mrow);
+        if (!local || !b.tile_pos || !b.tile_uv || !b.tile_tmp || !b.vert_uv || !b.onmask)
             st = TSR_ERR_NOMEM;
     }
     /* room for everything at once: triangles exactly (but fans), vertices at most */
@@ -2117,6 +2125,7 @@ done:
     tsr_free(a, b.tile_tmp);
     tsr_free(a, b.vert_uv);
     tsr_free(a, b.fp);
+    tsr_free(a, b.onmask);
     tsr_free(a, b.pv);
     tsr_keymap_free(&b.map, a);
     tsr_free(a, b.cb.p);

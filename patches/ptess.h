@@ -34,7 +34,7 @@
  * The tessellation. Every piece has a quadtree of tiles of N quads with
  * max_level levels (lattice size N << max_level). N is the piece's own:
  * for a Bézier piece of an untrimmed source, of tile_n, tile_n + 2, ...,
- * 2 tile_n - 2 (at most TSR_TILE_MAX) the one whose selection has the
+ * 4 tile_n - 2 (at most TSR_TILE_MAX) the one whose selection has the
  * fewest quads, so rates N 2^l step by (N + 2) / N rather than by 2; for
  * other pieces tile_n. A node's error delta is:
  *  - for a Bézier piece (polynomial or rational), a bound that holds: the
@@ -153,7 +153,7 @@ typedef struct tsr_ptess_options {
      * pixel_error is the screen error allowed. */
     const tsr_camera *camera;
     uint32_t tile_n;    /* quads per tile side, even, 2..TSR_TILE_MAX; 0: 4. Bézier pieces
-                           choose theirs in tile_n .. 2 tile_n - 2 (see above) */
+                           choose theirs in tile_n .. 4 tile_n - 2 (see above) */
     uint32_t max_level; /* quadtree depth per piece, 1..12; 0: 10 */
     bool normals;       /* per-vertex normals of the true surface */
     /* Optional per-piece factor (0 < f <= 1) on the tolerance (max_error

@@ -315,7 +315,7 @@ static void help_patches(FILE *f)
         "  --fov DEG             vertical field of view (default 60)\n"
         "  --near D              near plane distance (default 1e-3 of the box diagonal)\n"
         "  --tile N              quads per tile side, even, 2..128 (default 4); Bezier patches\n"
-        "                        choose theirs in N..2N-2, the one giving the fewest quads\n"
+        "                        choose theirs in N..4N-2, the one giving the fewest quads\n"
         "  --max-level L         quadtree depth per piece, 1..12 (default 10)\n"
         "  --samples N           measurement samples per piece side (default 64)\n"
         "  --retries N           re-tessellate the pieces of patches whose error is estimated, not bounded\n"

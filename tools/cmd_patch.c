@@ -32,7 +32,7 @@ static void help(FILE *f)
             "  --fov DEG             vertical field of view (default 60)\n"
             "  --near D              near plane distance (default 1e-3 of the model's diagonal)\n"
             "  --tile N              quads per tile side, even, 2..128 (default 4); Bezier patches\n"
-            "                        choose theirs in N..2N-2, the one giving the fewest quads\n"
+            "                        choose theirs in N..4N-2, the one giving the fewest quads\n"
             "  --max-level L         quadtree depth per patch, 1..12 (default 10)\n"
             "  --scheme S            catmark or bilinear, for a polygon cage (default: bilinear when the\n"
             "                        file name starts with \"bilinear\", else catmark)\n"
