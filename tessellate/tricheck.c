@@ -23,7 +23,10 @@
  *    tol = 1e-9 |b - a| + 8 eps max|coordinate| of the line ab (vertices
  *    exactly on it always qualify: rounding error is far below tol) and
  *    strictly further along it: (q - p).d > 0 for a step p -> q, exact
- *    for nearby points, so Steiner points ulps apart still progress. The
+ *    for nearby points, so Steiner points ulps apart still progress; or q
+ *    within 8 ulps of p's coordinates either way (one point rounded twice,
+ *    as the crossings of a segment with two segments along one line, in
+ *    whichever order the rounding put them). The
  *    chain is found by a depth-first search (each vertex
  *    entered once per segment) over a vertex -> neighbours adjacency, so
  *    nearly coincident segments, whose chains are both within tolerance,
@@ -31,9 +34,15 @@
  *    hull (not HULL, or hole seeds), the chain may have gaps: from p it
  *    may jump to the next vertex q on the segment when no kept triangle at
  *    p covers the direction to b and none at q covers the direction back
- *    to p (the piece lies outside the region). A gap whose two ends are
- *    outside the region but whose middle crosses a kept triangle through
- *    edge interiors only is not detected here.
+ *    to p (the piece lies outside the region). The candidates q are the
+ *    used vertices near the line in order of progress, then b; one that
+ *    refuses is passed over only when it lies strictly off the segment's
+ *    line and the segment meets the interior of none of its kept triangles
+ *    (both exact): it is near the line only within the tolerance, as a
+ *    crossing of a segment beside this one, whose triangles may well cover
+ *    the direction back while the segment passes them by. A gap whose two
+ *    ends are outside the region but whose middle crosses a kept triangle
+ *    through edge interiors only is not detected here.
  *  - Area: the sum of triangle areas (Neumaier's compensated sum) against
  *    an expected area computed from the input alone, when it can be:
  *      HULL, no hole seeds: the convex hull of the points (monotone chain
@@ -626,6 +635,8 @@ typedef struct ck {
     struct frame *stack;      /* the segment search */
     size_t nstack, stack_cap;
     uint32_t *seen, stamp;    /* vertex -> last search that entered it */
+    struct cand *cand;        /* a gap's candidate ends */
+    size_t ncand, cand_cap;
     bool *boundary;           /* vertex on an edge of one triangle */
     uint32_t *hull_memo;      /* 2 per vertex: hull edges through it */
     double maxabs;            /* largest output coordinate magnitude */
@@ -646,6 +657,7 @@ static void ck_free(ck *c)
     free(c->feat);
     free(c->stack);
     free(c->seen);
+    free(c->cand);
     free(c->boundary);
     free(c->hull_memo);
 }
@@ -684,12 +696,29 @@ typedef struct pos {
 
 static bool pos_gt(pos x, pos y) { return x.half != y.half ? x.half > y.half : x.v > y.v; }
 
+/* A candidate end of a gap: a vertex and its progress. */
+typedef struct cand {
+    uint32_t v;
+    pos t;
+} cand;
+
 /* Is q further along the segment than p? Decided on q - p, which is
  * exact for nearby points: Steiner points a few ulps apart in the middle
  * of a long segment have the same rounded progress from either end. */
 static bool forward(const line *l, const double *p, const double *q)
 {
     return (q[0] - p[0]) * l->dx + (q[1] - p[1]) * l->dy > 0;
+}
+
+/* May a chain step from p to q: further along, or (either way) to a point
+ * within rounding of p, a few ulps of its coordinates? Two crossings of
+ * one segment with two segments along one line (given twice, or
+ * overlapping) are the same point rounded twice; which comes first along
+ * the segment is the rounding's choice. */
+static bool ahead(const line *l, const double *p, const double *q)
+{
+    double r = 8 * DBL_EPSILON * fmax(fabs(p[0]), fabs(p[1]));
+    return forward(l, p, q) || (fabs(q[0] - p[0]) <= r && fabs(q[1] - p[1]) <= r);
 }
 
 static pos pos_start(const line *l) { return (pos){0, 0, 0, l->len2}; }
@@ -749,26 +778,79 @@ static bool feat_add(ck *c, uint32_t v, uint32_t s)
     return true;
 }
 
-/* The next vertex on the line beyond p, for a gap: the used
- * vertex of least progress, else vb. */
-static uint32_t gap_target(const ck *c, const line *l, uint32_t p, uint32_t vb, pos *tq_out)
+/* Does the open interior of kept triangle t meet the closed segment
+ * a-b? Exact: they are disjoint exactly when the line of one of the
+ * triangle's edges, or the segment's own line, separates them (weakly). */
+static bool meets_interior(const ck *c, uint32_t t, const double *a, const double *b)
+{
+    const uint32_t *tri = c->out->tri + 3 * (size_t)t;
+    const double *p[3] = {vxy(c, tri[0]), vxy(c, tri[1]), vxy(c, tri[2])};
+    int pos = 0, neg = 0;
+    for (int k = 0; k < 3; k++) {
+        if (tsr_orient2d(p[k], p[(k + 1) % 3], a) <= 0 && tsr_orient2d(p[k], p[(k + 1) % 3], b) <= 0)
+            return false;
+        double o = tsr_orient2d(a, b, p[k]);
+        pos += o > 0;
+        neg += o < 0;
+    }
+    return pos > 0 && neg > 0;
+}
+
+/* Does the segment of l pass vertex q by, off its kept triangles? True
+ * when q lies strictly off the segment's line (exact) and no kept triangle
+ * at q has its interior meeting the segment: q is near the line only
+ * within the tolerance, and nothing of the region at q is on the segment. */
+static bool passes_by(const ck *c, const line *l, uint32_t q)
+{
+    if (tsr_orient2d(l->a, l->b, vxy(c, q)) == 0)
+        return false;
+    for (uint32_t i = c->vt_off[q]; i < c->vt_off[q + 1]; i++)
+        if (meets_interior(c, c->vt[i] / 3, l->a, l->b))
+            return false;
+    return true;
+}
+
+static int cmp_cand(const void *x, const void *y)
+{
+    const cand *a = x, *b = y;
+    if (pos_gt(a->t, b->t))
+        return 1;
+    if (pos_gt(b->t, a->t))
+        return -1;
+    return (a->v > b->v) - (a->v < b->v);
+}
+
+/* The candidates for a gap from p (in c->cand, by progress): the used
+ * vertices near the line and further along it than p, short of vb, then
+ * vb. False when out of memory. */
+static bool gap_candidates(ck *c, const line *l, uint32_t p, uint32_t vb)
 {
     const double *pp = vxy(c, p);
-    uint32_t q = vb;
-    pos tq = pos_end(l);
     double bx0 = fmin(pp[0], l->b[0]) - l->tol, bx1 = fmax(pp[0], l->b[0]) + l->tol;
     double by0 = fmin(pp[1], l->b[1]) - l->tol, by1 = fmax(pp[1], l->b[1]) + l->tol;
-    for (uint32_t v = 0; v < c->out->nv; v++) {
-        const double *xy = vxy(c, v);
-        pos t;
+    c->ncand = 0;
+    for (uint32_t v = 0; v <= c->out->nv; v++) {
+        pos t = pos_end(l);
         double d;
-        if (!c->used[v] || v == p || xy[0] < bx0 || xy[0] > bx1 || xy[1] < by0 || xy[1] > by1)
-            continue;
-        if (line_near(l, xy, &t, &d) && forward(l, pp, xy) && pos_gt(tq, t))
-            q = v, tq = t;
+        if (v < c->out->nv) {
+            const double *xy = vxy(c, v);
+            if (!c->used[v] || v == p || v == vb || xy[0] < bx0 || xy[0] > bx1 || xy[1] < by0 || xy[1] > by1)
+                continue;
+            if (!line_near(l, xy, &t, &d) || !ahead(l, pp, xy) || !pos_gt(pos_end(l), t))
+                continue;
+        }
+        if (c->ncand == c->cand_cap) {
+            size_t cap = c->cand_cap ? 2 * c->cand_cap : 64;
+            cand *n = realloc(c->cand, cap * sizeof *n);
+            if (!n)
+                return false;
+            c->cand = n;
+            c->cand_cap = cap;
+        }
+        c->cand[c->ncand++] = (cand){v < c->out->nv ? v : vb, t};
     }
-    *tq_out = tq;
-    return q;
+    qsort(c->cand, c->ncand - 1, sizeof *c->cand, cmp_cand); /* vb stays last */
+    return true;
 }
 
 typedef struct frame {
@@ -826,7 +908,7 @@ static int walk_segment(ck *c, uint32_t s, uint32_t va, uint32_t vb, bool gaps)
             double d;
             if (c->seen[q] == c->stamp || !sorted_has(c->cons, c->ncons, edge_key(f->v, q)))
                 continue;
-            if (q != vb && (!line_near(&l, vxy(c, q), &t, &d) || !forward(&l, vxy(c, f->v), vxy(c, q)) || t.tb < 0))
+            if (q != vb && (!line_near(&l, vxy(c, q), &t, &d) || !ahead(&l, vxy(c, f->v), vxy(c, q)) || t.tb < 0))
                 continue;
             if (!push_frame(c, q, t))
                 return -1;
@@ -838,13 +920,20 @@ static int walk_segment(ck *c, uint32_t s, uint32_t va, uint32_t vb, bool gaps)
         if (gaps && !f->gap_done) {
             f->gap_done = true;
             if (!covers(c, f->v, l.b)) {
-                pos tq;
-                uint32_t q = gap_target(c, &l, f->v, vb, &tq);
-                if (c->seen[q] != c->stamp && !(c->used[q] && covers(c, q, vxy(c, f->v)))) {
-                    if (!push_frame(c, q, tq))
-                        return -1;
-                    continue;
+                if (!gap_candidates(c, &l, f->v, vb))
+                    return -1;
+                bool jumped = false;
+                for (size_t i = 0; i < c->ncand && !jumped; i++) {
+                    uint32_t q = c->cand[i].v;
+                    if (c->seen[q] != c->stamp && !(c->used[q] && covers(c, q, vxy(c, f->v)))) {
+                        if (!push_frame(c, q, c->cand[i].t))
+                            return -1;
+                        jumped = true;
+                    } else if (q == vb || !passes_by(c, &l, q))
+                        break;
                 }
+                if (jumped)
+                    continue;
             }
         }
         c->nstack--;
@@ -855,7 +944,7 @@ static int walk_segment(ck *c, uint32_t s, uint32_t va, uint32_t vb, bool gaps)
         uint32_t q = c->adj[i];
         pos t = pos_end(&l);
         double d;
-        if (q != vb && (!line_near(&l, vxy(c, q), &t, &d) || !forward(&l, pp, vxy(c, q)) || t.tb < 0))
+        if (q != vb && (!line_near(&l, vxy(c, q), &t, &d) || !ahead(&l, pp, vxy(c, q)) || t.tb < 0))
             continue;
         if (!sorted_has(c->cons, c->ncons, edge_key(far_v, q))) {
             problem(c->res,

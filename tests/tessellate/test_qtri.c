@@ -637,6 +637,47 @@ TEST(near_coincident_features_fall_back)
     }
 }
 
+TEST(segment_hugging_square_side_beside_fallback_cell)
+{
+    /* The fuzz find quadtree_segment_hugging_square_side_missing: segment 0
+     * runs up the quadtree square's right side, 1.4e-11 inside it, to
+     * (15 (1 + 2^-40), 15); segments 2 and 3 cross 2.6e-11 left of it,
+     * beside two points 1.4e-11 apart (a fallback cell), and with segment
+     * 1 they enclose a sliver of area 1e-10 whose corner touches segment 0
+     * only at its end. The crossing lies within the checker's tolerance of
+     * segment 0 and its kept triangle covers the direction back down the
+     * segment, though the segment passes it by: the region is right, and
+     * the checker must find segment 0 outside it. */
+    const double e = 15 * (1 + 0x1p-40);
+    const double xy[] = {15,  -16, e,   15, -0.0029296875, -2.5, -8, -0.0029296875, e, e,   -16, -15,
+                         -16, -16, -16, -8, -2.5,          -15,  -8, 0.0068359375,  0, -16, 10,  3.25};
+    static const uint32_t seg[] = {0, 1, 1, 2, 3, 1, 4, 2, 5, 0};
+    tsr_pslg in = {xy, 12, seg, 5, NULL, 0};
+    tsr_tri_options o = {.method = TSR_TRI_QUADTREE, .region = TSR_REGION_ENCLOSED, .max_area = 64};
+    tsr_triangulation t;
+    tsr_error err;
+    CHECK_MSG(tsr_triangulate(&in, &o, &t, NULL, &err) == TSR_OK, "%s", err.message);
+    CHECK(t.fallback_cells > 0 && !t.fell_back);
+    /* the sliver, and a vertex off segment 0 by less than its tolerance */
+    double area = 0;
+    for (uint32_t i = 0; i < t.nt; i++) {
+        const double *a = t.xy + 2 * t.tri[3 * i], *b = t.xy + 2 * t.tri[3 * i + 1], *c = t.xy + 2 * t.tri[3 * i + 2];
+        area += 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+    }
+    CHECK_MSG(area > 0.9e-10 && area < 1.1e-10, "kept area %g", area);
+    uint32_t beside = 0;
+    for (uint32_t v = 0; v < t.nv; v++) {
+        double d, u;
+        on_line(xy, xy + 2, t.xy + 2 * v, &d, &u);
+        beside += d > 0 && d < 1e-10 && u > 0 && u < 1;
+    }
+    CHECK_MSG(beside > 0, "no vertex beside segment 0: the case is not exercised");
+    tsr_tri_check c;
+    CHECK(tsr_triangulation_check(&in, &o, &t, &c) == TSR_OK);
+    CHECK_MSG(c.ok && c.missing_segments == 0, "checker: %s", c.first_problem);
+    tsr_triangulation_free(&t);
+}
+
 TEST(unsupported_inputs)
 {
     static const double xy[] = {0, 0, 1, 0, 2, 0, 0, 1};
@@ -1073,5 +1114,6 @@ TEST_MAIN(T(single_triangle), T(round_coordinates_square_with_hole), T(star_poly
           T(random_points_many_seeds), T(crossing_segments_grid), T(random_crossing_segments),
           T(vertex_on_segment_and_collinear_overlap), T(duplicates_and_degenerate_segments),
           T(vertex_near_cell_corner_and_grid_lines), T(high_degree_vertex), T(max_area),
-          T(near_coincident_features_fall_back), T(even_odd_parity_of_overlaps), T(lattice_segments_degenerate),
-          T(unsupported_inputs), T(region_from_cells_matches_general_pass), T(allocator_failures))
+          T(near_coincident_features_fall_back), T(segment_hugging_square_side_beside_fallback_cell),
+          T(even_odd_parity_of_overlaps), T(lattice_segments_degenerate), T(unsupported_inputs),
+          T(region_from_cells_matches_general_pass), T(allocator_failures))

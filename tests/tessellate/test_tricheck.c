@@ -410,6 +410,64 @@ TEST(enclosed_rejects_segment_missing_inside)
     CHECK(strstr(r.first_problem, "input segment 4") != NULL);
 }
 
+TEST(enclosed_gap_passes_vertex_beside_segment)
+{
+    /* the enclosed region is the sliver P(0,0) B(4,4) q, q 2e-12 left of
+     * the dangling segment S(4,-4)-B, which touches the sliver only at B.
+     * q is within the segment's tolerance and its triangle covers the
+     * direction back to S (its angle at q is near 180 degrees), yet the
+     * segment passes it by: the gap runs from S to B. */
+    static double xy[] = {0, 0, 4, 4, 4 - 2e-12, 4 - 1e-12, 4, -4};
+    static uint32_t seg[] = {0, 1, 1, 2, 2, 0, 3, 1};
+    static uint32_t tri[] = {0, 1, 2};
+    static uint32_t eseg[] = {0, 1, 2};
+    tsr_pslg in = {xy, 4, seg, 4, NULL, 0};
+    tsr_tri_options opt = {.region = TSR_REGION_ENCLOSED, .method = TSR_TRI_QUADTREE};
+    tsr_triangulation out = output(xy, 4, 4, tri, 1, seg, eseg, 3);
+    tsr_tri_check r = run(&in, &opt, &out);
+    CHECK(r.ok && r.missing_segments == 0);
+}
+
+TEST(enclosed_gap_rejects_segment_through_triangle_at_near_vertex)
+{
+    /* the kept triangle q X Y lies across the segment S(4,-4)-(4,4) below
+     * q, 1e-12 right of it: the segment runs through the region with no
+     * constrained edge, and q, off the line within the tolerance, may not
+     * be passed over */
+    static double xy[] = {4, -4, 4, 4, 4 + 1e-12, 0, 3, -3, 5, -3};
+    static uint32_t seg[] = {0, 1, 2, 3, 3, 4, 4, 2};
+    static uint32_t tri[] = {2, 3, 4};
+    static uint32_t edge[] = {2, 3, 3, 4, 4, 2};
+    static uint32_t eseg[] = {1, 2, 3};
+    tsr_pslg in = {xy, 5, seg, 4, NULL, 0};
+    tsr_tri_options opt = {.region = TSR_REGION_ENCLOSED, .method = TSR_TRI_QUADTREE};
+    tsr_triangulation out = output(xy, 5, 5, tri, 1, edge, eseg, 3);
+    tsr_tri_check r = run(&in, &opt, &out);
+    CHECK(!r.ok && r.missing_segments == 1);
+    CHECK(strstr(r.first_problem, "input segment 0") != NULL);
+}
+
+TEST(accepts_chain_step_back_within_rounding)
+{
+    /* the chain of (0,0)-(4,4) passes v1 (2,2) and then v2 an ulp below
+     * it, a step back along the segment: one crossing rounded twice (by
+     * two segments along one line); further back it is refused */
+    static double xy[] = {0, 0, 4, 4, 4, 0, 0, 4, 2, 2, 2, 0};
+    xy[11] = nextafter(2.0, 0.0);
+    static uint32_t seg[] = {0, 1};
+    static uint32_t tri[] = {0, 2, 5, 5, 2, 1, 0, 5, 4, 4, 5, 1, 0, 4, 3, 4, 1, 3};
+    static uint32_t edge[] = {0, 4, 4, 5, 5, 1};
+    static uint32_t eseg[] = {0, 0, 0};
+    tsr_pslg in = {xy, 4, seg, 1, NULL, 0};
+    tsr_tri_options opt = {.method = TSR_TRI_QUADTREE};
+    tsr_triangulation out = output(xy, 6, 4, tri, 6, edge, eseg, 3);
+    tsr_tri_check r = run(&in, &opt, &out);
+    CHECK(r.ok && r.missing_segments == 0);
+    xy[11] = 2 - 1e-13; /* 450 ulps: a step back */
+    r = run(&in, &opt, &out);
+    CHECK(!r.ok && r.missing_segments == 1);
+}
+
 TEST(rejects_angle_below_bound)
 {
     /* a square fanned around (5, 0.3): two triangles have 3.4 degree angles */
@@ -527,8 +585,10 @@ TEST_MAIN(T(accepts_delaunay_rhombus), T(rejects_non_delaunay_edge), T(constrain
           T(rejects_missing_triangle), T(rejects_overlapping_triangles), T(rejects_fan_winding_twice),
           T(rejects_edge_used_three_times), T(rejects_wrong_euler_characteristic), T(accepts_even_odd_ring),
           T(rejects_even_odd_ring_with_hole_filled), T(even_odd_area_of_a_bowtie), T(even_odd_open_chain_not_checked),
-          T(accepts_rounded_crossing_point), T(rejects_chain_off_the_segment), T(accepts_splits_next_to_segment_end), T(accepts_point_exactly_on_segment),
-          T(enclosed_allows_segment_outside_region), T(enclosed_rejects_segment_missing_inside),
+          T(accepts_rounded_crossing_point), T(rejects_chain_off_the_segment), T(accepts_splits_next_to_segment_end),
+          T(accepts_point_exactly_on_segment), T(enclosed_allows_segment_outside_region),
+          T(enclosed_rejects_segment_missing_inside), T(enclosed_gap_passes_vertex_beside_segment),
+          T(enclosed_gap_rejects_segment_through_triangle_at_near_vertex), T(accepts_chain_step_back_within_rounding),
           T(rejects_angle_below_bound), T(small_input_angle_excuses_triangle),
           T(below_resolution_excused_only_when_reported), T(rejects_area_above_bound),
           T(empty_output_of_collinear_points), T(hole_seeds_leave_area_unchecked))
