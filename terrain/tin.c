@@ -30,9 +30,14 @@
  * lies within the tolerance of the edge above it, because the edges are
  * constrained and interpolate linearly along the run.
  *
- * A triangle's samples are found by exact integer edge functions on the
- * lattice (vertices are samples), so the scan never misses or adds one.
- * Errors are in file units inside (h), world units (h dz) outside.
+ * A triangle's samples are found exactly on the lattice (vertices are
+ * samples): each row's span between the triangle's edges is stepped in
+ * integers (a quotient and a remainder per edge, no division per row), so
+ * the scan never misses or adds one; its rows' lines are asked for before
+ * it starts, and the triangles an insertion rewrote are loaded together
+ * before any is scanned, so that cache misses overlap (the pass is bound
+ * by them: the greedy order jumps across the heightfield). Errors are in
+ * file units inside (h), world units (h dz) outside.
  *
  * quadtree: the restricted quadtree's cut (lod.c's pyramid) with
  * error(node) <= the bound, each leaf a grid tile; grid: every step-th
@@ -43,20 +48,31 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* ---- the candidate queue: an indexed 4-ary max-heap over triangle slots
- * (four children share a cache line, halving the depth a pop walks) */
+/* ---- the candidate queue: an 8-ary max-heap of (key, slot) words with
+ * lazy deletion. Each triangle slot keeps its own record (error and
+ * candidate sample, rec[] below); the heap holds a word for every slot
+ * whose error is above the target (the ones still to refine; the others
+ * never enter it) and perhaps stale words of slots rescanned since, which
+ * are dropped when they surface: a word is live when its key is its
+ * slot's current error. A word is the key's bits (keys are positive
+ * floats, whose bits order as integers) above the slot, so one integer
+ * compare orders the heap and no position index is written on every move
+ * (the indexed heap's scattered writes were its cost); a node's eight
+ * children fill one 64-byte line, so a pop misses the cache once a level
+ * of a tree a third as deep as a binary one. The words of one insertion
+ * are pushed once at its end (a slot rescanned, then flipped, gets one). */
 
-typedef struct hent {
-    float key;
-    uint32_t slot;
-    uint32_t cand; /* the triangle's candidate sample (r * w + c) */
-} hent;
+typedef struct trec {
+    float err;     /* the error of the slot's worst candidate (rounded up) */
+    uint32_t cand; /* that candidate (r * w + c), UINT32_MAX: none */
+    float wkey;    /* the key of the slot's last word pushed, 0 when none
+                    * (or dropped) */
+} trec;
 
 typedef struct heap {
-    hent *e; /* heap order: only the triangles that have a candidate */
+    uint64_t *e; /* e[1] on a 64-byte line: children of i are 8i+1..8i+8 */
+    void *block; /* the allocation e lies in */
     uint32_t n, cap;
-    uint32_t *pos; /* per slot: index in the heap or UINT32_MAX */
-    uint32_t nslots, cap_slots;
 } heap;
 
 static bool grow_u32(const tsr_allocator *a, void **arr, uint32_t *cap, uint32_t need, size_t elem)
@@ -76,101 +92,110 @@ static bool grow_u32(const tsr_allocator *a, void **arr, uint32_t *cap, uint32_t
     return true;
 }
 
-static bool heap_slots(heap *h, const tsr_allocator *a, uint32_t n)
+static bool heap_grow(heap *h, const tsr_allocator *a)
 {
-    if (n <= h->nslots)
-        return true;
-    if (!grow_u32(a, (void **)&h->pos, &h->cap_slots, n, sizeof *h->pos))
+    uint64_t c = h->cap ? h->cap + h->cap / 2 : 4096;
+    if (c > UINT32_MAX - 16)
         return false;
-    for (uint32_t i = h->nslots; i < n; i++)
-        h->pos[i] = UINT32_MAX;
-    h->nslots = n;
+    void *b = tsr_alloc(a, (size_t)(c + 16) * sizeof *h->e);
+    if (!b)
+        return false;
+    uintptr_t p = ((uintptr_t)b + 8 + 63) & ~(uintptr_t)63; /* &e[1] */
+    uint64_t *e = (uint64_t *)(p - 8);
+    if (h->n)
+        memcpy(e, h->e, (size_t)h->n * sizeof *e);
+    tsr_free(a, h->block);
+    h->block = b;
+    h->e = e;
+    h->cap = (uint32_t)c;
     return true;
+}
+
+static inline uint32_t f32_bits(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return u;
+}
+
+static inline float bits_f32(uint32_t u)
+{
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
 }
 
 static void heap_up(heap *h, uint32_t i)
 {
-    hent x = h->e[i];
+    uint64_t x = h->e[i];
     while (i > 0) {
-        uint32_t p = (i - 1) / 4;
-        if (h->e[p].key >= x.key)
+        uint32_t p = (i - 1) / 8;
+        if (h->e[p] >= x)
             break;
         h->e[i] = h->e[p];
-        h->pos[h->e[i].slot] = i;
         i = p;
     }
     h->e[i] = x;
-    h->pos[x.slot] = i;
 }
 
 static void heap_down(heap *h, uint32_t i)
 {
-    hent x = h->e[i];
+    uint64_t x = h->e[i];
+    uint64_t *e = h->e;
     for (;;) {
-        uint32_t l = 4 * i + 1, best = i, end = l + 4 < h->n ? l + 4 : h->n;
-        float bk = x.key;
-        for (uint32_t k = l; k < end; k++)
-            if (h->e[k].key > bk) {
-                best = k;
-                bk = h->e[k].key;
-            }
-        if (best == i)
+        uint32_t l = 8 * i + 1;
+        if (l >= h->n)
             break;
-        h->e[i] = h->e[best];
-        h->pos[h->e[i].slot] = i;
+        uint32_t best = l;
+        uint64_t bk = e[l];
+        if (l + 8 <= h->n) {
+            for (uint32_t k = l + 1; k < l + 8; k++)
+                if (e[k] > bk) {
+                    best = k;
+                    bk = e[k];
+                }
+        } else
+            for (uint32_t k = l + 1; k < h->n; k++)
+                if (e[k] > bk) {
+                    best = k;
+                    bk = e[k];
+                }
+        if (bk <= x)
+            break;
+        e[i] = bk;
         i = best;
     }
-    h->e[i] = x;
-    h->pos[x.slot] = i;
+    e[i] = x;
 }
 
-static void heap_remove(heap *h, uint32_t s)
+static bool heap_push(heap *h, const tsr_allocator *a, uint64_t x)
 {
-    uint32_t i = h->pos[s];
-    if (i == UINT32_MAX)
-        return;
-    h->pos[s] = UINT32_MAX;
-    h->n--;
-    if (i == h->n)
-        return;
-    h->e[i] = h->e[h->n];
-    h->pos[h->e[i].slot] = i;
-    if (i > 0 && h->e[(i - 1) / 4].key < h->e[i].key)
-        heap_up(h, i);
-    else
-        heap_down(h, i);
-}
-
-/* Sets slot s's key and candidate; false when out of memory. */
-static bool heap_set(heap *h, const tsr_allocator *a, uint32_t s, float k, uint32_t cand)
-{
-    uint32_t i = h->pos[s];
-    if (i == UINT32_MAX) {
-        if (h->n == h->cap && !grow_u32(a, (void **)&h->e, &h->cap, h->n + 1, sizeof *h->e))
-            return false;
-        i = h->n++;
-        h->e[i] = (hent){k, s, cand};
-        h->pos[s] = i;
-        heap_up(h, i);
-        return true;
-    }
-    float old = h->e[i].key;
-    h->e[i].key = k;
-    h->e[i].cand = cand;
-    if (k > old)
-        heap_up(h, i);
-    else if (k < old)
-        heap_down(h, i);
+    if (h->n == h->cap && !heap_grow(h, a))
+        return false;
+    h->e[h->n] = x;
+    heap_up(h, h->n++);
     return true;
+}
+
+static void heap_pop(heap *h)
+{
+    h->e[0] = h->e[--h->n];
+    if (h->n > 1)
+        heap_down(h, 0);
 }
 
 static void heap_free(heap *h, const tsr_allocator *a)
 {
-    tsr_free(a, h->e);
-    tsr_free(a, h->pos);
+    tsr_free(a, h->block);
 }
 
 /* ---- the greedy mesher ------------------------------------------------- */
+
+/* a vertex: its lattice position and height, read together */
+typedef struct tvx {
+    uint32_t c, r;
+    float z;
+} tvx;
 
 typedef struct tin {
     const float *data;
@@ -178,8 +203,13 @@ typedef struct tin {
     const tsr_allocator *a;
     tsr_cdt *cdt;
     heap q;
-    /* per vertex id: its column and row */
-    uint32_t *vc;
+    trec *rec; /* per triangle slot */
+    uint32_t nrec, cap_rec;
+    uint32_t live; /* slots whose error is above thr */
+    float thr;     /* the heap holds the slots whose error is above it */
+    uint32_t *dirty; /* slots whose record changed in this insertion */
+    uint32_t ndirty, cap_dirty;
+    tvx *vx; /* per vertex id */
     uint32_t nv, cap_v;
     /* when the heightfield has no-data: 1 bit per sample, set when the
      * sample may not be a candidate (not inside the domain's interior) */
@@ -199,6 +229,104 @@ typedef struct tin {
     uint32_t flips;
 } tin;
 
+static bool rec_slots(tin *t, uint32_t n)
+{
+    if (n <= t->nrec)
+        return true;
+    if (!grow_u32(t->a, (void **)&t->rec, &t->cap_rec, n, sizeof *t->rec))
+        return false;
+    for (uint32_t i = t->nrec; i < n; i++)
+        t->rec[i] = (trec){-1.0f, UINT32_MAX, 0.0f};
+    t->nrec = n;
+    return true;
+}
+
+static inline bool rec_above(const tin *t, trec r)
+{
+    return r.cand != UINT32_MAX && r.err > t->thr;
+}
+
+/* Is word x live? Else, when x is the slot's last word, the slot has none
+ * now. */
+static inline bool word_live(tin *t, uint64_t x)
+{
+    trec *r = t->rec + (uint32_t)x;
+    uint32_t k = (uint32_t)(x >> 32);
+    if (rec_above(t, *r) && f32_bits(r->err) == k)
+        return true;
+    if (f32_bits(r->wkey) == k)
+        r->wkey = 0;
+    return false;
+}
+
+/* Drops the stale words (when they outnumber the live ones) and rebuilds
+ * the heap from the rest. */
+static void heap_compact(tin *t)
+{
+    heap *h = &t->q;
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < h->n; i++)
+        if (word_live(t, h->e[i]))
+            h->e[m++] = h->e[i];
+    h->n = m;
+    for (uint32_t i = m / 8 + 1; i-- > 0;)
+        if (i < m)
+            heap_down(h, i);
+}
+
+/* Sets slot s's record (its word follows at the next flush). */
+static void rec_set(tin *t, uint32_t s, float err, uint32_t cand)
+{
+    trec *r = t->rec + s;
+    bool was = rec_above(t, *r);
+    r->err = err;
+    r->cand = cand;
+    bool is = rec_above(t, *r);
+    t->live += (uint32_t)is - (uint32_t)was;
+    if (is && err != r->wkey) {
+        if (t->ndirty == t->cap_dirty &&
+            !grow_u32(t->a, (void **)&t->dirty, &t->cap_dirty, t->ndirty + 1, sizeof *t->dirty)) {
+            t->nomem = true;
+            return;
+        }
+        t->dirty[t->ndirty++] = s;
+    }
+}
+
+/* Pushes a word for every changed slot above thr that lacks a live one. */
+static void flush(tin *t)
+{
+    for (uint32_t i = 0; i < t->ndirty; i++) {
+        trec *r = t->rec + t->dirty[i];
+        if (!rec_above(t, *r) || r->err == r->wkey)
+            continue; /* below, or pushed already (listed twice) */
+        if (t->q.n == t->q.cap && t->q.n >= 2 * t->live + 4096)
+            heap_compact(t);
+        if (!heap_push(&t->q, t->a, (uint64_t)f32_bits(r->err) << 32 | t->dirty[i])) {
+            t->nomem = true;
+            break;
+        }
+        r->wkey = r->err;
+    }
+    t->ndirty = 0;
+}
+
+/* The top live word (stale ones on the way dropped), or false. */
+static bool heap_top(tin *t, uint32_t *slot, float *key)
+{
+    heap *h = &t->q;
+    while (h->n) {
+        uint64_t x = h->e[0];
+        if (word_live(t, x)) {
+            *slot = (uint32_t)x;
+            *key = bits_f32((uint32_t)(x >> 32));
+            return true;
+        }
+        heap_pop(h);
+    }
+    return false;
+}
+
 static inline bool excluded(const tin *t, uint32_t s)
 {
     return t->excl[s >> 3] >> (s & 7) & 1;
@@ -212,11 +340,12 @@ static inline bool cell_ok(const tin *t, int64_t c, int64_t r)
     return !isnan(p[0]) && !isnan(p[1]) && !isnan(p[t->w]) && !isnan(p[t->w + 1]);
 }
 
-/* floor(a / b) for b > 0 and |a| < 2^50: the double quotient, then an
- * exact integer correction (an integer division costs far more). */
+/* floor(a / b) for b > 0 and |a| < 2^50: the double quotient truncated,
+ * then an exact integer correction (an integer division, or a call to
+ * floor, costs more). */
 static inline int64_t floor_div_fast(int64_t a, int64_t b)
 {
-    int64_t q = (int64_t)floor((double)a / (double)b);
+    int64_t q = (int64_t)((double)a / (double)b);
     while (q * b > a)
         q--;
     while ((q + 1) * b <= a)
@@ -224,15 +353,48 @@ static inline int64_t floor_div_fast(int64_t a, int64_t b)
     return q;
 }
 
-/* max over x < n of |rp[x] - (base + ga x)| */
-static double row_max(const float *restrict rp, int64_t n, double base, double ga)
+/* A hint to fetch the line at p (a no-op where the compiler has none). */
+#if defined(__GNUC__) || defined(__clang__)
+#define PREFETCH(p) __builtin_prefetch(p)
+#else
+#define PREFETCH(p) ((void)(p))
+#endif
+
+/* |rp[x] - (base + ga x)| */
+static inline double err_at(const float *rp, int64_t x, double base, double ga)
 {
-    double m = -1;
-    for (int64_t x = 0; x < n; x++) {
-        double e = fabs((double)rp[x] - (base + ga * (double)x));
-        m = e > m ? e : m;
+    return fabs((double)rp[x] - (base + ga * (double)x));
+}
+
+/* max over x < n (n >= 1) of err_at: four independent maxima, so the loop
+ * runs at the loads' pace rather than the max's latency; the last four
+ * overlap the previous ones rather than a scalar tail */
+static inline double row_max(const float *restrict rp, int64_t n, double base, double ga)
+{
+    if (n < 4) {
+        double m = err_at(rp, 0, base, ga);
+        for (int64_t x = 1; x < n; x++) {
+            double e = err_at(rp, x, base, ga);
+            m = e > m ? e : m;
+        }
+        return m;
     }
-    return m;
+    double m0 = -1, m1 = -1, m2 = -1, m3 = -1;
+    for (int64_t x = 0;; x += 4) {
+        if (x + 4 > n)
+            x = n - 4;
+        double e0 = err_at(rp, x, base, ga), e1 = err_at(rp, x + 1, base, ga), e2 = err_at(rp, x + 2, base, ga),
+               e3 = err_at(rp, x + 3, base, ga);
+        m0 = e0 > m0 ? e0 : m0;
+        m1 = e1 > m1 ? e1 : m1;
+        m2 = e2 > m2 ? e2 : m2;
+        m3 = e3 > m3 ? e3 : m3;
+        if (x + 4 >= n)
+            break;
+    }
+    m0 = m1 > m0 ? m1 : m0;
+    m2 = m3 > m2 ? m3 : m2;
+    return m2 > m0 ? m2 : m0;
 }
 
 /* The lattice positions and heights of vertices v[3]; false when one is
@@ -240,75 +402,152 @@ static double row_max(const float *restrict rp, int64_t n, double base, double g
 static inline bool tri_load(const tin *t, const uint32_t v[3], int64_t c[3], int64_t r[3], double z[3])
 {
     for (int k = 0; k < 3; k++) {
-        c[k] = t->vc[2 * (size_t)v[k]];
-        r[k] = t->vc[2 * (size_t)v[k] + 1];
-        z[k] = t->data[(size_t)r[k] * t->w + (size_t)c[k]];
+        const tvx *p = t->vx + v[k];
+        c[k] = p->c;
+        r[k] = p->r;
+        z[k] = p->z;
     }
     return !isnan(z[0]) && !isnan(z[1]) && !isnan(z[2]);
+}
+
+/* An edge's column on successive rows, without a division per row: at row
+ * y, x = x0 + floor((x1 - x0) (y - y0) / dy), rem the division's
+ * remainder (in [0, dy)), so the ceiling is x + (rem != 0). */
+typedef struct dda {
+    int64_t x, rem, dy, q, r;
+} dda;
+
+static inline void dda_init(dda *e, int64_t x0, int64_t y0, int64_t x1, int64_t y1, int64_t y)
+{
+    int64_t dy = y1 - y0, dx = x1 - x0;
+    if (dy <= 0) { /* a row of its own: used on row y0 only */
+        *e = (dda){x0, 0, 1, 0, 0};
+        return;
+    }
+    int64_t num = dx * (y - y0), f = y == y0 ? 0 : floor_div_fast(num, dy), q = floor_div_fast(dx, dy);
+    *e = (dda){x0 + f, num - f * dy, dy, q, dx - q * dy};
+}
+
+static inline void dda_step(dda *e)
+{
+    e->x += e->q;
+    e->rem += e->r;
+    if (e->rem >= e->dy) {
+        e->x++;
+        e->rem -= e->dy;
+    }
+}
+
+/* Asks for the lines of the triangle's first rows (up to 32) at once, so
+ * that their misses overlap (the rows lie w samples apart: each its own
+ * line, often its own page) rather than stall a scan one after another. */
+static inline void prefetch_tri(const tin *t, const int64_t c[3], const int64_t r[3])
+{
+    int64_t x0 = c[0] < c[1] ? c[0] : c[1], x1 = c[0] > c[1] ? c[0] : c[1];
+    x0 = c[2] < x0 ? c[2] : x0;
+    x1 = c[2] > x1 ? c[2] : x1;
+    int64_t y0 = r[0] < r[1] ? r[0] : r[1], y1 = r[0] > r[1] ? r[0] : r[1];
+    y0 = r[2] < y0 ? r[2] : y0;
+    y1 = r[2] > y1 ? r[2] : y1;
+    if (y1 - y0 > 32)
+        y1 = y0 + 32;
+    for (int64_t y = y0; y <= y1; y++) {
+        const float *row = t->data + (size_t)y * t->w;
+        PREFETCH(row + x0);
+        if (x1 - x0 >= 16)
+            PREFETCH(row + x1);
+    }
 }
 
 /* The worst candidate sample of the triangle (c, r, z), counter-clockwise
  * and not degenerate: its error into *best (-1 when the triangle has no
  * candidate), its index into *best_s. Stops early once a row's error
  * exceeds stop (then *best > stop, *best_s may be any sample of it); stop
- * = INFINITY scans it all. */
+ * = INFINITY scans it all. Rows top to bottom, each the lattice points
+ * inside or on the triangle, between its edges' columns stepped exactly
+ * in integers (the vertices sorted by row: the long edge from the top to
+ * the bottom one on one side, the two short ones on the other). */
 static void tri_worst(const tin *t, const int64_t c[3], const int64_t r[3], const double z[3], double stop,
                       double *best_out, uint32_t *best_s_out)
 {
     int64_t det = (c[1] - c[0]) * (r[2] - r[0]) - (c[2] - c[0]) * (r[1] - r[0]);
     double ga = ((z[1] - z[0]) * (double)(r[2] - r[0]) - (z[2] - z[0]) * (double)(r[1] - r[0])) / (double)det;
     double gb = ((double)(c[1] - c[0]) * (z[2] - z[0]) - (double)(c[2] - c[0]) * (z[1] - z[0])) / (double)det;
-    int64_t r0 = r[0] < r[1] ? r[0] : r[1], r1 = r[0] > r[1] ? r[0] : r[1];
-    r0 = r[2] < r0 ? r[2] : r0;
-    r1 = r[2] > r1 ? r[2] : r1;
-    int64_t cmin = c[0] < c[1] ? c[0] : c[1], cmax = c[0] > c[1] ? c[0] : c[1];
-    cmin = c[2] < cmin ? c[2] : cmin;
-    cmax = c[2] > cmax ? c[2] : cmax;
+    /* top, middle, bottom by row */
+    int a = 0, b = 1, d = 2, s;
+    if (r[b] < r[a])
+        s = a, a = b, b = s;
+    if (r[d] < r[b]) {
+        s = b, b = d, d = s;
+        if (r[b] < r[a])
+            s = a, a = b, b = s;
+    }
+    int64_t ra = r[a], rb = r[b], rd = r[d];
+    /* the middle vertex left of the long edge (a, d)? */
+    bool mid_left = (c[d] - c[a]) * (rb - ra) - (c[b] - c[a]) * (rd - ra) > 0;
+    int64_t y0 = ra, y1 = rd, clo = INT64_MIN, chi = INT64_MAX;
     /* the outer border is no candidate when fixed */
     if (t->fixed_border) {
-        if (r0 < 1)
-            r0 = 1;
-        if (r1 > (int64_t)t->h - 2)
-            r1 = (int64_t)t->h - 2;
-        if (cmin < 1)
-            cmin = 1;
-        if (cmax > (int64_t)t->w - 2)
-            cmax = (int64_t)t->w - 2;
+        if (y0 < 1)
+            y0 = 1;
+        if (y1 > (int64_t)t->h - 2)
+            y1 = (int64_t)t->h - 2;
+        clo = 1;
+        chi = (int64_t)t->w - 2;
     }
     double best = -1;
     uint32_t best_s = UINT32_MAX;
-    for (int64_t y = r0; y <= r1 && best <= stop; y++) {
-        int64_t lo = cmin, hi = cmax;
-        for (int k = 0; k < 3 && lo <= hi; k++) {
-            int64_t x0 = c[k], y0 = r[k], x1 = c[(k + 1) % 3], y1 = r[(k + 1) % 3];
-            int64_t dy = y1 - y0, num = (x1 - x0) * (y - y0);
-            /* inside (left of or on x0->x1): dy (cc - x0) <= num */
-            if (dy > 0) {
-                int64_t m = x0 + floor_div_fast(num, dy);
-                hi = m < hi ? m : hi;
-            } else if (dy < 0) {
-                int64_t m = x0 - floor_div_fast(num, -dy); /* ceil(num / dy) */
-                lo = m > lo ? m : lo;
-            } else if (num < 0)
-                hi = lo - 1;
+    /* the row holding the worst sample so far (its position found once,
+     * at the end) */
+    const float *best_rp = NULL;
+    int64_t best_n = 0, best_x0 = 0, best_y = 0;
+    double best_base = 0;
+    if (y0 > y1) {
+        *best_out = best;
+        *best_s_out = best_s;
+        return;
+    }
+    prefetch_tri(t, c, r);
+    dda el, es;
+    dda_init(&el, c[a], ra, c[d], rd, y0);
+    bool lower = y0 >= rb;
+    if (lower)
+        dda_init(&es, c[b], rb, c[d], rd, y0);
+    else
+        dda_init(&es, c[a], ra, c[b], rb, y0);
+    for (int64_t y = y0; y <= y1 && best <= stop; y++) {
+        if (!lower && y == rb) {
+            dda_init(&es, c[b], rb, c[d], rd, y);
+            lower = true;
         }
+        int64_t lo, hi;
+        if (mid_left) {
+            lo = es.x + (es.rem != 0);
+            hi = el.x;
+        } else {
+            lo = el.x + (el.rem != 0);
+            hi = es.x;
+        }
+        dda_step(&el);
+        dda_step(&es);
+        lo = lo > clo ? lo : clo;
+        hi = hi < chi ? hi : chi;
         if (lo > hi)
             continue;
         const float *row = t->data + (size_t)y * t->w;
         double base = z[0] + ga * (double)(lo - c[0]) + gb * (double)(y - r[0]);
         if (!t->nodata) {
-            /* the row's max first (a branch-free loop the compiler
-             * vectorises), then its position only when it beats best */
+            /* the row's max; the row kept when it beats best */
             const float *rp = row + lo;
             int64_t n = hi - lo + 1;
             double m = row_max(rp, n, base, ga);
             if (m > best) {
-                for (int64_t x = 0; x < n; x++)
-                    if (fabs((double)rp[x] - (base + ga * (double)x)) == m) {
-                        best = m;
-                        best_s = (uint32_t)((size_t)y * t->w + (size_t)(lo + x));
-                        break;
-                    }
+                best = m;
+                best_rp = rp;
+                best_n = n;
+                best_x0 = lo;
+                best_y = y;
+                best_base = base;
             }
         } else {
             for (int64_t x = lo; x <= hi; x++) {
@@ -323,45 +562,93 @@ static void tri_worst(const tin *t, const int64_t c[3], const int64_t r[3], cons
             }
         }
     }
+    if (best_rp) /* the first sample of the row at its max */
+        for (int64_t x = 0; x < best_n; x++)
+            if (err_at(best_rp, x, best_base, ga) == best) {
+                best_s = (uint32_t)((size_t)best_y * t->w + (size_t)(best_x0 + x));
+                break;
+            }
     *best_out = best;
     *best_s_out = best_s;
 }
 
-/* Puts slot s in the queue with error best at sample best_s, or takes it
- * out when it has no candidate. */
+/* Sets slot s's record to error best at sample best_s (none when best_s
+ * is UINT32_MAX). */
 static void queue_set(tin *t, uint32_t s, double best, uint32_t best_s)
 {
     if (best_s == UINT32_MAX) {
-        heap_remove(&t->q, s);
+        rec_set(t, s, -1.0f, UINT32_MAX);
         return;
     }
     float key = (float)best; /* rounded up, so a key at or below the target means the error is */
-    if ((double)key < best)
-        key = nextafterf(key, INFINITY);
-    if (!heap_set(&t->q, t->a, s, key, best_s))
-        t->nomem = true;
+    if ((double)key < best) /* the next float up (best >= 0 and finite) */
+        key = bits_f32(f32_bits(key) + 1);
+    rec_set(t, s, key, best_s);
 }
 
-/* Scans the triangle in slot s: its worst candidate sample into the queue,
- * or out of the queue when it has none. */
+/* Scans the triangle in slot s: its worst candidate sample into its
+ * record (and the queue when above the target), none when it has none. */
 static void scan(tin *t, uint32_t s)
 {
     uint32_t v[3];
     int64_t c[3], r[3];
     double z[3];
     if (!tsr_cdt_triangle(t->cdt, s, v) || !tri_load(t, v, c, r, z)) { /* a ghost, or outside the domain */
-        heap_remove(&t->q, s);
+        rec_set(t, s, -1.0f, UINT32_MAX);
         return;
     }
     int64_t det = (c[1] - c[0]) * (r[2] - r[0]) - (c[2] - c[0]) * (r[1] - r[0]);
     if (det <= 0) {
-        heap_remove(&t->q, s);
+        rec_set(t, s, -1.0f, UINT32_MAX);
         return;
     }
     double best;
     uint32_t best_s;
     tri_worst(t, c, r, z, INFINITY, &best, &best_s);
     queue_set(t, s, best, best_s);
+}
+
+/* Scans the slots s[0..n): first every triangle's vertices loaded and its
+ * rows and record asked for, then the scans, so that the misses of one
+ * triangle overlap those of the others. */
+static void scan_batch(tin *t, const uint32_t *s, uint32_t n)
+{
+    struct {
+        int64_t c[3], r[3];
+        double z[3];
+        bool ok;
+    } b[64];
+    for (uint32_t i = 0; i < n && i < 64; i++) {
+        uint32_t v[3];
+        b[i].ok = tsr_cdt_triangle(t->cdt, s[i], v);
+        if (!b[i].ok)
+            continue;
+        for (int k = 0; k < 3; k++) {
+            const tvx *p = t->vx + v[k];
+            b[i].c[k] = p->c;
+            b[i].r[k] = p->r;
+            b[i].z[k] = p->z;
+        }
+    }
+    for (uint32_t i = 0; i < n && i < 64; i++) {
+        PREFETCH(t->rec + s[i]);
+        if (!b[i].ok)
+            continue;
+        b[i].ok = !isnan(b[i].z[0]) && !isnan(b[i].z[1]) && !isnan(b[i].z[2]) &&
+                  (b[i].c[1] - b[i].c[0]) * (b[i].r[2] - b[i].r[0]) - (b[i].c[2] - b[i].c[0]) * (b[i].r[1] - b[i].r[0]) > 0;
+        if (b[i].ok)
+            prefetch_tri(t, b[i].c, b[i].r);
+    }
+    for (uint32_t i = 0; i < n && i < 64; i++) {
+        if (!b[i].ok) { /* a ghost, outside the domain, or degenerate */
+            rec_set(t, s[i], -1.0f, UINT32_MAX);
+            continue;
+        }
+        double best;
+        uint32_t best_s;
+        tri_worst(t, b[i].c, b[i].r, b[i].z, INFINITY, &best, &best_s);
+        queue_set(t, s[i], best, best_s);
+    }
 }
 
 /* ---- data-dependent flips ------------------------------------------------ */
@@ -392,8 +679,8 @@ static void push_edge(tin *t, uint32_t s, uint32_t a, uint32_t b)
 /* The queue's error of slot s (its key, rounded up), 0 without candidate. */
 static inline double slot_error(const tin *t, uint32_t s)
 {
-    uint32_t i = s < t->q.nslots ? t->q.pos[s] : UINT32_MAX;
-    return i == UINT32_MAX ? 0 : t->q.e[i].key;
+    trec r = t->rec[s];
+    return r.cand == UINT32_MAX ? 0 : r.err;
 }
 
 /* The height at lattice point (x, y) of the plane through (c, r, z). */
@@ -456,9 +743,10 @@ static void flip_pass(tin *t, double target)
         double z[4];
         bool valid = true;
         for (int i = 0; i < 4; i++) {
-            c[i] = t->vc[2 * (size_t)id[i]];
-            r[i] = t->vc[2 * (size_t)id[i] + 1];
-            z[i] = t->data[(size_t)r[i] * t->w + (size_t)c[i]];
+            const tvx *p = t->vx + id[i];
+            c[i] = p->c;
+            r[i] = p->r;
+            z[i] = p->z;
             valid = valid && !isnan(z[i]);
         }
         if (!valid || orient(c, r, 0, 1, 3) <= 0 || orient(c, r, 0, 3, 2) <= 0)
@@ -474,10 +762,9 @@ static void flip_pass(tin *t, double target)
          * bound the new cost from below */
         double lb[2] = {0, 0};
         for (int j = 0; j < 2; j++) {
-            uint32_t i = t->q.pos[j ? n : s];
-            if (i == UINT32_MAX)
+            uint32_t smp = t->rec[j ? n : s].cand;
+            if (smp == UINT32_MAX)
                 continue;
-            uint32_t smp = t->q.e[i].cand;
             int64_t cc[3] = {c[0], c[3], smp % t->w}, rr[3] = {r[0], r[3], smp / t->w};
             int side = orient(cc, rr, 0, 1, 2) > 0; /* left of p->q: in (0 3 2) */
             double e = fabs(t->data[smp] - plane_at(side ? c2 : c1, side ? r2 : r1, side ? z2 : z1, cc[2], rr[2]));
@@ -485,6 +772,7 @@ static void flip_pass(tin *t, double target)
         }
         if (lb[0] + lb[1] >= cost)
             continue;
+        prefetch_tri(t, c2, r2); /* the first triangle's rows follow in tri_worst */
         double e1, e2;
         uint32_t s1, s2;
         tri_worst(t, c1, r1, z1, target + cost - lb[1], &e1, &s1);
@@ -524,14 +812,13 @@ static uint32_t add_sample(tin *t, uint32_t smp, uint32_t hint)
             uint32_t cap = t->cap_v ? t->cap_v + t->cap_v / 2 : 4096;
             while (cap <= id)
                 cap += cap / 2;
-            uint32_t *p = tsr_realloc(t->a, t->vc, 2 * (size_t)cap * sizeof *p);
+            tvx *p = tsr_realloc(t->a, t->vx, (size_t)cap * sizeof *p);
             if (!p)
                 return UINT32_MAX;
-            t->vc = p;
+            t->vx = p;
             t->cap_v = cap;
         }
-        t->vc[2 * (size_t)id] = smp % t->w;
-        t->vc[2 * (size_t)id + 1] = smp / t->w;
+        t->vx[id] = (tvx){smp % t->w, smp / t->w, t->data[smp]};
         t->nv = id + 1;
     }
     return id;
@@ -692,8 +979,8 @@ static bool in_domain(const tin *t, const uint32_t v[3])
         return true;
     double cx = 0, cy = 0;
     for (int k = 0; k < 3; k++) {
-        cx += t->vc[2 * (size_t)v[k]];
-        cy += t->vc[2 * (size_t)v[k] + 1];
+        cx += t->vx[v[k]].c;
+        cy += t->vx[v[k]].r;
     }
     cx /= 3;
     cy /= 3;
@@ -710,7 +997,9 @@ static void tin_free(tin *t)
 {
     tsr_cdt_destroy(t->cdt);
     heap_free(&t->q, t->a);
-    tsr_free(t->a, t->vc);
+    tsr_free(t->a, t->vx);
+    tsr_free(t->a, t->rec);
+    tsr_free(t->a, t->dirty);
     tsr_free(t->a, t->excl);
     tsr_free(t->a, t->fstack);
 }
@@ -809,23 +1098,30 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
         goto fail;
     }
     tsr_cdt_track_changes(t.cdt, true);
+    /* the heap holds the slots whose error is above the target: thr is
+     * the largest float at or below it */
+    t.thr = (float)target;
+    if ((double)t.thr > target)
+        t.thr = nextafterf(t.thr, -INFINITY);
     uint32_t nh = tsr_cdt_handle_count(t.cdt);
-    if (!heap_slots(&t.q, t.a, nh))
+    if (!rec_slots(&t, nh))
         goto fail;
     for (uint32_t s = 0; s < nh; s++)
         scan(&t, s);
+    flush(&t);
     if (t.nomem)
         goto fail;
-    double first = t.q.n ? t.q.e[0].key : 0;
+    uint32_t s;
+    float key;
+    double first = heap_top(&t, &s, &key) ? key : 0;
     uint32_t steps = 0;
     for (;;) {
-        if (t.q.n == 0)
+        if (!heap_top(&t, &s, &key))
             break;
-        uint32_t s = t.q.e[0].slot;
-        double e = t.q.e[0].key;
+        double e = key;
         if (e <= target)
             break;
-        uint32_t cand = t.q.e[0].cand;
+        uint32_t cand = t.rec[s].cand;
         uint32_t grow = !fixed_border && on_boundary(&t, cand) ? 1 : 2;
         if ((max_tri && ntri + grow > max_tri) || (max_vert && nvert + 1 > max_vert)) {
             rep->budget_reached = true;
@@ -837,7 +1133,8 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
             goto fail;
         if (tsr_cdt_vertex_count(t.cdt) == before) {
             /* the candidate was a vertex already (a rounding residue) */
-            heap_remove(&t.q, s);
+            rec_set(&t, s, -1.0f, UINT32_MAX);
+            flush(&t);
             tsr_cdt_clear_changes(t.cdt);
             continue;
         }
@@ -846,7 +1143,7 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
         rep->insertions++;
         uint32_t nc;
         const uint32_t *ch = tsr_cdt_changes(t.cdt, &nc);
-        if (!heap_slots(&t.q, t.a, tsr_cdt_handle_count(t.cdt)))
+        if (!rec_slots(&t, tsr_cdt_handle_count(t.cdt)))
             goto fail;
         uint32_t nseen = 0;
         for (uint32_t i = 0; i < nc; i++) {
@@ -858,8 +1155,10 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
                 continue;
             if (nseen < sizeof t.seen / sizeof t.seen[0])
                 t.seen[nseen++] = cs;
-            scan(&t, cs);
+            else
+                scan(&t, cs);
         }
+        scan_batch(&t, t.seen, nseen);
         tsr_cdt_clear_changes(t.cdt);
         if (t.flip) {
             /* the new triangles' edges: the star's outer edges and its
@@ -870,6 +1169,8 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
                     continue;
                 for (int k = 0; k < 3; k++) {
                     uint32_t nb = tsr_cdt_neighbor(t.cdt, t.seen[i], k, NULL);
+                    if (nb != UINT32_MAX) /* its record: read by the flip test */
+                        PREFETCH(t.rec + nb);
                     bool inner = false;
                     for (uint32_t j = 0; j < nseen && !inner; j++)
                         inner = t.seen[j] == nb;
@@ -879,9 +1180,12 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
             }
             /* with a budget alone, the target is unknown: half the worst
              * error so far stands for it */
-            flip_pass(&t, target > 0 ? target : 0.5 * (t.q.n ? t.q.e[0].key : 0));
+            if (!(target > 0))
+                flush(&t);
+            flip_pass(&t, target > 0 ? target : 0.5 * (heap_top(&t, &s, &key) ? key : 0));
             tsr_cdt_clear_changes(t.cdt);
         }
+        flush(&t);
         if (t.nomem)
             goto fail;
         if (o->progress && (++steps & 4095) == 0) {
@@ -896,7 +1200,15 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
         }
     }
     rep->flips = t.flips;
-    rep->estimated_error = fmax(t.q.n ? fmax(t.q.e[0].key, 0) : 0, 0) * hf->dz;
+    /* the worst error left: the records' (the heap holds only those above
+     * the target) */
+    double worst = 0;
+    for (uint32_t i = 0; i < t.nrec; i++)
+        if (t.rec[i].cand != UINT32_MAX && t.rec[i].err > worst)
+            worst = t.rec[i].err;
+    rep->estimated_error = worst * hf->dz;
+    tsr_free(t.a, t.rec); /* with the heap, before the output, to lower the peak */
+    t.rec = NULL;
     heap_free(&t.q, t.a); /* before the output, to lower the peak */
     memset(&t.q, 0, sizeof t.q);
     /* the mesh: triangles inside the domain, their vertices compacted */
@@ -917,7 +1229,7 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
                 continue;
             for (int k = 0; k < 3; k++) {
                 if (map[v[k]] == UINT32_MAX) {
-                    uint32_t smp = t.vc[2 * (size_t)v[k] + 1] * t.w + t.vc[2 * (size_t)v[k]];
+                    uint32_t smp = t.vx[v[k]].r * t.w + t.vx[v[k]].c;
                     float p[3] = {(float)((smp % t.w) * hf->dx), (float)((smp / t.w) * hf->dy),
                                   (float)(t.data[smp] * hf->dz)};
                     map[v[k]] = tsr_mesh_add_vertex(mesh, p, NULL, NULL);
