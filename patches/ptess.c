@@ -1697,6 +1697,44 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
                     np++;
                 }
         }
+        /* along linked edges, the neighbours' samples too (as the fans of
+         * emit_piece): both sides then sample the edge alike */
+        for (int e = 0; e < 4 && st == TSR_OK; e++) {
+            b->nfp = 0;
+            if (!c->act[e])
+                continue;
+            if (!edge_foreign(b, pi, e, 0, Z)) {
+                st = TSR_ERR_NOMEM;
+                break;
+            }
+            for (uint32_t x = 0; x < b->nfp && st == TSR_OK; x++) {
+                lpoint cq;
+                if (!canonical(m, b->ctx, b->fp[x].q, &b->cb, a, &cq)) {
+                    st = TSR_ERR_NOMEM;
+                    break;
+                }
+                bool found;
+                uint32_t *slot = tsr_keymap_slot(&seen, lkey(cq), &found, a);
+                if (!slot) {
+                    st = TSR_ERR_NOMEM;
+                    break;
+                }
+                if (found)
+                    continue;
+                *slot = (uint32_t)np;
+                GROW(xy, np, cap, 2)
+                GROW(key, np, cap, 1)
+                if (st != TSR_OK)
+                    break;
+                if (np + 1 > cap)
+                    cap *= 2;
+                double T = b->fp[x].T / Z, ss = e == 1 ? 1 : e == 3 ? 0 : T, tt = e == 0 ? 0 : e == 2 ? 1 : T;
+                xy[2 * np] = ss == 1 ? p->rect[1] : p->rect[0] + ss * (p->rect[1] - p->rect[0]);
+                xy[2 * np + 1] = tt == 1 ? p->rect[3] : p->rect[2] + tt * (p->rect[3] - p->rect[2]);
+                key[np] = lkey(cq) + 1;
+                np++;
+            }
+        }
     }
     tsr_keymap_free(&seen, a);
     double hu = INFINITY, hv = INFINITY;

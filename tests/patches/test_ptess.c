@@ -1374,6 +1374,117 @@ TEST(linked_rates_differ_conform)
     free(b.s);
 }
 
+/* A trimmed patch (a quarter cylinder with a hole) linked along its
+ * untrimmed edge z = 0 to an untrimmed patch of another rate: the trimmed
+ * side's triangulation takes the neighbour's samples on that edge too, so
+ * the seam has no T-junction (found by review: it had 384 open edges). */
+TEST(trimmed_linked_conform)
+{
+    static const char obj[] =
+        "v 1 0 0 1\n"
+        "v 1 1 0 0.70710678118654752\n"
+        "v 0 1 0 1\n"
+        "v 1 0 2\n"
+        "v 1 1 2 0.70710678118654752\n"
+        "v 0 1 2 1\n"
+        "v 2 0 -1 1\n"
+        "v 2 2 -1 0.70710678118654752\n"
+        "v 0 2 -1 1\n"
+        "v 1 0 -2 1\n"
+        "v 1 1 -2 0.70710678118654752\n"
+        "v 0 1 -2 1\n"
+        "vp 0 0\n"
+        "vp 1 0\n"
+        "vp 1 1\n"
+        "vp 0 1\n"
+        "vp 0 0\n"
+        "vp 0.75 0.5 1\n"
+        "vp 0.75 0.75 0.70710678118654752\n"
+        "vp 0.5 0.75 1\n"
+        "vp 0.25 0.75 0.70710678118654752\n"
+        "vp 0.25 0.5 1\n"
+        "vp 0.25 0.25 0.70710678118654752\n"
+        "vp 0.5 0.25 1\n"
+        "vp 0.75 0.25 0.70710678118654752\n"
+        "vp 0.75 0.5 1\n"
+        "cstype bspline\n"
+        "deg 1\n"
+        "curv2 1 2 3 4 5\n"
+        "parm u 0 0 1 2 3 4 4\n"
+        "end\n"
+        "cstype rat bspline\n"
+        "deg 2\n"
+        "curv2 -9 -8 -7 -6 -5 -4 -3 -2 -1\n"
+        "parm u 0 0 0 1 1 2 2 3 3 4 4 4\n"
+        "end\n"
+        "g cylinder\n"
+        "deg 2 1\n"
+        "surf 0 1 0 1 1 2 3 4 5 6\n"
+        "parm u 0 0 0 1 1 1\n"
+        "parm v 0 0 1 1\n"
+        "trim 0 4 1\n"
+        "hole 0 4 -1\n"
+        "end\n"
+        "g below\n"
+        "cstype rat bspline\n"
+        "deg 2 2\n"
+        "surf 0 1 0 1 1 2 3 7 8 9 10 11 12\n"
+        "parm u 0 0 0 1 1 1\n"
+        "parm v 0 0 0 1 1 1\n"
+        "end\n"
+        ;
+    sbuf b = {0};
+    sb_printf(&b, "%s", obj);
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "trimmed_linked.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        CHECK_MSG(info.trimmed_sources == 1 && info.links >= 2, "trimmed %u links %u", info.trimmed_sources, info.links);
+        for (uint32_t tile = 4; tile <= 8; tile *= 2)
+            for (double E = 1e-2; E >= 0.9e-4; E /= 10) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                o.tile_n = tile;
+                tsr_ptess_result r;
+                if (run_ptess(m, &o, &r)) {
+                    tsr_validation v = validate(&r.mesh);
+                    CHECK_MSG(v.nonmanifold_edges == 0, "tile %u E %g: %u non-manifold edges", tile, E,
+                              v.nonmanifold_edges);
+                    /* every seam vertex (z = 0) of the untrimmed side's
+                     * triangles is a vertex of the trimmed side's (the
+                     * converse is not promised: the trim loop runs along the
+                     * seam and its samples are the trimmed side's own) */
+                    uint32_t nv = r.mesh.vertex_count, missing = 0, seam = 0;
+                    uint8_t *side = calloc(nv ? nv : 1, 1);
+                    if (!side)
+                        abort();
+                    for (uint32_t t = 0; t < r.mesh.triangle_count; t++)
+                        for (int k = 0; k < 3; k++) {
+                            uint32_t x = r.mesh.indices[3 * t + k];
+                            if (fabsf(r.mesh.positions[3 * (size_t)x + 2]) <= 1e-6f)
+                                side[x] |= (uint8_t)(1u << (r.tri_source[t] ? 1 : 0));
+                        }
+                    for (uint32_t x = 0; x < nv; x++) {
+                        seam += side[x] == 3;
+                        missing += side[x] == 2;
+                    }
+                    free(side);
+                    CHECK_MSG(missing == 0 && seam > 2, "tile %u E %g: %u of the untrimmed side's seam vertices not in "
+                              "the trimmed side's triangles (%u shared)", tile, E, missing, seam);
+                }
+                tsr_ptess_result_free(&r);
+            }
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
 TEST(camera_near_finer)
 {
     sbuf b = {0};
@@ -2043,4 +2154,4 @@ TEST(data_osd_cages)
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
-          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(camera_near_finer), T(bad_options), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
+          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(camera_near_finer), T(bad_options), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
