@@ -79,7 +79,8 @@
  *
  * Trimmed sources (patches with trim loops) are meshed differently: the
  * lattice points of their pieces' leaves that lie inside the trimmed
- * region and the trim loops, sampled so that the loop lies within
+ * region, the linked neighbours' samples along linked edges, and the trim
+ * loops, sampled so that the loop lies within
  * max_error of the true curve on the surface (for a camera: within the
  * pixel error at the camera's nearest distance), are triangulated in the
  * source's (u, v) by tsr_triangulate with the loops as constraints and
