@@ -1400,6 +1400,13 @@ static bool add_tri(builder *b, uint32_t source, const uint32_t v[3], const doub
     return true;
 }
 
+/* The source's (u, v) of (s, t) on piece p (the rectangle's ends exact). */
+static void piece_uv(const piece *p, double s, double t, double uv[2])
+{
+    uv[0] = s == 1 ? p->rect[1] : p->rect[0] + s * (p->rect[1] - p->rect[0]);
+    uv[1] = t == 1 ? p->rect[3] : p->rect[2] + t * (p->rect[3] - p->rect[2]);
+}
+
 /* ---- linked borders: the neighbour's samples too --------------------------- */
 
 /* A sample of a linked neighbour strictly inside a border segment of a
@@ -1553,8 +1560,7 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
                 local[j * row + i] = v;
                 double s = (double)(x0 + i * step) / Z, tt = (double)(y0 + j * step) / Z;
                 double *o = vuv + 2 * (j * row + i);
-                o[0] = s == 1 ? p->rect[1] : p->rect[0] + s * (p->rect[1] - p->rect[0]);
-                o[1] = tt == 1 ? p->rect[3] : p->rect[2] + tt * (p->rect[3] - p->rect[2]);
+                piece_uv(p, s, tt, o);
             }
         /* tile edges on a linked border: the neighbour's samples there too */
         unsigned lmask = 0;
@@ -1619,8 +1625,7 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
                 /* on the piece edge of its chain */
                 int k = x >= off[2] && cnt[2] ? 2 : x >= off[1] && cnt[1] ? 1 : 0, e = ek[k];
                 double T = f->T / Z, s = e == 1 ? 1 : e == 3 ? 0 : T, tt = e == 0 ? 0 : e == 2 ? 1 : T;
-                o->uv[0] = s == 1 ? p->rect[1] : p->rect[0] + s * (p->rect[1] - p->rect[0]);
-                o->uv[1] = tt == 1 ? p->rect[3] : p->rect[2] + tt * (p->rect[3] - p->rect[2]);
+                piece_uv(p, s, tt, o->uv);
             }
             pchain ch[3];
             for (int k = 0; k < 3; k++)
@@ -1631,6 +1636,39 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
             b->out->fan_triangles += b->out->mesh.triangle_count - before - (b->out->mesh.triangle_count > before);
         }
     }
+    return TSR_OK;
+}
+
+/* A lattice point of a trimmed source's triangulation, at (s, t) of piece
+ * p, once per canonical point (seen): its (u, v) into xy, its canonical
+ * key + 1 into key; both grown together (capacity *cap points). */
+static tsr_status add_lattice_point(builder *b, tsr_keymap *seen, lpoint q, const piece *p, double s, double t,
+                                    double **xy, uint64_t **key, size_t *np, size_t *cap)
+{
+    lpoint cq;
+    if (!canonical(b->m, b->ctx, q, &b->cb, b->a, &cq))
+        return TSR_ERR_NOMEM;
+    bool found;
+    uint32_t *slot = tsr_keymap_slot(seen, lkey(cq), &found, b->a);
+    if (!slot)
+        return TSR_ERR_NOMEM;
+    if (found)
+        return TSR_OK;
+    *slot = (uint32_t)*np;
+    if (*np + 1 > *cap) {
+        double *nx = tsr_realloc(b->a, *xy, 2 * *cap * 2 * sizeof *nx);
+        if (!nx)
+            return TSR_ERR_NOMEM;
+        *xy = nx;
+        uint64_t *nk = tsr_realloc(b->a, *key, 2 * *cap * sizeof *nk);
+        if (!nk)
+            return TSR_ERR_NOMEM;
+        *key = nk;
+        *cap *= 2;
+    }
+    piece_uv(p, s, t, *xy + 2 * *np);
+    (*key)[*np] = lkey(cq) + 1;
+    (*np)++;
     return TSR_OK;
 }
 
@@ -1670,31 +1708,8 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
             uint32_t w = N << (c->surf.levels - n.level), step = w / N;
             for (uint32_t j = 0; j <= N && st == TSR_OK; j++)
                 for (uint32_t i = 0; i <= N && st == TSR_OK; i++) {
-                    lpoint q = {pi, n.x * w + i * step, n.y * w + j * step}, cq;
-                    if (!canonical(m, b->ctx, q, &b->cb, a, &cq)) {
-                        st = TSR_ERR_NOMEM;
-                        break;
-                    }
-                    bool found;
-                    uint32_t *slot = tsr_keymap_slot(&seen, lkey(cq), &found, a);
-                    if (!slot) {
-                        st = TSR_ERR_NOMEM;
-                        break;
-                    }
-                    if (found)
-                        continue;
-                    *slot = (uint32_t)np;
-                    GROW(xy, np, cap, 2)
-                    GROW(key, np, cap, 1)
-                    if (st != TSR_OK)
-                        break;
-                    if (np + 1 > cap)
-                        cap *= 2;
-                    double ss = (double)q.i / Z, tt = (double)q.j / Z;
-                    xy[2 * np] = ss == 1 ? p->rect[1] : p->rect[0] + ss * (p->rect[1] - p->rect[0]);
-                    xy[2 * np + 1] = tt == 1 ? p->rect[3] : p->rect[2] + tt * (p->rect[3] - p->rect[2]);
-                    key[np] = lkey(cq) + 1;
-                    np++;
+                    lpoint q = {pi, n.x * w + i * step, n.y * w + j * step};
+                    st = add_lattice_point(b, &seen, q, p, (double)q.i / Z, (double)q.j / Z, &xy, &key, &np, &cap);
                 }
         }
         /* along linked edges, the neighbours' samples too (as the fans of
@@ -1708,31 +1723,8 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
                 break;
             }
             for (uint32_t x = 0; x < b->nfp && st == TSR_OK; x++) {
-                lpoint cq;
-                if (!canonical(m, b->ctx, b->fp[x].q, &b->cb, a, &cq)) {
-                    st = TSR_ERR_NOMEM;
-                    break;
-                }
-                bool found;
-                uint32_t *slot = tsr_keymap_slot(&seen, lkey(cq), &found, a);
-                if (!slot) {
-                    st = TSR_ERR_NOMEM;
-                    break;
-                }
-                if (found)
-                    continue;
-                *slot = (uint32_t)np;
-                GROW(xy, np, cap, 2)
-                GROW(key, np, cap, 1)
-                if (st != TSR_OK)
-                    break;
-                if (np + 1 > cap)
-                    cap *= 2;
                 double T = b->fp[x].T / Z, ss = e == 1 ? 1 : e == 3 ? 0 : T, tt = e == 0 ? 0 : e == 2 ? 1 : T;
-                xy[2 * np] = ss == 1 ? p->rect[1] : p->rect[0] + ss * (p->rect[1] - p->rect[0]);
-                xy[2 * np + 1] = tt == 1 ? p->rect[3] : p->rect[2] + tt * (p->rect[3] - p->rect[2]);
-                key[np] = lkey(cq) + 1;
-                np++;
+                st = add_lattice_point(b, &seen, b->fp[x].q, p, ss, tt, &xy, &key, &np, &cap);
             }
         }
     }
