@@ -14,6 +14,7 @@
 #include "patches/ptess.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -52,8 +53,21 @@ typedef struct psource {
     bool trimmed;
 } psource;
 
+/* A tile size's patterns and which tile vertices each uses: made on first
+ * use and kept with the model (every run, every camera, uses them). */
+typedef struct patcache {
+    tsr_tile_patterns pat;
+    uint8_t *used;       /* per stitch mask, per tile vertex */
+    uint64_t used_n[16]; /* how many per mask */
+} patcache;
+
+enum { NPAT = TSR_TILE_MAX / 2 + 1 };
+
 struct tsr_pmodel {
     tsr_allocator alloc;
+    /* logically const: filled at most once per tile size, by whichever run
+     * gets there first (compare-and-swap, so runs may share the model) */
+    _Atomic(patcache *) pats[NPAT];
     const tsr_patch_set *set;
     const tsr_subd *subd;
     uint32_t npieces, nsources;
@@ -88,6 +102,14 @@ void tsr_pmodel_destroy(tsr_pmodel *m)
     if (!m)
         return;
     const tsr_allocator *a = ma(m);
+    for (int k = 0; k < NPAT; k++) {
+        patcache *pc = atomic_load(&m->pats[k]);
+        if (pc) {
+            tsr_tile_patterns_free(&pc->pat);
+            tsr_free(a, pc->used);
+            tsr_free(a, pc);
+        }
+    }
     tsr_free(a, m->pieces);
     tsr_free(a, m->sources);
     tsr_free(a, m->values);
@@ -632,9 +654,42 @@ static double norm3(double x, double y, double z) { return sqrt(x * x + y * y + 
  * w_ss (S - c) - 2 w_s S_s) / w, Q = w (S - c)) with c the centre of the
  * net's box, which is free: interpolation error does not change under
  * translation. */
+static inline double sq_second(const double *a, const double *b, const double *c, const double *d)
+{
+    /* |a - b - c + d|^2 */
+    double x = a[0] - b[0] - c[0] + d[0], y = a[1] - b[1] - c[1] + d[1], z = a[2] - b[2] - c[2] + d[2];
+    return x * x + y * y + z * z;
+}
+
 static void bezier_delta(int du, int dv, const double *P, const double *W, double N, double out[3])
 {
     int nu = du + 1, nv = dv + 1;
+    if (!W) { /* polynomial: the second differences of the net itself */
+        double qss = 0, qtt = 0, qst = 0;
+        for (int j = 0; j < nv; j++)
+            for (int i = 0; i + 2 < nu; i++) {
+                const double *p0 = P + 3 * (j * nu + i);
+                double x = p0[6] - 2 * p0[3] + p0[0], y = p0[7] - 2 * p0[4] + p0[1], z = p0[8] - 2 * p0[5] + p0[2];
+                qss = dmax(qss, x * x + y * y + z * z);
+            }
+        for (int j = 0; j + 2 < nv; j++)
+            for (int i = 0; i < nu; i++) {
+                const double *p0 = P + 3 * (j * nu + i), *p1 = p0 + 3 * nu, *p2 = p1 + 3 * nu;
+                double x = p2[0] - 2 * p1[0] + p0[0], y = p2[1] - 2 * p1[1] + p0[1], z = p2[2] - 2 * p1[2] + p0[2];
+                qtt = dmax(qtt, x * x + y * y + z * z);
+            }
+        for (int j = 0; j + 1 < nv; j++)
+            for (int i = 0; i + 1 < nu; i++) {
+                const double *p0 = P + 3 * (j * nu + i), *p1 = p0 + 3 * nu;
+                qst = dmax(qst, sq_second(p1 + 3, p1, p0 + 3, p0));
+            }
+        double h2 = 1.0 / (N * N);
+        double fuu = du * (du - 1.0), fvv = dv * (dv - 1.0), fuv = (double)du * dv;
+        shape_bounds(h2 * (fuu * sqrt(qss)), h2 * (fuv * sqrt(qst)), h2 * (fvv * sqrt(qtt)), out);
+        for (int k = 0; k < 3; k++)
+            out[k] = out[k] * (1 + 1e-12) + 1e-300;
+        return;
+    }
     double c[3], lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int k = 0; W && k < nu * nv; k++)
         for (int q = 0; q < 3; q++) {
@@ -726,64 +781,49 @@ static void bernstein(int d, double t, double *B)
     }
 }
 
-/* The Bézier net of a piece restricted to [r0, r1] x [r2, r3] of its
- * [0,1]^2 (de Casteljau twice per row and column, in homogeneous
- * coordinates when rational): out 3 per point, wout per point when W. */
-static void split_1d(double *h, int d, int stride, double a, double b)
+/* Homogeneous control points (w x, w y, w z, w), 4 doubles each. */
+static void homogeneous(const tsr_patch *p, double *h)
 {
-    /* h: d+1 homogeneous points (4 doubles each) at stride (in points);
-     * keep the part over [a, b] */
-    double tmp[TSR_PATCH_MAX_DEGREE + 1][4];
-    for (int i = 0; i <= d; i++)
-        memcpy(tmp[i], h + 4 * i * stride, sizeof tmp[i]);
-    if (b < 1) { /* left part over [0, b]: first point of each level */
-        double out[TSR_PATCH_MAX_DEGREE + 1][4];
-        memcpy(out[0], tmp[0], sizeof out[0]);
-        for (int k = 1; k <= d; k++) {
-            for (int i = 0; i <= d - k; i++)
-                for (int c = 0; c < 4; c++)
-                    tmp[i][c] = (1 - b) * tmp[i][c] + b * tmp[i + 1][c];
-            memcpy(out[k], tmp[0], sizeof out[k]);
-        }
-        memcpy(tmp, out, sizeof out);
-    }
-    if (a > 0) { /* right part over [a/b, 1] of that: last point of each level */
-        double t = a / b, out[TSR_PATCH_MAX_DEGREE + 1][4];
-        memcpy(out[d], tmp[d], sizeof out[d]);
-        for (int k = 1; k <= d; k++) {
-            for (int i = 0; i <= d - k; i++)
-                for (int c = 0; c < 4; c++)
-                    tmp[i][c] = (1 - t) * tmp[i][c] + t * tmp[i + 1][c];
-            memcpy(out[d - k], tmp[d - k], sizeof out[d - k]);
-        }
-        memcpy(tmp, out, sizeof out);
-    }
-    for (int i = 0; i <= d; i++)
-        memcpy(h + 4 * i * stride, tmp[i], sizeof tmp[i]);
-}
-
-static void bez_interval(const tsr_patch *p, const double r[4], double *out, double *wout)
-{
-    int du = p->degree_u, dv = p->degree_v, nu = du + 1, nv = dv + 1;
-    double h[4 * TSR_BEZIER_MAX_POINTS];
-    for (int k = 0; k < nu * nv; k++) {
+    uint32_t cnt = (uint32_t)(p->degree_u + 1) * (uint32_t)(p->degree_v + 1);
+    for (uint32_t k = 0; k < cnt; k++) {
         double w = p->weights ? p->weights[k] : 1;
         h[4 * k] = w * p->ctrl[3 * k];
         h[4 * k + 1] = w * p->ctrl[3 * k + 1];
         h[4 * k + 2] = w * p->ctrl[3 * k + 2];
         h[4 * k + 3] = w;
     }
+}
+
+/* De Casteljau at 1/2 of d + 1 homogeneous points at stride (in points):
+ * the halves over [0, 1/2] and [1/2, 1], at the same stride. */
+static void halve(const double *src, double *lo, double *hi, int d, int stride)
+{
+    double t[TSR_PATCH_MAX_DEGREE + 1][4];
+    size_t s4 = 4 * (size_t)stride;
+    for (int i = 0; i <= d; i++)
+        memcpy(t[i], src + s4 * (size_t)i, sizeof t[i]);
+    memcpy(lo, t[0], sizeof t[0]);
+    memcpy(hi + s4 * (size_t)d, t[d], sizeof t[d]);
+    for (int k = 1; k <= d; k++) {
+        for (int i = 0; i <= d - k; i++)
+            for (int c = 0; c < 4; c++)
+                t[i][c] = 0.5 * (t[i][c] + t[i + 1][c]);
+        memcpy(lo + s4 * (size_t)k, t[0], sizeof t[0]);
+        memcpy(hi + s4 * (size_t)(d - k), t[d - k], sizeof t[0]);
+    }
+}
+
+/* The four quarter nets of a homogeneous net: kid[cx + 2 cy] over
+ * [cx/2, (cx+1)/2] x [cy/2, (cy+1)/2]. */
+static void split4(const double *h, int du, int dv, double kid[4][4 * TSR_BEZIER_MAX_POINTS])
+{
+    int nu = du + 1, nv = dv + 1;
+    double L[4 * TSR_BEZIER_MAX_POINTS], R[4 * TSR_BEZIER_MAX_POINTS];
     for (int j = 0; j < nv; j++)
-        split_1d(h + 4 * j * nu, du, 1, r[0], r[1]);
-    for (int i = 0; i < nu; i++)
-        split_1d(h + 4 * i, dv, nu, r[2], r[3]);
-    for (int k = 0; k < nu * nv; k++) {
-        double w = h[4 * k + 3];
-        out[3 * k] = h[4 * k] / w;
-        out[3 * k + 1] = h[4 * k + 1] / w;
-        out[3 * k + 2] = h[4 * k + 2] / w;
-        if (wout)
-            wout[k] = w;
+        halve(h + 4 * j * nu, L + 4 * j * nu, R + 4 * j * nu, du, 1);
+    for (int i = 0; i < nu; i++) {
+        halve(L + 4 * i, kid[0] + 4 * i, kid[2] + 4 * i, dv, nu);
+        halve(R + 4 * i, kid[1] + 4 * i, kid[3] + 4 * i, dv, nu);
     }
 }
 
@@ -796,8 +836,20 @@ typedef struct nodeval {
     float d[3];    /* interior, stitched along s, stitched along t: for a
                       Bézier piece per unit tile (N = 1; node_d scales), for
                       a subd piece at the piece's N */
+    float cam;     /* with a camera: pixels per unit of error (its
+                      tsr_camera_box_factor, rounded up); else 1 */
     uint8_t force; /* split it: a finer neighbour's stitched tile needs it */
 } nodeval;
+
+/* The nets of the four children of one node (level l - 1) of one piece,
+ * homogeneous: kept per level l, so the top-down selection, which visits
+ * a node's children together, makes each child's net from its parent's by
+ * one midpoint split, not from the piece's net. */
+typedef struct kidnets {
+    uint64_t key; /* 1 + the parent's tsr_qnode_key; 0: empty */
+    uint32_t piece;
+    double h[4][4 * TSR_BEZIER_MAX_POINTS];
+} kidnets;
 
 typedef struct pctx {
     const tsr_pmodel *m;
@@ -815,11 +867,11 @@ typedef struct pctx {
     uint32_t nnv, capnv;
     nodeval cur;     /* the last node asked about */
     uint64_t cur_key;
-    float override;  /* >= 0: surf_error answers this (stitched checks) */
     bool nomem;      /* the memo could not grow */
     uint64_t *evaluations;
     double *scratch; /* subd tile positions */
     double *uv;
+    kidnets *kids;   /* per level, shared by all pieces (selected in turn) */
 } pctx;
 
 static void node_rect(const pctx *c, tsr_qnode n, double r[4])
@@ -832,6 +884,38 @@ static void node_rect(const pctx *c, tsr_qnode n, double r[4])
     (void)c;
 }
 
+/* Floats at or beyond a double, on the side asked. */
+static inline float f_up(double x)
+{
+    float f = (float)x;
+    return (double)f < x ? nextafterf(f, INFINITY) : f;
+}
+
+static inline float f_down(double x)
+{
+    float f = (float)x;
+    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+
+/* The homogeneous net of a Bézier piece's node: from the cache of its
+ * level, or its parent's (recursively) split in four and kept. */
+static const double *node_net(pctx *c, tsr_qnode n)
+{
+    const piece *p = &c->m->pieces[c->piece];
+    kidnets *k = &c->kids[n.level];
+    tsr_qnode up = {n.x >> 1, n.y >> 1, (uint8_t)(n.level ? n.level - 1 : 0)};
+    uint64_t key = n.level ? tsr_qnode_key(up) + 1 : 1;
+    if (k->piece != c->piece || k->key != key) {
+        if (!n.level)
+            homogeneous(&p->bez, k->h[0]);
+        else
+            split4(node_net(c, up), p->bez.degree_u, p->bez.degree_v, k->h);
+        k->piece = c->piece;
+        k->key = key;
+    }
+    return k->h[n.level ? (n.x & 1) + 2 * (n.y & 1) : 0];
+}
+
 static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
 {
     const piece *p = &c->m->pieces[c->piece];
@@ -841,18 +925,29 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
     if (p->kind == KIND_BEZIER) {
         double ctrl[3 * TSR_BEZIER_MAX_POINTS], w[TSR_BEZIER_MAX_POINTS];
         tsr_patch sub = p->bez;
+        uint32_t cnt = (uint32_t)(sub.degree_u + 1) * (uint32_t)(sub.degree_v + 1);
         if (n.level > 0) {
-            bez_interval(&p->bez, r, ctrl, p->bez.weights ? w : NULL);
+            const double *h = node_net(c, n);
+            for (uint32_t k = 0; k < cnt; k++) {
+                double wk = h[4 * k + 3];
+                if (p->bez.weights) {
+                    ctrl[3 * k] = h[4 * k] / wk;
+                    ctrl[3 * k + 1] = h[4 * k + 1] / wk;
+                    ctrl[3 * k + 2] = h[4 * k + 2] / wk;
+                    w[k] = wk;
+                } else {
+                    memcpy(ctrl + 3 * k, h + 4 * k, 3 * sizeof *ctrl);
+                }
+            }
             sub.ctrl = ctrl;
             sub.weights = p->bez.weights ? w : NULL;
         }
-        uint32_t cnt = (uint32_t)(sub.degree_u + 1) * (uint32_t)(sub.degree_v + 1);
         double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
         for (uint32_t i = 0; i < cnt; i++)
             box_add(lo, hi, sub.ctrl + 3 * i);
         for (int k = 0; k < 3; k++) {
-            out->lo[k] = nextafterf((float)lo[k], -INFINITY);
-            out->hi[k] = nextafterf((float)hi[k], INFINITY);
+            out->lo[k] = f_down(lo[k]);
+            out->hi[k] = f_up(hi[k]);
         }
         bezier_delta(sub.degree_u, sub.degree_v, sub.ctrl, sub.weights, 1, d);
         /* the parent's bounds hold for the child at a quarter (the same
@@ -865,7 +960,7 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
                     d[k] = dmin(d[k], 0.25 * c->nv[*slot].d[k]);
         }
         for (int k = 0; k < 3; k++)
-            out->d[k] = nextafterf((float)d[k], INFINITY);
+            out->d[k] = f_up(d[k]);
         return;
     }
     /* subd: the tile's vertices, second differences, an estimate */
@@ -917,8 +1012,8 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
         h = h > p->hi[k] ? p->hi[k] : h;
         if (l > h)
             l = h = 0.5 * (lo[k] + hi[k]);
-        out->lo[k] = nextafterf((float)l, -INFINITY);
-        out->hi[k] = nextafterf((float)h, INFINITY);
+        out->lo[k] = f_down(l);
+        out->hi[k] = f_up(h);
     }
 }
 
@@ -933,6 +1028,9 @@ static const nodeval *node_info(pctx *c, tsr_qnode n)
         c->cur = c->nv[*have];
     } else {
         node_compute(c, n, &c->cur);
+        c->cur.cam = c->opt->camera ? f_up(tsr_camera_box_factor(c->opt->camera, c->cur.lo, c->cur.hi,
+                                                                   c->surf.error_isotropic))
+                                    : 1;
         if (c->nnv == c->capnv) {
             uint32_t cap = c->capnv ? 2 * c->capnv : 256;
             nodeval *nv = cap > c->capnv ? tsr_realloc(c->alloc, c->nv, (size_t)cap * sizeof *nv) : NULL;
@@ -977,7 +1075,7 @@ static float node_d(const pctx *c, const nodeval *v, int k)
 {
     if (c->m->pieces[c->piece].kind != KIND_BEZIER)
         return v->d[k];
-    return nextafterf((float)((double)v->d[k] * c->inv_n2), INFINITY);
+    return f_up((double)v->d[k] * c->inv_n2);
 }
 
 static bool surf_evaluate(void *user, uint32_t i, uint32_t j, float pos[3], float normal[3])
@@ -996,22 +1094,22 @@ static void surf_bounds(void *user, tsr_qnode n, float lo[3], float hi[3])
 
 /* The error of the node's tile without stitching (tsr_ptess_run checks
  * stitched tiles after selection, and splits their coarse neighbours where
- * the stitched bound is beyond the tolerance), or the override. */
+ *  the stitched bound is beyond the tolerance). */
 static float surf_error(void *user, tsr_qnode n)
 {
     pctx *c = user;
-    return c->override >= 0 ? c->override : node_d(c, node_info(c, n), 0);
+    return node_d(c, node_info(c, n), 0);
 }
 
-/* The node's error against the tolerance: model units or pixels. */
-static double node_measure(pctx *c, tsr_qnode n, float delta)
+/* The node's error against the tolerance: model units or pixels (as
+ * tsr_camera_node_error, with the factor kept per node). */
+static double node_measure(const pctx *c, const nodeval *v, float delta)
 {
     if (!c->opt->camera)
         return delta;
-    c->override = delta;
-    double e = tsr_camera_node_error(c->opt->camera, &c->surf, n);
-    c->override = -1;
-    return e;
+    if (v->cam == 0)
+        return 0;
+    return isinf(delta) ? INFINITY : (double)v->cam * delta;
 }
 
 /* Segment range [k0, k1) of edge e covered by node n, or false. */
@@ -1032,7 +1130,7 @@ static bool refine(void *user, const tsr_surface *s, tsr_qnode n)
     pctx *c = user;
     (void)s;
     const nodeval *v = node_info(c, n);
-    return v->force || node_measure(c, n, node_d(c, v, 0)) > c->tol;
+    return v->force || node_measure(c, v, node_d(c, v, 0)) > c->tol;
 }
 
 /* A Bézier piece's tile size N: of tile, tile + 2, ... up to maxN (4 tile
@@ -1079,7 +1177,7 @@ static uint32_t check_stitched(pctx *c, double *bound)
             if (!(lv[i].stitch & (1u << e)))
                 continue;
             float ds = node_d(c, &v, e & 1 ? 2 : 1);
-            if (node_measure(c, n, ds) > c->tol && n.level > 0) {
+            if (node_measure(c, &v, ds) > c->tol && n.level > 0) {
                 tsr_qnode up = {n.x >> 1, n.y >> 1, (uint8_t)(n.level - 1)};
                 int dx = e == 1 ? 1 : e == 3 ? -1 : 0, dy = e == 0 ? -1 : e == 2 ? 1 : 0;
                 if ((dx < 0 && up.x == 0) || (dy < 0 && up.y == 0))
@@ -1128,10 +1226,35 @@ static lpoint edge_point(const pctx *ctx, uint32_t piece, int e, uint32_t T)
     }
 }
 
+enum { CANON_CACHE = 256 };
+
 typedef struct canon_buf {
     lpoint *p;
     uint32_t n, cap;
+    /* the last answers of the general case (corners, collapsed edges),
+     * direct-mapped by the start's key: every tile at a corner asks */
+    struct {
+        uint64_t key; /* 1 + lkey of the start; 0: empty */
+        lpoint out;
+    } cache[CANON_CACHE];
 } canon_buf;
+
+/* The neighbour's lattice point S along its edge for point T of edge e
+ * (lattice size Zq) through link l, if the neighbour's lattice has one
+ * there (the two lattices may differ in density). */
+static bool link_map(const pctx *ctx, const plink *l, uint32_t Zq, uint32_t T, uint32_t *S)
+{
+    uint32_t t0 = l->t0 * Zq / 2, t1 = l->t1 * Zq / 2;
+    if (T < t0 || T > t1)
+        return false;
+    uint32_t Zn = lattice_size(ctx, l->piece), s0 = l->s0 * Zn / 2;
+    uint64_t B = (uint64_t)(l->s0 > l->s1 ? l->s0 - l->s1 : l->s1 - l->s0) * Zn / 2, num = (uint64_t)(T - t0) * B;
+    if (num % (t1 - t0))
+        return false;
+    uint32_t d = (uint32_t)(num / (t1 - t0));
+    *S = l->reversed ? s0 - d : s0 + d;
+    return true;
+}
 
 static bool canon_push(canon_buf *b, lpoint q, const tsr_allocator *a)
 {
@@ -1162,12 +1285,44 @@ static bool canonical(const tsr_pmodel *m, const pctx *ctx, lpoint start, canon_
     }
     /* a point on a collapsed edge stands for the edge's first corner */
     const piece *ps = &m->pieces[start.piece];
+    bool moved = false;
     for (int e = 0; e < 4; e++) {
         bool on = e == 0 ? start.j == 0 : e == 1 ? start.i == Z : e == 2 ? start.j == Z : start.i == 0;
         if (on && (ps->collapsed >> e & 1)) {
             start = edge_point(ctx, start.piece, e, 0);
+            moved = true;
             break;
         }
+    }
+    if (!moved) {
+        /* the common case: inside one edge, one link each way, the
+         * neighbour's point inside its edge: the two points, or one */
+        int on = 0, e1 = -1;
+        for (int e = 0; e < 4; e++)
+            if (e == 0 ? start.j == 0 : e == 1 ? start.i == Z : e == 2 ? start.j == Z : start.i == 0)
+                on++, e1 = e;
+        if (on == 1 && ps->nlinks[e1] <= 1) {
+            uint32_t T = (e1 & 1) ? start.j : start.i, S;
+            if (!ps->nlinks[e1] || !link_map(ctx, &ps->link[e1][0], Z, T, &S)) {
+                *out = start;
+                return true;
+            }
+            const plink *l = &ps->link[e1][0];
+            const piece *pn = &m->pieces[l->piece];
+            if (S > 0 && S < lattice_size(ctx, l->piece) && !(pn->collapsed >> l->edge & 1) &&
+                pn->nlinks[l->edge] == 1 && pn->link[l->edge][0].piece == start.piece &&
+                pn->link[l->edge][0].edge == e1) {
+                lpoint q = edge_point(ctx, l->piece, l->edge, S);
+                *out = lkey(q) < lkey(start) ? q : start;
+                return true;
+            }
+        }
+    }
+    uint64_t ck = lkey(start) + 1;
+    uint32_t slot = (uint32_t)((ck * 0x9E3779B97F4A7C15ull) >> 56) & (CANON_CACHE - 1);
+    if (b->cache[slot].key == ck) {
+        *out = b->cache[slot].out;
+        return true;
     }
     b->n = 0;
     if (!canon_push(b, start, a))
@@ -1180,7 +1335,7 @@ static bool canonical(const tsr_pmodel *m, const pctx *ctx, lpoint start, canon_
             bool on = e == 0 ? q.j == 0 : e == 1 ? q.i == Zq : e == 2 ? q.j == Zq : q.i == 0;
             if (!on)
                 continue;
-            uint32_t T = (e & 1) ? q.j : q.i;
+            uint32_t T = (e & 1) ? q.j : q.i, S;
             if (pq->collapsed >> e & 1) {
                 if (!canon_push(b, edge_point(ctx, q.piece, e, 0), a) || !canon_push(b, edge_point(ctx, q.piece, e, Zq), a))
                     return false;
@@ -1188,19 +1343,7 @@ static bool canonical(const tsr_pmodel *m, const pctx *ctx, lpoint start, canon_
             }
             for (int k = 0; k < pq->nlinks[e]; k++) {
                 const plink *l = &pq->link[e][k];
-                uint32_t t0 = l->t0 * Zq / 2, t1 = l->t1 * Zq / 2;
-                if (T < t0 || T > t1)
-                    continue;
-                /* the neighbour's lattice point there, if there is one (the
-                 * two lattices may differ in density) */
-                uint32_t Zn = lattice_size(ctx, l->piece), s0 = l->s0 * Zn / 2;
-                uint64_t B = (uint64_t)(l->s0 > l->s1 ? l->s0 - l->s1 : l->s1 - l->s0) * Zn / 2,
-                         num = (uint64_t)(T - t0) * B;
-                if (num % (t1 - t0))
-                    continue;
-                uint32_t d = (uint32_t)(num / (t1 - t0));
-                uint32_t S = l->reversed ? s0 - d : s0 + d;
-                if (!canon_push(b, edge_point(ctx, l->piece, l->edge, S), a))
+                if (link_map(ctx, l, Zq, T, &S) && !canon_push(b, edge_point(ctx, l->piece, l->edge, S), a))
                     return false;
             }
         }
@@ -1210,6 +1353,8 @@ static bool canonical(const tsr_pmodel *m, const pctx *ctx, lpoint start, canon_
         if (lkey(b->p[h]) < lkey(best))
             best = b->p[h];
     *out = best;
+    b->cache[slot].key = ck;
+    b->cache[slot].out = best;
     return true;
 }
 
@@ -1253,9 +1398,30 @@ static uint32_t new_vertex(builder *b, const piece *p, const double pos[3], cons
     return tsr_mesh_add_vertex(&b->out->mesh, fp, b->opt->normals ? fn : NULL, NULL);
 }
 
-/* Mesh vertex of lattice point q: evaluated once, at its canonical point
- * (pre: q's own position when the canonical point is q itself and pre is
- * not NULL, which spares the evaluation). */
+/* A Bézier piece's point at (s, t): the tensor-product Bernstein sum. */
+static void bez_point(const tsr_patch *p, double s, double t, double pos[3])
+{
+    double Bu[TSR_PATCH_MAX_DEGREE + 1], Bv[TSR_PATCH_MAX_DEGREE + 1], h[4] = {0, 0, 0, 0};
+    int nu = p->degree_u + 1;
+    bernstein(p->degree_u, s, Bu);
+    bernstein(p->degree_v, t, Bv);
+    for (int j = 0; j <= p->degree_v; j++)
+        for (int i = 0; i < nu; i++) {
+            int k = j * nu + i;
+            double f = Bu[i] * Bv[j] * (p->weights ? p->weights[k] : 1);
+            h[0] += f * p->ctrl[3 * k];
+            h[1] += f * p->ctrl[3 * k + 1];
+            h[2] += f * p->ctrl[3 * k + 2];
+            h[3] += f;
+        }
+    for (int c = 0; c < 3; c++)
+        pos[c] = p->weights ? h[c] / h[3] : h[c];
+}
+
+/* Mesh vertex of lattice point q: made once, for its canonical point, at
+ * pre when not NULL (q's own position: the points a link or collapsed edge
+ * makes equal differ by rounding only), else evaluated at the canonical
+ * point. */
 static uint32_t vertex_of(builder *b, lpoint q, const double *pre)
 {
     lpoint c;
@@ -1270,12 +1436,14 @@ static uint32_t vertex_of(builder *b, lpoint q, const double *pre)
     const piece *p = &b->m->pieces[c.piece];
     bool want_n = b->opt->normals;
     double pos[3], nr[3] = {0, 0, 1};
-    if (pre && !want_n && c.piece == q.piece && c.i == q.i && c.j == q.j) {
+    if (pre && !want_n) {
         memcpy(pos, pre, sizeof pos);
     } else {
         uint32_t Z = lattice_size(b->ctx, c.piece);
         double s = (double)c.i / Z, t = (double)c.j / Z;
-        if (p->kind == KIND_BEZIER)
+        if (p->kind == KIND_BEZIER && !want_n)
+            bez_point(&p->bez, s, t, pos);
+        else if (p->kind == KIND_BEZIER)
             tsr_patch_eval(&p->bez, s, t, pos, NULL, NULL, want_n ? nr : NULL);
         else
             subd_point(b->m->subd, p->face, p->sub, s, t, pos, want_n ? nr : NULL);
@@ -1570,6 +1738,17 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
                 lmask |= 1u << e;
         }
         const uint32_t *tri = pat->tri[mask];
+        if (!lmask) { /* no linked piece edge: the pattern's triangles as they are */
+            int i1 = p->mirrored ? 2 : 1, i2 = p->mirrored ? 1 : 2;
+            for (uint32_t t = 0; t < pat->count[mask]; t++) {
+                uint32_t a0 = tri[3 * t], a1 = tri[3 * t + i1], a2 = tri[3 * t + i2];
+                uint32_t v[3] = {local[a0], local[a1], local[a2]};
+                double uv[6] = {vuv[2 * a0], vuv[2 * a0 + 1], vuv[2 * a1], vuv[2 * a1 + 1], vuv[2 * a2], vuv[2 * a2 + 1]};
+                if (!add_tri(b, p->source, v, uv))
+                    return TSR_ERR_NOMEM;
+            }
+            continue;
+        }
         for (uint32_t t = 0; t < pat->count[mask]; t++) {
             uint32_t idx[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
             if (p->mirrored) {
@@ -1885,6 +2064,44 @@ void tsr_ptess_result_free(tsr_ptess_result *r)
     memset(r, 0, sizeof *r);
 }
 
+/* The patterns of tile size N, from the model's cache or made and put
+ * there; NULL when out of memory. */
+static const patcache *patterns_of(const tsr_pmodel *cm, uint32_t N)
+{
+    tsr_pmodel *m = (tsr_pmodel *)cm; /* the cache only: see struct tsr_pmodel */
+    patcache *pc = atomic_load_explicit(&m->pats[N / 2], memory_order_acquire);
+    if (pc)
+        return pc;
+    const tsr_allocator *a = ma(m);
+    uint32_t r2 = (N + 1) * (N + 1);
+    pc = tsr_alloc(a, sizeof *pc);
+    if (!pc)
+        return NULL;
+    memset(pc, 0, sizeof *pc);
+    pc->used = tsr_alloc(a, (size_t)16 * r2);
+    if (!pc->used || tsr_tile_patterns_init(&pc->pat, N, a) != TSR_OK) {
+        tsr_free(a, pc->used);
+        tsr_free(a, pc);
+        return NULL;
+    }
+    memset(pc->used, 0, (size_t)16 * r2);
+    for (unsigned mk = 0; mk < 16; mk++) {
+        for (uint32_t t = 0; t < 3 * pc->pat.count[mk]; t++)
+            pc->used[(size_t)mk * r2 + pc->pat.tri[mk][t]] = 1;
+        for (uint32_t k = 0; k < r2; k++)
+            pc->used_n[mk] += pc->used[(size_t)mk * r2 + k];
+    }
+    patcache *expected = NULL;
+    if (!atomic_compare_exchange_strong_explicit(&m->pats[N / 2], &expected, pc, memory_order_acq_rel,
+                                                 memory_order_acquire)) {
+        tsr_tile_patterns_free(&pc->pat); /* another run was first */
+        tsr_free(a, pc->used);
+        tsr_free(a, pc);
+        pc = expected;
+    }
+    return pc;
+}
+
 tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, const tsr_allocator *alloc,
                          tsr_ptess_result *out, tsr_error *err)
 {
@@ -1927,8 +2144,11 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
     uint32_t row = opt.tile_n + 1, maxN = 4 * opt.tile_n - 2;
     maxN = maxN < opt.tile_n ? opt.tile_n : maxN > TSR_TILE_MAX ? TSR_TILE_MAX : maxN;
     double *scratch = tsr_alloc(a, (size_t)row * row * 5 * sizeof *scratch);
+    kidnets *kids = tsr_alloc(a, ((size_t)opt.max_level + 1) * sizeof *kids);
     uint64_t evals = 0;
-    tsr_status st = ctx && scratch ? TSR_OK : TSR_ERR_NOMEM;
+    tsr_status st = ctx && scratch && kids ? TSR_OK : TSR_ERR_NOMEM;
+    for (uint32_t l = 0; kids && l <= opt.max_level; l++)
+        kids[l].key = 0, kids[l].piece = UINT32_MAX;
     if (ctx)
         memset(ctx, 0, (size_t)m->npieces * sizeof *ctx);
     for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
@@ -1943,9 +2163,9 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         c->tol = (opt.camera ? opt.camera->pixel_error : opt.max_error) * scale;
         c->scratch = scratch;
         c->uv = scratch + 3 * (size_t)row * row;
+        c->kids = kids;
         c->evaluations = &evals;
         c->alloc = a;
-        c->override = -1;
         uint32_t L = opt.max_level - (pc->kind == KIND_SUBD && pc->levels ? 1 : 0);
         c->surf = (tsr_surface){c, opt.tile_n, L, opt.tile_n << L, opt.tile_n << L, surf_evaluate, surf_bounds,
                                 surf_error, true};
@@ -2007,35 +2227,11 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
     builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0, NULL, 0, NULL};
     /* the tile patterns of every tile size in use, and which of a tile's
      * vertices each uses */
-    enum { NPAT = TSR_TILE_MAX / 2 + 1 };
-    tsr_tile_patterns *pats[NPAT] = {NULL};
-    uint8_t *pused[NPAT] = {NULL};
-    uint64_t used_n[NPAT][16];
+    const patcache *pats[NPAT] = {NULL};
     uint32_t *local = NULL, mrow = maxN + 1;
-    for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
-        uint32_t N = ctx[p].N, r2 = (N + 1) * (N + 1);
-        if (pats[N / 2])
-            continue;
-        pats[N / 2] = tsr_alloc(a, sizeof **pats);
-        pused[N / 2] = tsr_alloc(a, (size_t)16 * r2);
-        if (!pats[N / 2] || !pused[N / 2]) {
+    for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++)
+        if (!pats[ctx[p].N / 2] && !(pats[ctx[p].N / 2] = patterns_of(m, ctx[p].N)))
             st = TSR_ERR_NOMEM;
-            break;
-        }
-        if ((st = tsr_tile_patterns_init(pats[N / 2], N, a)) != TSR_OK) {
-            tsr_free(a, pats[N / 2]);
-            pats[N / 2] = NULL;
-            break;
-        }
-        memset(pused[N / 2], 0, (size_t)16 * r2);
-        for (unsigned mk = 0; mk < 16; mk++) {
-            for (uint32_t t = 0; t < 3 * pats[N / 2]->count[mk]; t++)
-                pused[N / 2][(size_t)mk * r2 + pats[N / 2]->tri[mk][t]] = 1;
-            used_n[N / 2][mk] = 0;
-            for (uint32_t k = 0; k < r2; k++)
-                used_n[N / 2][mk] += pused[N / 2][(size_t)mk * r2 + k];
-        }
-    }
     if (st == TSR_OK) {
         local = tsr_alloc(a, (size_t)mrow * mrow * sizeof *local);
         b.tile_pos = tsr_alloc(a, (size_t)3 * mrow * mrow * sizeof(double));
@@ -2054,8 +2250,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         uint32_t N = ctx[p].N;
         const tsr_qleaf *lv = tsr_quadtree_leaves(ctx[p].qt);
         for (uint32_t i = 0; i < tsr_quadtree_leaf_count(ctx[p].qt); i++) {
-            want_t += pats[N / 2]->count[lv[i].stitch & 15];
-            want_v += used_n[N / 2][lv[i].stitch & 15];
+            want_t += pats[N / 2]->pat.count[lv[i].stitch & 15];
+            want_v += pats[N / 2]->used_n[lv[i].stitch & 15];
             want_border += 4 * N;
         }
     }
@@ -2080,8 +2276,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         out->leaves += tsr_quadtree_leaf_count(ctx[p].qt);
         if (m->sources[m->pieces[p].source].trimmed)
             continue;
-        b.used = pused[ctx[p].N / 2];
-        st = emit_piece(&b, p, pats[ctx[p].N / 2], local);
+        b.used = pats[ctx[p].N / 2]->used;
+        st = emit_piece(&b, p, &pats[ctx[p].N / 2]->pat, local);
     }
     /* trimmed sources: the loops sampled finely enough in (u, v) */
     for (uint32_t s = 0; s < m->nsources && st == TSR_OK; s++) {
@@ -2144,12 +2340,6 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         tsr_error_set(err, st, "tessellate patches: the mesh would pass 2^32 - 2 vertices or triangles");
 done:
     tsr_free(a, local);
-    for (uint32_t k = 0; k < NPAT; k++) {
-        if (pats[k])
-            tsr_tile_patterns_free(pats[k]);
-        tsr_free(a, pats[k]);
-        tsr_free(a, pused[k]);
-    }
     tsr_free(a, b.tile_pos);
     tsr_free(a, b.tile_uv);
     tsr_free(a, b.tile_tmp);
@@ -2169,6 +2359,7 @@ done:
     }
     tsr_free(a, ctx);
     tsr_free(a, scratch);
+    tsr_free(a, kids);
     out->seconds = now_s() - t_start;
     return st;
 }

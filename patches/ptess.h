@@ -191,7 +191,9 @@ typedef struct tsr_ptess_result {
  * tile_n or max_level out of range, a piece_scale outside (0, 1];
  * TSR_ERR_TOO_LARGE when the mesh would pass 2^32 - 2 vertices or
  * triangles; TSR_ERR_NOMEM. A trimmed source whose triangulation fails
- * gives that error naming the patch. */
+ * gives that error naming the patch. Runs may share m, also from several
+ * threads at once: the tile patterns a run makes are kept with m (made
+ * with m's allocator, freed by tsr_pmodel_destroy) and reused. */
 tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt, const tsr_allocator *alloc,
                          tsr_ptess_result *out, tsr_error *err);
 

@@ -387,15 +387,14 @@ static bool box_to_camera(const tsr_camera *c, const float lo[3], const float hi
  * displacement d in any direction (error_isotropic), |(d_r - xi d_f,
  * d_u - eta d_f)| <= |d| sqrt(1 + xi^2 + eta^2), the largest singular
  * value of that linear map, again largest at a corner of the rectangle. */
-double tsr_camera_node_error(const tsr_camera *c, const tsr_surface *s, tsr_qnode node)
+static bool camera_box(const tsr_camera *c, const float lo[3], const float hi[3], bool isotropic, double *factor_out,
+                       double *z_out)
 {
-    float lo[3], hi[3];
-    s->bounds(s->user, node, lo, hi);
     if (!(lo[0] <= hi[0] && lo[1] <= hi[1] && lo[2] <= hi[2]))
-        return 0;
+        return false;
     double rr[8], uu[8], ff[8];
     if (box_to_camera(c, lo, hi, rr, uu, ff))
-        return 0;
+        return false;
     double fmin = INFINITY, xi0 = INFINITY, xi1 = -INFINITY, eta0 = INFINITY, eta1 = -INFINITY;
     bool all_front = true;
     for (int k = 0; k < 8; k++) {
@@ -420,20 +419,37 @@ double tsr_camera_node_error(const tsr_camera *c, const tsr_surface *s, tsr_qnod
     eta0 = eta0 < -c->tan_y ? -c->tan_y : eta0;
     eta1 = eta1 > c->tan_y ? c->tan_y : eta1;
     if (xi0 > xi1 || eta0 > eta1)
-        return 0;
+        return false;
     double zr = c->right[2], zu = c->up[2], zf = c->fwd[2], factor = 0;
     for (int k = 0; k < 4; k++) {
         double xi = k & 1 ? xi1 : xi0, eta = k & 2 ? eta1 : eta0;
         /* isotropic: the largest singular value of [[1, 0, -xi], [0, 1, -eta]] */
         double a = zr - xi * zf, b = zu - eta * zf,
-               m = s->error_isotropic ? sqrt(1 + xi * xi + eta * eta) : sqrt(a * a + b * b);
+               m = isotropic ? sqrt(1 + xi * xi + eta * eta) : sqrt(a * a + b * b);
         factor = m > factor ? m : factor;
     }
-    double z = fmin > c->near_dist ? fmin : c->near_dist;
+    *z_out = fmin > c->near_dist ? fmin : c->near_dist;
+    *factor_out = factor;
+    return true;
+}
+
+double tsr_camera_node_error(const tsr_camera *c, const tsr_surface *s, tsr_qnode node)
+{
+    float lo[3], hi[3];
+    double factor, z;
+    s->bounds(s->user, node, lo, hi);
+    if (!camera_box(c, lo, hi, s->error_isotropic, &factor, &z))
+        return 0;
     double delta = s->error(s->user, node);
     if (isinf(delta))
         return INFINITY;
     return c->K * delta * factor / z;
+}
+
+double tsr_camera_box_factor(const tsr_camera *c, const float lo[3], const float hi[3], bool isotropic)
+{
+    double factor, z;
+    return camera_box(c, lo, hi, isotropic, &factor, &z) ? c->K * factor / z : 0;
 }
 
 bool tsr_refine_camera(void *camera, const tsr_surface *s, tsr_qnode node)

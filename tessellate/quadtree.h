@@ -174,6 +174,11 @@ void tsr_camera_project(const tsr_camera *c, const double p[3], double *sx, doub
  * for why it bounds the projected error of every counted sample. */
 double tsr_camera_node_error(const tsr_camera *c, const tsr_surface *s, tsr_qnode node);
 
+/* The same error per unit of displacement, for a box [lo, hi]: the node's
+ * error is this times error(node) (0 where tsr_camera_node_error gives 0).
+ * For callers that keep it per node and ask again with other errors. */
+double tsr_camera_box_factor(const tsr_camera *c, const float lo[3], const float hi[3], bool isotropic);
+
 /* View-dependent: split while tsr_camera_node_error > pixel_error. */
 bool tsr_refine_camera(void *camera /* const tsr_camera * (prepared) */, const tsr_surface *s, tsr_qnode node);
 

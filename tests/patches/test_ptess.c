@@ -31,6 +31,7 @@
 
 #include <float.h>
 #include <stdarg.h>
+#include <threads.h>
 
 static const double PI = 3.14159265358979323846;
 static const double H2 = 0.70710678118654752440; /* sqrt(2) / 2, the middle weight of a quarter circle */
@@ -1585,6 +1586,91 @@ TEST(camera_near_finer)
     free(b.s);
 }
 
+/* Runs share a model: the second run (tile patterns now kept with the
+ * model) and two runs from two threads at once give the first run's mesh,
+ * vertex for vertex. */
+typedef struct shared_run {
+    const tsr_pmodel *m;
+    tsr_ptess_options opt;
+    tsr_ptess_result r;
+    tsr_status st;
+} shared_run;
+
+static int shared_run_main(void *arg)
+{
+    shared_run *sr = arg;
+    tsr_error err = {0};
+    sr->st = tsr_ptess_run(sr->m, &sr->opt, NULL, &sr->r, &err);
+    return 0;
+}
+
+static bool same_mesh(const tsr_ptess_result *a, const tsr_ptess_result *b)
+{
+    return a->mesh.vertex_count == b->mesh.vertex_count && a->mesh.triangle_count == b->mesh.triangle_count &&
+           !memcmp(a->mesh.positions, b->mesh.positions, 3 * sizeof(float) * a->mesh.vertex_count) &&
+           !memcmp(a->mesh.indices, b->mesh.indices, 3 * sizeof(uint32_t) * a->mesh.triangle_count);
+}
+
+TEST(runs_share_model)
+{
+    sbuf b = {0};
+    const double A[3][2] = {{1, 0}, {1, 1}, {0, 1}}, w[3] = {1, H2, 1};
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 3; i++)
+            sb_printf(&b, "v %.17g %.17g %.17g %.17g\n", VL * j, VR * A[i][0], VR * A[i][1], w[i]);
+    sb_printf(&b, "cstype rat bezier\ndeg 2 1\nsurf 0 1 0 1 -6 -5 -4 -3 -2 -1\nend\n");
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL, *m2 = NULL;
+    if (!parse_set(&b, "long_cylinder.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    tsr_camera cam;
+    memset(&cam, 0, sizeof cam);
+    const double eye[3] = {-2, 2.5, 1.8}, target[3] = {10, 0.3, 0.3};
+    memcpy(cam.eye, eye, sizeof eye);
+    memcpy(cam.target, target, sizeof target);
+    cam.fovy_deg = 50;
+    cam.width = 1024;
+    cam.height = 768;
+    cam.near_dist = 0.05;
+    cam.pixel_error = 0.5;
+    CHECK(tsr_camera_prepare(&cam));
+    if (make_model(&set, &m) && make_model(&set, &m2)) {
+        tsr_ptess_options opt = {0};
+        opt.camera = &cam;
+        tsr_ptess_result first, second;
+        bool ok1 = run_ptess(m, &opt, &first), ok2 = run_ptess(m, &opt, &second);
+        if (ok1 && ok2) {
+            CHECK(first.mesh.triangle_count > 100);
+            CHECK_MSG(same_mesh(&first, &second), "second run: %u triangles, first %u", second.mesh.triangle_count,
+                      first.mesh.triangle_count);
+            /* a fresh model, two threads at once */
+            shared_run sr[2];
+            thrd_t th[2];
+            for (int k = 0; k < 2; k++) {
+                memset(&sr[k], 0, sizeof sr[k]);
+                sr[k].m = m2;
+                sr[k].opt = opt;
+                CHECK(thrd_create(&th[k], shared_run_main, &sr[k]) == thrd_success);
+            }
+            for (int k = 0; k < 2; k++) {
+                thrd_join(th[k], NULL);
+                CHECK(sr[k].st == TSR_OK);
+                CHECK_MSG(sr[k].st != TSR_OK || same_mesh(&first, &sr[k].r), "thread %d: %u triangles, first %u", k,
+                          sr[k].r.mesh.triangle_count, first.mesh.triangle_count);
+                tsr_ptess_result_free(&sr[k].r);
+            }
+        }
+        tsr_ptess_result_free(&first);
+        tsr_ptess_result_free(&second);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_pmodel_destroy(m2);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
 /* ---- the contract's refusals ---------------------------------------------------------- */
 
 TEST(bad_options)
@@ -2154,4 +2240,4 @@ TEST(data_osd_cages)
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
-          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(camera_near_finer), T(bad_options), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
+          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(camera_near_finer), T(runs_share_model), T(bad_options), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))

@@ -463,6 +463,11 @@ TEST(geomorph_weights)
                 continue;
             tsr_qnode p = {L[i].node.x / 2, L[i].node.y / 2, (uint8_t)(L[i].node.level - 1)};
             double e = tsr_camera_node_error(&cam, s, p), want = 2 - e / cam.pixel_error;
+            /* the per-box factor times the node's error is the same figure */
+            float lo[3], hi[3];
+            s->bounds(s->user, p, lo, hi);
+            double f = tsr_camera_box_factor(&cam, lo, hi, s->error_isotropic) * s->error(s->user, p);
+            CHECK_MSG(fabs(f - e) <= 1e-12 * e, "box factor times error %.17g, node error %.17g", f, e);
             want = want < 0 ? 0 : want > 1 ? 1 : want;
             CHECK_NEAR(L[i].morph, want, 1e-6);
             partial += L[i].morph > 0 && L[i].morph < 1;
