@@ -16,27 +16,20 @@ static uint64_t mix64(uint64_t k)
 /* Rehashes into cap slots (a power of two larger than the count). */
 static bool rehash(tsr_keymap *m, size_t cap, const tsr_allocator *a)
 {
-    uint64_t *keys = tsr_alloc(a, cap * sizeof *keys);
-    uint32_t *vals = tsr_alloc(a, cap * sizeof *vals);
-    if (!keys || !vals) {
-        tsr_free(a, keys);
-        tsr_free(a, vals);
+    tsr_keyslot *slots = tsr_alloc(a, cap * sizeof *slots);
+    if (!slots)
         return false;
-    }
-    memset(keys, 0, cap * sizeof *keys);
-    for (size_t i = 0; m->keys && i <= m->mask; i++) {
-        if (!m->keys[i])
+    memset(slots, 0, cap * sizeof *slots);
+    for (size_t i = 0; m->slots && i <= m->mask; i++) {
+        if (!m->slots[i].key)
             continue;
-        size_t h = mix64(m->keys[i]) & (cap - 1);
-        while (keys[h])
+        size_t h = mix64(m->slots[i].key) & (cap - 1);
+        while (slots[h].key)
             h = (h + 1) & (cap - 1);
-        keys[h] = m->keys[i];
-        vals[h] = m->vals[i];
+        slots[h] = m->slots[i];
     }
-    tsr_free(a, m->keys);
-    tsr_free(a, m->vals);
-    m->keys = keys;
-    m->vals = vals;
+    tsr_free(a, m->slots);
+    m->slots = slots;
     m->mask = cap - 1;
     return true;
 }
@@ -46,7 +39,7 @@ bool tsr_keymap_reserve(tsr_keymap *m, size_t n, const tsr_allocator *a)
     size_t cap = 1024;
     while (cap < 2 * n + 2)
         cap *= 2;
-    return (m->keys && cap <= m->mask + 1) || rehash(m, cap, a);
+    return (m->slots && cap <= m->mask + 1) || rehash(m, cap, a);
 }
 
 uint32_t *tsr_keymap_slot(tsr_keymap *m, uint64_t key, bool *found, const tsr_allocator *a)
@@ -55,30 +48,29 @@ uint32_t *tsr_keymap_slot(tsr_keymap *m, uint64_t key, bool *found, const tsr_al
         return NULL;
     uint64_t k = key + 1;
     size_t h = mix64(k) & m->mask;
-    while (m->keys[h] && m->keys[h] != k)
+    while (m->slots[h].key && m->slots[h].key != k)
         h = (h + 1) & m->mask;
-    *found = m->keys[h] == k;
+    *found = m->slots[h].key == k;
     if (!*found) {
-        m->keys[h] = k;
+        m->slots[h].key = k;
         m->count++;
     }
-    return &m->vals[h];
+    return &m->slots[h].val;
 }
 
 uint32_t *tsr_keymap_find(const tsr_keymap *m, uint64_t key)
 {
-    if (!m->keys)
+    if (!m->slots)
         return NULL;
     uint64_t k = key + 1;
     size_t h = mix64(k) & m->mask;
-    while (m->keys[h] && m->keys[h] != k)
+    while (m->slots[h].key && m->slots[h].key != k)
         h = (h + 1) & m->mask;
-    return m->keys[h] == k ? &m->vals[h] : NULL;
+    return m->slots[h].key == k ? &m->slots[h].val : NULL;
 }
 
 void tsr_keymap_free(tsr_keymap *m, const tsr_allocator *a)
 {
-    tsr_free(a, m->keys);
-    tsr_free(a, m->vals);
+    tsr_free(a, m->slots);
     memset(m, 0, sizeof *m);
 }

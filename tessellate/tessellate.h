@@ -192,9 +192,13 @@ void tsr_halfedges_free(tsr_halfedges *he);
 /* A hash map from 64-bit keys (any value but UINT64_MAX) to 32-bit values,
  * open addressing with linear probing, for welding vertices by key. Zero-
  * initialise it; free with tsr_keymap_free and the same allocator. */
+typedef struct tsr_keyslot {
+    uint64_t key; /* key + 1; 0 = empty */
+    uint32_t val;
+} tsr_keyslot;
+
 typedef struct tsr_keymap {
-    uint64_t *keys; /* key + 1; 0 = empty */
-    uint32_t *vals;
+    tsr_keyslot *slots; /* key and value side by side: one cache line a probe */
     size_t mask;
     size_t count;
 } tsr_keymap;
