@@ -443,8 +443,13 @@ tsr_status create(const tsr_cage *c, tsr_subd_scheme scheme, const tsr_allocator
     return TSR_OK;
 }
 
-tsr_status tessellate(const tsr_subd *s, uint32_t rate, tsr_mesh *m, tsr_error *err)
+// The faces listed (faces NULL: all, in order), as
+// tsr_subd_tessellate_uniform_faces says.
+tsr_status tessellate(const tsr_subd *s, uint32_t rate, const uint32_t *faces, uint32_t num_faces, tsr_mesh *m,
+                      tsr_error *err)
 {
+    if (!faces)
+        num_faces = s->num_faces;
     Bfr::Tessellation::Options topt;
     topt.SetFacetSize(3);
 
@@ -452,7 +457,8 @@ tsr_status tessellate(const tsr_subd *s, uint32_t rate, tsr_mesh *m, tsr_error *
     uint64_t nv = 0, nt = 0;
     {
         std::vector<std::pair<uint32_t, std::pair<uint64_t, uint64_t>>> per_size; // face size -> coords, facets
-        for (uint32_t f = 0; f < s->num_faces; f++) {
+        for (uint32_t q = 0; q < num_faces; q++) {
+            uint32_t f = faces ? faces[q] : q;
             if (!s->has_limit[f])
                 continue;
             uint32_t n = face_size(s, f);
@@ -490,7 +496,8 @@ tsr_status tessellate(const tsr_subd *s, uint32_t rate, tsr_mesh *m, tsr_error *
     bool normals = (m->attributes & TSR_MESH_NORMALS) != 0;
     const float zero_uv[2] = {0, 0};
 
-    for (uint32_t f = 0; f < s->num_faces; f++) {
+    for (uint32_t q = 0; q < num_faces; q++) {
+        uint32_t f = faces ? faces[q] : q;
         if (!s->has_limit[f])
             continue;
         if (!prepare(s, f, p)) {
@@ -756,7 +763,7 @@ extern "C" tsr_status tsr_subd_tessellate_uniform(const tsr_subd *s, uint32_t ra
                              TSR_SUBD_MAX_RATE);
     uint32_t v0 = out->vertex_count, t0 = out->triangle_count;
     try {
-        return tessellate(s, rate, out, err);
+        return tessellate(s, rate, nullptr, 0, out, err);
     } catch (const std::bad_alloc &) {
         out->vertex_count = v0, out->triangle_count = t0;
         return tsr_error_set(err, TSR_ERR_NOMEM, "uniform tessellation: out of memory");
@@ -764,4 +771,112 @@ extern "C" tsr_status tsr_subd_tessellate_uniform(const tsr_subd *s, uint32_t ra
         out->vertex_count = v0, out->triangle_count = t0;
         return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "uniform tessellation: OpenSubdiv failed");
     }
+}
+
+extern "C" tsr_status tsr_subd_tessellate_uniform_faces(const tsr_subd *s, uint32_t rate, const uint32_t *faces,
+                                                        uint32_t num_faces, tsr_mesh *out, tsr_error *err)
+{
+    if (!s || !out || (num_faces && !faces))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "uniform tessellation: NULL surface, mesh or face list");
+    if (rate < 1 || rate > TSR_SUBD_MAX_RATE)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "uniform tessellation: rate %u outside 1..%u", rate,
+                             TSR_SUBD_MAX_RATE);
+    if (!num_faces)
+        return TSR_OK;
+    uint32_t v0 = out->vertex_count, t0 = out->triangle_count;
+    try {
+        Vec<uint8_t> listed(s->num_faces, 0, Alloc<uint8_t>(s->alloc));
+        for (uint32_t q = 0; q < num_faces; q++) {
+            uint32_t f = faces[q];
+            if (f >= s->num_faces)
+                return tsr_error_set(err, TSR_ERR_ARGUMENT,
+                                     "uniform tessellation: face %u (list entry %u) is not "
+                                     "below the face count %u",
+                                     f, q, s->num_faces);
+            if (listed[f])
+                return tsr_error_set(err, TSR_ERR_ARGUMENT, "uniform tessellation: face %u is listed twice (entry %u)",
+                                     f, q);
+            listed[f] = 1;
+        }
+        return tessellate(s, rate, faces, num_faces, out, err);
+    } catch (const std::bad_alloc &) {
+        out->vertex_count = v0, out->triangle_count = t0;
+        return tsr_error_set(err, TSR_ERR_NOMEM, "uniform tessellation: out of memory");
+    } catch (...) {
+        out->vertex_count = v0, out->triangle_count = t0;
+        return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "uniform tessellation: OpenSubdiv failed");
+    }
+}
+
+// The basis change, per direction, from Bézier points b to the uniform
+// cubic B-spline points Q of the same cubic on [0,1]: the inverse of
+// b = M Q with M = [1 4 1 0; 0 4 2 0; 0 2 4 0; 0 1 4 1] / 6 (the B-spline
+// segment's Bézier points). Rows sum to 1, so a repeated point stays put
+// (the teapot's collapsed edges stay collapsed).
+static const double BEZIER_TO_BSPLINE[4][4] = {{6, -7, 2, 0}, {0, 2, -1, 0}, {0, -1, 2, 0}, {0, 2, -7, 6}};
+
+extern "C" tsr_status tsr_subd_cage_from_bezier(const double *ctrl, uint32_t num_patches, const tsr_allocator *alloc,
+                                                tsr_cage *out, tsr_error *err)
+{
+    if (!out)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "Bezier cage: NULL output");
+    memset(out, 0, sizeof *out);
+    if (!ctrl)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "Bezier cage: NULL control points");
+    if (!num_patches)
+        return tsr_error_set(err, TSR_ERR_EMPTY, "Bezier cage: no patches");
+    if (num_patches > UINT32_MAX / 36)
+        return tsr_error_set(err, TSR_ERR_TOO_LARGE, "Bezier cage: %u patches (at most %u)", num_patches,
+                             UINT32_MAX / 36);
+    const tsr_allocator *a = alloc && alloc->realloc ? alloc : nullptr;
+    size_t np = 16 * (size_t)num_patches, nf = 9 * (size_t)num_patches;
+    double *pts = static_cast<double *>(tsr_alloc(a, 3 * np * sizeof(double)));
+    uint32_t *sizes = static_cast<uint32_t *>(tsr_alloc(a, nf * sizeof(uint32_t)));
+    uint32_t *verts = static_cast<uint32_t *>(tsr_alloc(a, 4 * nf * sizeof(uint32_t)));
+    if (!pts || !sizes || !verts) {
+        tsr_free(a, pts), tsr_free(a, sizes), tsr_free(a, verts);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "Bezier cage: out of memory for %u patches", num_patches);
+    }
+    for (uint32_t p = 0; p < num_patches; p++) {
+        const double *b = ctrl + 48 * (size_t)p;
+        double *q = pts + 48 * (size_t)p;
+        bool finite = true;
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 4; i++)
+                for (int c = 0; c < 3; c++) {
+                    // Q = B2S b B2S^T, rows and columns alike
+                    double sum = 0;
+                    for (int l = 0; l < 4; l++)
+                        for (int k = 0; k < 4; k++)
+                            sum += BEZIER_TO_BSPLINE[i][k] * BEZIER_TO_BSPLINE[j][l] * b[3 * (4 * l + k) + c];
+                    q[3 * (4 * j + i) + c] = sum;
+                    finite = finite && std::isfinite(sum) && std::isfinite(b[3 * (4 * j + i) + c]);
+                }
+        if (!finite) {
+            tsr_free(a, pts), tsr_free(a, sizes), tsr_free(a, verts);
+            return tsr_error_set(err, TSR_ERR_VALUE,
+                                 "Bezier cage: patch %u: a control point or its B-spline point is not finite", p);
+        }
+        for (uint32_t j = 0; j < 3; j++)
+            for (uint32_t i = 0; i < 3; i++) {
+                size_t f = 9 * (size_t)p + 3 * j + i;
+                uint32_t v = 16 * p + 4 * j + i;
+                sizes[f] = 4;
+                verts[4 * f] = v;
+                verts[4 * f + 1] = v + 1;
+                verts[4 * f + 2] = v + 5;
+                verts[4 * f + 3] = v + 4;
+            }
+    }
+    out->num_points = (uint32_t)np;
+    out->points = pts;
+    out->num_faces = (uint32_t)nf;
+    out->face_sizes = sizes;
+    out->face_verts = verts;
+    out->num_face_verts = (uint32_t)(4 * nf);
+    out->boundary_interp = 0;
+    out->fvar_interp = 0;
+    if (a)
+        out->alloc = *a;
+    return TSR_OK;
 }

@@ -187,6 +187,57 @@ tsr_status tsr_subd_face_bounds(const tsr_subd *s, uint32_t face, uint32_t sub, 
  * previous counts. Cost: O(rate^2) evaluations per face. */
 tsr_status tsr_subd_tessellate_uniform(const tsr_subd *s, uint32_t rate, tsr_mesh *out, tsr_error *err);
 
+/* As tsr_subd_tessellate_uniform, for the faces listed alone: each of
+ * faces[0 .. num_faces-1] that has a limit surface, in that order (faces
+ * without one are skipped, as there). A face's triangles and points are
+ * exactly those tsr_subd_tessellate_uniform gives it, except that
+ * vertices are shared only among the listed faces (the first listed face
+ * that uses a cage vertex or edge point evaluates it). With every face
+ * listed in order 0, 1, ..., the result is tsr_subd_tessellate_uniform's.
+ * faces may be NULL when num_faces is 0 (nothing appended). Errors as
+ * tsr_subd_tessellate_uniform's, and TSR_ERR_ARGUMENT (err naming it) for
+ * a face >= tsr_subd_face_count or one listed twice. Cost: O(rate^2)
+ * evaluations per listed face, plus O(size of the cage) for the welding
+ * tables. */
+tsr_status tsr_subd_tessellate_uniform_faces(const tsr_subd *s, uint32_t rate, const uint32_t *faces,
+                                             uint32_t num_faces, tsr_mesh *out, tsr_error *err);
+
+/* ---- Bézier patches as subdivision cages ----------------------------------- */
+
+/* Face of a tsr_subd_cage_from_bezier cage whose limit surface is Bézier
+ * patch p: the middle face of its 4 x 4 grid. */
+#define TSR_SUBD_BEZIER_FACE(p) (9u * (uint32_t)(p) + 4u)
+
+/* A Catmull-Clark cage whose limit surface is exactly a list of
+ * polynomial bicubic Bézier patches, so that Bfr can tessellate them.
+ *
+ * ctrl holds 48 doubles per patch: its 4 x 4 control points, point (i, j)
+ * (i along s, j along t) at ctrl[48 p + 3 (4 j + i)] (the order of
+ * patches.h). Each patch becomes the uniform cubic B-spline patch of the
+ * same surface over [0,1]^2: per direction, the B-spline points Q of the
+ * Bézier points b are (inverting b0 = (Q0 + 4 Q1 + Q2) / 6, b1 = (2 Q1 +
+ * Q2) / 3, b2 = (Q1 + 2 Q2) / 3, b3 = (Q1 + 4 Q2 + Q3) / 6)
+ *     Q0 = 6 b0 - 7 b1 + 2 b2,  Q1 = 2 b1 - b2,
+ *     Q2 = 2 b2 - b1,           Q3 = 2 b1 - 7 b2 + 6 b3.
+ * The cage holds one 4 x 4 grid of those points per patch, unconnected:
+ * point (i, j) of patch p is cage point 16 p + 4 j + i; face 9 p + 3 j + i
+ * (i, j in 0..2) is the quad (i, j), (i+1, j), (i+1, j+1), (i, j+1). The
+ * middle face TSR_SUBD_BEZIER_FACE(p) is a regular interior face, whose
+ * limit (Stam) is that B-spline patch, with Bfr's (u, v) equal to the
+ * Bézier patch's (s, t) (tests/patches/test_subd.c checks both to 1e-12).
+ * boundary_interp is 0, so the other eight faces have no limit surface and
+ * tsr_subd_tessellate_uniform of the whole cage tessellates exactly the
+ * patches. Rational or non-cubic patches have no such cage (convert
+ * B-splines with tsr_patch_to_bezier first; rational ones not at all).
+ *
+ * *out is zeroed first; its arrays come from alloc (NULL: malloc), which
+ * the cage keeps for tsr_cage_free. TSR_ERR_ARGUMENT for NULL pointers,
+ * TSR_ERR_EMPTY for no patches, TSR_ERR_TOO_LARGE beyond (2^32 - 1) / 36
+ * patches (the face-vertex count), TSR_ERR_VALUE (naming the patch) for a non-finite input or
+ * B-spline point, TSR_ERR_NOMEM. Thread-safe. */
+tsr_status tsr_subd_cage_from_bezier(const double *ctrl, uint32_t num_patches, const tsr_allocator *alloc,
+                                     tsr_cage *out, tsr_error *err);
+
 #ifdef __cplusplus
 }
 #endif

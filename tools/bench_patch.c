@@ -15,9 +15,19 @@
  *  3. Bfr's limit evaluation rate (tsr_subd_eval on a dense grid per patch,
  *     positions alone and with derivatives): the throughput baseline.
  *  4. View-dependent tessellation of the teapot from cameras on an orbit,
- *     against the uniform tessellation (by tsr_ptess_run, one tile per
- *     piece) at the smallest rate whose measured pixel error is at most the
- *     adaptive one.
+ *     against two uniform tessellations, each at the smallest rate whose
+ *     measured pixel error is at most the adaptive one's:
+ *      - ours (tsr_ptess_run with one tile per piece), a stand-in;
+ *      - Bfr's (the target of issue 7): every bicubic Bézier patch becomes
+ *        the uniform cubic B-spline patch of the same surface, the middle
+ *        face of a 4 x 4 Catmull-Clark grid (tsr_subd_cage_from_bezier,
+ *        checked here against tsr_patch_eval), and
+ *        tsr_subd_tessellate_uniform_faces tessellates those middle faces
+ *        (Bfr::Tessellation and limit evaluation), timed; its pixel error
+ *        is measured on the equivalent mesh of table 2, whose source for a
+ *        middle face is the patch itself, Bfr's (u, v) being its (s, t).
+ *     Skipped, with a note, when a patch is not a polynomial bicubic
+ *     Bézier patch or is trimmed.
  * Every ratio compares figures measured in the same run. */
 #include "bench.h"
 #include "patches/ptess.h"
@@ -49,7 +59,11 @@ static void help(FILE *f)
             "     checked against Bfr's mesh): triangles and time, and the ratios adaptive / Bfr;\n"
             "  3. Bfr's limit evaluation rate (tsr_subd_eval on a dense grid per patch): points per second;\n"
             "  4. the teapot seen from cameras on an orbit (1920 x 1080, 60 deg, 1 px): view-dependent\n"
-            "     tessellation against the uniform one reaching the same measured pixel error.\n\n"
+            "     tessellation against uniform ones reaching the same measured pixel error: our own\n"
+            "     (tsr_ptess_run, one tile per piece; a stand-in) and Bfr's, on the Catmull-Clark cage whose\n"
+            "     middle faces are exactly the teapot's bicubic patches (tsr_subd_cage_from_bezier): Bfr rate,\n"
+            "     triangles, seconds (tsr_subd_tessellate_uniform_faces, best of R), measured px (on Bfr's\n"
+            "     points and triangles, as in 2) and the time ratio adaptive / Bfr (the target: < 1).\n\n"
             "inputs: $TESSERA_DATA/patches/teapot.bpt and the cages catmark_cube_creases1,\n"
             "catmark_cubes_semisharp, catmark_gregory_test1, catmark_edgecorner and catmark_fan of\n"
             "$TESSERA_DATA/patches/osd (TESSERA_DATA defaults to ../shared/data; absent files are skipped).\n\n"
@@ -84,6 +98,10 @@ typedef struct model {
     char pm_message[512];
     tsr_pmodel_info info;
     double diag;
+    /* the patch set as a Catmull-Clark cage for Bfr (table 4) */
+    tsr_cage bez_cage;
+    tsr_subd *bez_subd; /* NULL when not built */
+    uint32_t *bez_faces, bez_count;
 } model;
 
 static const char *base_name(const char *path)
@@ -96,6 +114,9 @@ static void model_free(model *m)
 {
     tsr_pmodel_destroy(m->pm);
     tsr_subd_destroy(m->subd);
+    tsr_subd_destroy(m->bez_subd);
+    tsr_cage_free(&m->bez_cage);
+    free(m->bez_faces);
     tsr_cage_free(&m->cage);
     tsr_patch_set_free(&m->set);
     memset(m, 0, sizeof *m);
@@ -304,9 +325,23 @@ static int bfr_diagonal(uint32_t r, uint32_t i, uint32_t j)
     return (side & 1) ? 1 - d : d;
 }
 
+/* Bfr's surface of a model and the face standing for source si: the
+ * cage's own (face, sub), or for a patch set the middle face of its
+ * Bézier cage (bez_prepare), whose (u, v) is the patch's. */
+static const tsr_subd *bfr_subd(const model *m)
+{
+    return m->subd ? m->subd : m->bez_subd;
+}
+
+static uint32_t bfr_face(const model *m, const tsr_psource_info *si)
+{
+    return m->subd ? si->patch : TSR_SUBD_BEZIER_FACE(si->patch);
+}
+
 /* The mesh Bfr's uniform tessellation at `rate` makes, as a
  * tsr_ptess_result (with tri_source and tri_uv) that tsr_ptess_measure
- * reads: per source (face, sub) the lattice of q = rate (quads) or rate / 2
+ * reads: per source (face, sub) (for a patch set: the source's middle
+ * face, whose (u, v) spans the source's domain) the lattice of q = rate (quads) or rate / 2
  * (N-gon sub-faces; rate must then be even) quads per side, evaluated by
  * tsr_subd_eval, triangulated as bfr_diagonal says. Not welded (the
  * measurement does not need it). Free with free_equivalent. */
@@ -319,7 +354,7 @@ static tsr_status bfr_equivalent(const model *m, uint32_t rate, tsr_ptess_result
         tsr_psource_info si;
         if (!tsr_pmodel_source_info(m->pm, s, &si))
             return tsr_error_set(err, TSR_ERR_ARGUMENT, "source %u has no info", s);
-        uint64_t q = tsr_subd_face_size(m->subd, si.patch) == 4 ? rate : rate / 2;
+        uint64_t q = tsr_subd_face_size(bfr_subd(m), bfr_face(m, &si)) == 4 ? rate : rate / 2;
         nv += (q + 1) * (q + 1);
         nt += 2 * q * q;
     }
@@ -339,12 +374,12 @@ static tsr_status bfr_equivalent(const model *m, uint32_t rate, tsr_ptess_result
     for (uint32_t s = 0; s < m->info.sources; s++) {
         tsr_psource_info si;
         tsr_pmodel_source_info(m->pm, s, &si);
-        bool quad = tsr_subd_face_size(m->subd, si.patch) == 4;
+        bool quad = tsr_subd_face_size(bfr_subd(m), bfr_face(m, &si)) == 4;
         uint32_t q = quad ? rate : rate / 2, w = q + 1;
         for (uint32_t j = 0, k = 0; j <= q; j++)
             for (uint32_t i = 0; i <= q; i++, k++)
                 uv[2 * k] = (double)i / q, uv[2 * k + 1] = (double)j / q;
-        tsr_status st = tsr_subd_eval(m->subd, si.patch, si.sub, uv, w * w, pos, NULL, NULL);
+        tsr_status st = tsr_subd_eval(bfr_subd(m), bfr_face(m, &si), si.sub, uv, w * w, pos, NULL, NULL);
         if (st != TSR_OK) {
             free(uv);
             free(pos);
@@ -475,7 +510,7 @@ static uint64_t pattern_mismatches(const tsr_mesh *a, const tsr_mesh *b, const d
 }
 
 typedef struct bfr_rate {
-    bool timed;
+    bool timed, warned;
     uint32_t triangles, vertices;
     double seconds;
     uint64_t mismatches; /* UINT64_MAX: not checked */
@@ -522,9 +557,10 @@ static double bfr_error(uint32_t idx, void *ctx)
     return e;
 }
 
-/* Times tsr_subd_tessellate_uniform at rate (best of repeat) and, when
- * the adaptive model exists, checks that the equivalent mesh has Bfr's
- * triangles. */
+/* Times tsr_subd_tessellate_uniform at rate (best of repeat; for a patch
+ * set, tsr_subd_tessellate_uniform_faces of its Bézier cage's middle
+ * faces) and, when the adaptive model exists, checks that the equivalent
+ * mesh has Bfr's triangles. */
 static tsr_status bfr_time(model *m, uint32_t rate, uint32_t repeat, bfr_rate *out, tsr_error *err)
 {
     out->seconds = INFINITY;
@@ -535,7 +571,9 @@ static tsr_status bfr_time(model *m, uint32_t rate, uint32_t repeat, bfr_rate *o
         tsr_mesh_free(&mesh);
         tsr_mesh_init(&mesh, 0, NULL);
         double t0 = cli_now();
-        tsr_status st = tsr_subd_tessellate_uniform(m->subd, rate, &mesh, err);
+        tsr_status st =
+            m->subd ? tsr_subd_tessellate_uniform(m->subd, rate, &mesh, err)
+                    : tsr_subd_tessellate_uniform_faces(m->bez_subd, rate, m->bez_faces, m->bez_count, &mesh, err);
         double dt = cli_now() - t0;
         if (st != TSR_OK) {
             tsr_mesh_free(&mesh);
@@ -755,6 +793,163 @@ static bool uni_time(uni_ctx *c, uint32_t idx, uint32_t repeat)
     u->seconds = r.seconds;
     u->timed = true;
     return true;
+}
+
+/* ---- Bfr on the teapot ------------------------------------------------------ */
+
+/* Builds m's Bézier cage for Bfr (tsr_subd_cage_from_bezier): every patch
+ * must be a polynomial bicubic Bézier patch whose source is untrimmed and
+ * covers its whole domain. Then checks the orientation the equivalent mesh
+ * relies on: Bfr's middle face at (u, v) against tsr_patch_eval at the
+ * patch's (s, t) = its domain at (u, v), on 7 x 7 points per patch;
+ * *deviation is the largest distance over the box diagonal, refused beyond
+ * 1e-9. false with note saying why (m->bez_subd NULL). */
+static bool bez_prepare(model *m, double *deviation, char *note, size_t cap)
+{
+    const tsr_patch_set *set = &m->set;
+    *deviation = NAN;
+    if (m->info.sources != set->num_patches) {
+        snprintf(note, cap, "%u sources for %u patches", m->info.sources, set->num_patches);
+        return false;
+    }
+    for (uint32_t s = 0; s < m->info.sources; s++) {
+        tsr_psource_info si;
+        double dom[4];
+        if (!tsr_pmodel_source_info(m->pm, s, &si) || si.patch >= set->num_patches) {
+            snprintf(note, cap, "source %u has no patch", s);
+            return false;
+        }
+        const tsr_patch *pa = &set->patches[si.patch];
+        if (pa->kind != TSR_PATCH_BEZIER || pa->degree_u != 3 || pa->degree_v != 3 || pa->weights) {
+            snprintf(note, cap, "patch %u is not a polynomial bicubic Bezier patch (%s, degrees %d x %d)", si.patch,
+                     pa->kind == TSR_PATCH_BEZIER    ? (pa->weights ? "rational Bezier" : "Bezier")
+                     : pa->kind == TSR_PATCH_BSPLINE ? "B-spline"
+                                                     : "NURBS",
+                     pa->degree_u, pa->degree_v);
+            return false;
+        }
+        if (si.trimmed) {
+            snprintf(note, cap, "patch %u is trimmed (Bfr would mesh the whole patch)", si.patch);
+            return false;
+        }
+        tsr_patch_domain(pa, dom);
+        if (memcmp(dom, si.domain, sizeof dom)) {
+            snprintf(note, cap, "source %u covers part of patch %u", s, si.patch);
+            return false;
+        }
+    }
+    uint32_t n = set->num_patches;
+    double *ctrl = malloc(48 * (size_t)n * sizeof *ctrl);
+    m->bez_faces = malloc(n * sizeof *m->bez_faces);
+    if (!ctrl || !m->bez_faces) {
+        free(ctrl);
+        snprintf(note, cap, "out of memory");
+        return false;
+    }
+    for (uint32_t p = 0; p < n; p++) {
+        memcpy(ctrl + 48 * (size_t)p, set->patches[p].ctrl, 48 * sizeof *ctrl);
+        m->bez_faces[p] = TSR_SUBD_BEZIER_FACE(p);
+    }
+    m->bez_count = n;
+    tsr_error e = {0};
+    tsr_status st = tsr_subd_cage_from_bezier(ctrl, n, NULL, &m->bez_cage, &e);
+    free(ctrl);
+    if (st == TSR_OK)
+        st = tsr_subd_create(&m->bez_cage, TSR_SUBD_CATMARK, NULL, &m->bez_subd, &e);
+    if (st != TSR_OK) {
+        snprintf(note, cap, "Bezier cage: %s", e.message);
+        return false;
+    }
+    enum { G = 7 };
+    double uv[2 * G * G], pos[3 * G * G], worst = 0;
+    for (uint32_t j = 0, k = 0; j < G; j++)
+        for (uint32_t i = 0; i < G; i++, k++)
+            uv[2 * k] = (double)i / (G - 1), uv[2 * k + 1] = (double)j / (G - 1);
+    for (uint32_t p = 0; p < n && st == TSR_OK; p++) {
+        const tsr_patch *pa = &set->patches[p];
+        double dom[4];
+        tsr_patch_domain(pa, dom);
+        st = tsr_subd_eval(m->bez_subd, m->bez_faces[p], 0, uv, G * G, pos, NULL, NULL);
+        for (uint32_t k = 0; st == TSR_OK && k < G * G; k++) {
+            double ref[3], d2 = 0;
+            tsr_patch_eval(pa, dom[0] + uv[2 * k] * (dom[1] - dom[0]), dom[2] + uv[2 * k + 1] * (dom[3] - dom[2]), ref,
+                           NULL, NULL, NULL);
+            for (int c = 0; c < 3; c++)
+                d2 += (pos[3 * k + c] - ref[c]) * (pos[3 * k + c] - ref[c]);
+            worst = fmax(worst, sqrt(d2) / m->diag);
+        }
+    }
+    *deviation = worst;
+    if (st != TSR_OK || !(worst <= 1e-9)) {
+        if (st != TSR_OK)
+            snprintf(note, cap, "Bfr's evaluation of the Bezier cage failed: %s", tsr_status_str(st));
+        else
+            snprintf(note, cap, "Bfr's middle faces are off the patches by %.3g of the diagonal", worst);
+        tsr_subd_destroy(m->bez_subd);
+        m->bez_subd = NULL;
+        return false;
+    }
+    return true;
+}
+
+/* The search of Bfr's rate per camera: rates 1..n, each measured (its
+ * equivalent mesh, bfr_equivalent) from every camera at once. */
+typedef struct bview_ctx {
+    model *m;
+    const tsr_camera *cams;
+    uint32_t ncam, cam; /* the camera the search is for */
+    double **err;       /* per rate: per camera, pixels; NULL unknown or failed */
+    bool *known;
+    bfr_rate *timed; /* per rate */
+    tsr_error *e;
+} bview_ctx;
+
+static uint32_t bview_idx_rate(uint32_t idx, void *ctx)
+{
+    (void)ctx;
+    return idx;
+}
+
+static bool bview_fill(bview_ctx *c, uint32_t idx)
+{
+    if (c->known[idx])
+        return c->err[idx] != NULL;
+    c->known[idx] = true;
+    tsr_ptess_result r;
+    if (bfr_equivalent(c->m, idx, &r, c->e) != TSR_OK) {
+        free_equivalent(&r);
+        return false;
+    }
+    double *e = malloc(c->ncam * sizeof *e);
+    if (!e)
+        tsr_error_set(c->e, TSR_ERR_NOMEM, "out of memory");
+    for (uint32_t k = 0; e && k < c->ncam; k++) {
+        tsr_ptess_measure_result mr;
+        memset(&mr, 0, sizeof mr);
+        tsr_status st = tsr_ptess_measure(c->m->pm, &r, PER_SIDE, &c->cams[k], false, NULL, &mr);
+        if (st != TSR_OK) {
+            tsr_error_set(c->e, st, "measurement of Bfr's equivalent mesh: %s", tsr_status_str(st));
+            free(e);
+            e = NULL;
+        } else
+            e[k] = mr.max_error;
+    }
+    free_equivalent(&r);
+    c->err[idx] = e;
+    return e != NULL;
+}
+
+static bool bview_known(uint32_t idx, void *ctx, double *e)
+{
+    bview_ctx *c = ctx;
+    *e = c->err[idx] ? c->err[idx][c->cam] : NAN;
+    return c->known[idx];
+}
+
+static double bview_error(uint32_t idx, void *ctx)
+{
+    bview_ctx *c = ctx;
+    return bview_fill(c, idx) ? c->err[idx][c->cam] : NAN;
 }
 
 /* ---- The command --------------------------------------------------------- */
@@ -1144,21 +1339,54 @@ int cli_bench_patch(int argc, char **argv)
         tsr_error err = {0};
         uni_ctx uc = {m, cams, ncam, 0, ue, &err};
         rate_search s = {n, uni_idx_rate, uni_error, uni_known, &uc};
+        /* Bfr: rates 1..max_rate on the Bézier cage */
+        char bnote[600] = "";
+        double bdev = NAN;
+        bool bfr_ok = bez_prepare(m, &bdev, bnote, sizeof bnote);
+        double **berr = calloc(max_rate + 2, sizeof *berr);
+        bool *bknown = calloc(max_rate + 2, 1);
+        bfr_rate *btimed = calloc(max_rate + 2, sizeof *btimed);
+        if (!berr || !bknown || !btimed) {
+            bfr_ok = false;
+            snprintf(bnote, sizeof bnote, "out of memory");
+        }
+        bview_ctx bc = {m, cams, ncam, 0, berr, bknown, btimed, &err};
+        rate_search bs = {max_rate, bview_idx_rate, bview_error, bview_known, &bc};
         printf("%s: %u cameras on an orbit 2.5 box radii from the centre, 25 deg up, 1920 x 1080, 60 deg, "
                "pixel error 1; adaptive: tsr_ptess_run with the camera (best of %u); uniform: tsr_ptess_run with "
                "one tile of r quads per piece (rates <= 128; r/2 split once above), view-independent, at the "
-               "smallest rate whose measured pixel error (same camera) is <= the adaptive one, and (last columns) "
-               "<= 1 px.\n\n",
+               "smallest rate whose measured pixel error (same camera) is <= the adaptive one, and (the three "
+               "columns after it) <= 1 px.\n\n",
                m->name, ncam, repeat);
+        if (bfr_ok)
+            printf("Bfr (the last five columns): OpenSubdiv's uniform tessellation of the teapot, "
+                   "tsr_subd_tessellate_uniform_faces (Bfr::Tessellation at rate r per edge and Bfr's limit "
+                   "evaluation, positions only, best of %u) of the %u middle faces of a Catmull-Clark cage whose "
+                   "limit surface there is exactly the teapot's patches (tsr_subd_cage_from_bezier: each bicubic "
+                   "Bezier patch as the uniform cubic B-spline patch of the same surface, a 4 x 4 grid of points; "
+                   "Bfr's (u, v) = the patch's (s, t), checked at 7 x 7 points per patch: off by %.2g of the "
+                   "diagonal), at the smallest rate in 1..%u whose measured pixel error (same camera, on an "
+                   "equivalent mesh with Bfr's points and triangles as in table 2) is <= the adaptive one. "
+                   "Time adaptive / Bfr is the target of issue 7 (< 1).\n\n",
+                   repeat, m->bez_count, bdev, max_rate);
+        else
+            printf("Bfr columns skipped: %s.\n\n", bnote);
         printf("| camera | adaptive triangles | adaptive seconds | measured px | uniform rate | uniform triangles | "
                "uniform seconds | measured px | triangles adaptive / uniform | time adaptive / uniform | "
-               "rate for <= 1 px | its triangles | its seconds "
-               "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+               "rate for <= 1 px | its triangles | its seconds | Bfr rate | Bfr triangles | Bfr seconds | "
+               "measured px | time adaptive / Bfr "
+               "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
         cJSON *jv = cJSON_AddObjectToObject(json, "view_dependent");
         cJSON_AddStringToObject(jv, "model", m->name);
+        if (bfr_ok) {
+            cJSON_AddNumberToObject(jv, "bfr_faces", m->bez_count);
+            cJSON_AddNumberToObject(jv, "bfr_cage_deviation", bdev);
+        } else
+            cJSON_AddStringToObject(jv, "bfr_note", bnote);
         cJSON *jc = cJSON_AddArrayToObject(jv, "cameras");
         double sum_a = 0, sum_u = 0, sum_ut = 0, sum_ratio = 0;
-        uint32_t counted = 0;
+        double sum_ab = 0, sum_b = 0, sum_bratio = 0;
+        uint32_t counted = 0, counted_b = 0;
         for (uint32_t k = 0; k < ncam && ue; k++) {
             arow a = {0};
             tsr_ptess_options o = {0};
@@ -1187,8 +1415,55 @@ int cli_bench_patch(int argc, char **argv)
                 idx = 0;
             if (idx1 && !uni_time(&uc, idx1, repeat))
                 idx1 = 0;
+            /* Bfr at the smallest rate reaching the adaptive error */
+            uint32_t bidx = 0;
+            char bcols[256] = "n/a | | | | ";
+            if (bfr_ok) {
+                bc.cam = k;
+                bidx = find_rate(&bs, fmax(a.err, PIXEL_ERROR_FLOOR), &failed);
+                if (failed) {
+                    cli_error("bench", "patch: %s: Bfr's equivalent mesh: %s", m->name, err.message);
+                    rc = CLI_FAIL;
+                    bfr_ok = false;
+                    bidx = 0;
+                } else if (bidx && !btimed[bidx].timed && bfr_time(m, bidx, repeat, &btimed[bidx], &err) != TSR_OK) {
+                    cli_error("bench", "patch: %s: Bfr: %s", m->name, err.message);
+                    rc = CLI_FAIL;
+                    bidx = 0;
+                } else if (bidx && btimed[bidx].mismatches && btimed[bidx].mismatches != UINT64_MAX &&
+                           !btimed[bidx].warned) {
+                    fprintf(stderr,
+                            "tessera bench patch: %s: warning: at Bfr rate %u, %llu triangles of Bfr's mesh differ "
+                            "from the equivalent mesh whose error is measured\n",
+                            m->name, bidx, (unsigned long long)btimed[bidx].mismatches);
+                    btimed[bidx].warned = true;
+                }
+                if (bidx) {
+                    const bfr_rate *b = &btimed[bidx];
+                    snprintf(bcols, sizeof bcols, "%u | %u | %.5f | %.3f | %.3f ", bidx, b->triangles, b->seconds,
+                             berr[bidx][k], a.seconds / b->seconds);
+                } else if (bfr_ok)
+                    snprintf(bcols, sizeof bcols, "> %u | | | | ", max_rate);
+            }
             cJSON *jk = json_arow(&a);
             cJSON_AddItemToArray(jc, jk);
+            if (bidx) {
+                const bfr_rate *b = &btimed[bidx];
+                cJSON *jb = cJSON_AddObjectToObject(jk, "bfr_uniform");
+                cJSON_AddNumberToObject(jb, "rate", bidx);
+                cJSON_AddNumberToObject(jb, "triangles", b->triangles);
+                cJSON_AddNumberToObject(jb, "vertices", b->vertices);
+                cJSON_AddNumberToObject(jb, "seconds", b->seconds);
+                cJSON_AddNumberToObject(jb, "measured_max_error", berr[bidx][k]);
+                cJSON_AddNumberToObject(jb, "triangle_ratio", (double)a.triangles / b->triangles);
+                cJSON_AddNumberToObject(jb, "time_ratio", a.seconds / b->seconds);
+                if (b->mismatches != UINT64_MAX)
+                    cJSON_AddNumberToObject(jb, "pattern_mismatches", (double)b->mismatches);
+                sum_ab += a.seconds;
+                sum_b += b->seconds;
+                sum_bratio += a.seconds / b->seconds;
+                counted_b++;
+            }
             char r1[64] = "> max", s1[64] = "";
             if (idx1) {
                 snprintf(r1, sizeof r1, "%u", uni_idx_rate(idx1, NULL));
@@ -1196,14 +1471,14 @@ int cli_bench_patch(int argc, char **argv)
             } else
                 snprintf(s1, sizeof s1, " | ");
             if (!idx) {
-                printf("| %u | %u | %.5f | %.3f | > %u | | | | | | %s | %s |\n", k, a.triangles, a.seconds, a.err,
-                       uni_idx_rate(n, NULL), r1, s1);
+                printf("| %u | %u | %.5f | %.3f | > %u | | | | | | %s | %s | %s|\n", k, a.triangles, a.seconds, a.err,
+                       uni_idx_rate(n, NULL), r1, s1, bcols);
                 continue;
             }
             const uni_entry *u = &ue[idx];
-            printf("| %u | %u | %.5f | %.3f | %u | %u | %.5f | %.3f | %.3f | %.3f | %s | %s |\n", k, a.triangles,
+            printf("| %u | %u | %.5f | %.3f | %u | %u | %.5f | %.3f | %.3f | %.3f | %s | %s | %s|\n", k, a.triangles,
                    a.seconds, a.err, uni_idx_rate(idx, NULL), u->triangles, u->seconds, u->err[k],
-                   (double)a.triangles / u->triangles, a.seconds / u->seconds, r1, s1);
+                   (double)a.triangles / u->triangles, a.seconds / u->seconds, r1, s1, bcols);
             cJSON *ju = cJSON_AddObjectToObject(jk, "uniform");
             cJSON_AddNumberToObject(ju, "rate", uni_idx_rate(idx, NULL));
             cJSON_AddNumberToObject(ju, "triangles", u->triangles);
@@ -1220,16 +1495,41 @@ int cli_bench_patch(int argc, char **argv)
             sum_ut += (double)a.triangles / u->triangles;
             counted++;
         }
-        if (counted) {
-            printf("| mean of %u | | %.5f | | | | %.5f | | %.3f | %.3f (ratio of means %.3f) | | | |\n", counted,
-                   sum_a / counted, sum_u / counted, sum_ut / counted, sum_ratio / counted, sum_a / sum_u);
-            cJSON_AddNumberToObject(jv, "mean_adaptive_seconds", sum_a / counted);
-            cJSON_AddNumberToObject(jv, "mean_uniform_seconds", sum_u / counted);
-            cJSON_AddNumberToObject(jv, "mean_time_ratio", sum_ratio / counted);
+        if (counted || counted_b) {
+            /* the stand-in's means over its cameras, Bfr's over its own (the same unless a search failed) */
+            char ucols[200] = "| | | | | | | | | | | |", bmean[200] = "| | | | |";
+            if (counted)
+                snprintf(ucols, sizeof ucols, "| %.5f | | | | %.5f | | %.3f | %.3f (ratio of means %.3f) | | | |",
+                         sum_a / counted, sum_u / counted, sum_ut / counted, sum_ratio / counted, sum_a / sum_u);
+            if (counted_b) {
+                char own[64] = "";
+                if (counted_b != counted)
+                    snprintf(own, sizeof own, "(of %u cameras; adaptive %.5f s)", counted_b, sum_ab / counted_b);
+                snprintf(bmean, sizeof bmean, " %s | | %.5f | | %.3f (ratio of means %.3f) |", own, sum_b / counted_b,
+                         sum_bratio / counted_b, sum_ab / sum_b);
+            }
+            printf("| mean of %u | %s%s\n", counted ? counted : counted_b, ucols, bmean);
+            if (counted) {
+                cJSON_AddNumberToObject(jv, "mean_adaptive_seconds", sum_a / counted);
+                cJSON_AddNumberToObject(jv, "mean_uniform_seconds", sum_u / counted);
+                cJSON_AddNumberToObject(jv, "mean_time_ratio", sum_ratio / counted);
+            }
+            if (counted_b) {
+                cJSON_AddNumberToObject(jv, "bfr_cameras", counted_b);
+                cJSON_AddNumberToObject(jv, "mean_adaptive_seconds_bfr_cameras", sum_ab / counted_b);
+                cJSON_AddNumberToObject(jv, "mean_bfr_seconds", sum_b / counted_b);
+                cJSON_AddNumberToObject(jv, "mean_time_ratio_bfr", sum_bratio / counted_b);
+                cJSON_AddNumberToObject(jv, "time_ratio_of_means_bfr", sum_ab / sum_b);
+            }
         }
         for (uint32_t i = 0; ue && i <= n + 1; i++)
             free(ue[i].err);
         free(ue);
+        for (uint32_t i = 0; berr && i <= max_rate + 1; i++)
+            free(berr[i]);
+        free(berr);
+        free(bknown);
+        free(btimed);
         model_free(m);
         free(m);
     }

@@ -1029,7 +1029,183 @@ TEST(data_osd_shapes)
     }
 }
 
+/* ---- Bézier patches as cages, and uniform tessellations of face lists ------ */
+
+static double lcg_uniform(uint64_t *state)
+{
+    *state = *state * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(*state >> 11) / 9007199254740992.0;
+}
+
+/* The bicubic Bézier patch b (48 doubles, point (i, j) at 3 (4 j + i)) at
+ * (s, t), by the Bernstein polynomials written out. */
+static void bezier_point(const double *b, double s, double t, double out[3])
+{
+    double bs[4] = {(1 - s) * (1 - s) * (1 - s), 3 * s * (1 - s) * (1 - s), 3 * s * s * (1 - s), s * s * s};
+    double bt[4] = {(1 - t) * (1 - t) * (1 - t), 3 * t * (1 - t) * (1 - t), 3 * t * t * (1 - t), t * t * t};
+    out[0] = out[1] = out[2] = 0;
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++)
+            for (int c = 0; c < 3; c++)
+                out[c] += bs[i] * bt[j] * b[3 * (4 * j + i) + c];
+}
+
+/* Random bicubic nets (and one with a collapsed edge, like the teapot's lid)
+ * become a cage whose middle faces reproduce them: the B-spline points map
+ * back to the Bézier points by the forward basis change, and Bfr's limit
+ * at (u, v) on face TSR_SUBD_BEZIER_FACE(p) is the Bézier point at (s, t) =
+ * (u, v) (a swapped or mirrored parameterisation, or a wrong inverse, is
+ * off by the patch's size). */
+TEST(bezier_cage_reproduces_patches)
+{
+    enum { NP = 5 };
+    double ctrl[48 * NP];
+    uint64_t seed = 12345;
+    for (int k = 0; k < 48 * NP; k++)
+        ctrl[k] = 10 * lcg_uniform(&seed) - 5 + (k % 3 == 0 ? 100 : 0); /* off the origin: relative matters */
+    for (int i = 0; i < 4; i++) /* patch 4: the row t = 0 collapsed to one point */
+        for (int c = 0; c < 3; c++)
+            ctrl[48 * 4 + 3 * i + c] = ctrl[48 * 4 + c];
+    tsr_cage cage;
+    tsr_error err = {0};
+    CHECK_MSG(tsr_subd_cage_from_bezier(ctrl, NP, NULL, &cage, &err) == TSR_OK, "%s", err.message);
+    CHECK(cage.num_points == 16 * NP && cage.num_faces == 9 * NP && cage.num_face_verts == 36 * NP);
+    double scale = 0;
+    for (int k = 0; k < 48 * NP; k++)
+        scale = fmax(scale, fabs(ctrl[k]));
+
+    /* forward change per direction: the segment's Bézier points from Q */
+    static const double M[4][4] = {
+        {1. / 6, 4. / 6, 1. / 6, 0}, {0, 4. / 6, 2. / 6, 0}, {0, 2. / 6, 4. / 6, 0}, {0, 1. / 6, 4. / 6, 1. / 6}};
+    double back = 0;
+    for (int p = 0; p < NP; p++)
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 4; i++)
+                for (int c = 0; c < 3; c++) {
+                    double sum = 0;
+                    for (int l = 0; l < 4; l++)
+                        for (int k = 0; k < 4; k++)
+                            sum += M[i][k] * M[j][l] * cage.points[3 * (16 * p + 4 * l + k) + c];
+                    back = fmax(back, fabs(sum - ctrl[48 * p + 3 * (4 * j + i) + c]));
+                }
+    CHECK_MSG(back <= 1e-13 * scale, "forward basis change of the B-spline points: off by %g", back / scale);
+
+    tsr_subd *s = make(&cage, TSR_SUBD_CATMARK);
+    if (!s) {
+        tsr_cage_free(&cage);
+        return;
+    }
+    for (uint32_t f = 0; f < 9 * NP; f++)
+        CHECK_MSG(tsr_subd_face_has_limit(s, f) == (f % 9 == 4), "face %u", f);
+    double worst = 0;
+    int worst_p = -1;
+    for (int p = 0; p < NP; p++) {
+        double uv[2 * 204], pos[3 * 204];
+        static const double corners[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+        memcpy(uv, corners, sizeof corners);
+        for (int k = 8; k < 2 * 204; k++)
+            uv[k] = lcg_uniform(&seed);
+        CHECK(tsr_subd_eval(s, TSR_SUBD_BEZIER_FACE(p), 0, uv, 204, pos, NULL, NULL) == TSR_OK);
+        for (int k = 0; k < 204; k++) {
+            double ref[3];
+            bezier_point(ctrl + 48 * p, uv[2 * k], uv[2 * k + 1], ref);
+            double d = dist3(pos + 3 * k, ref) / scale;
+            if (d > worst)
+                worst = d, worst_p = p;
+        }
+    }
+    CHECK_MSG(worst <= 1e-12, "Bfr's middle face off the Bezier patch by %g (relative; patch %d)", worst, worst_p);
+    fprintf(stderr, "  Bfr middle face vs Bezier patch: max relative distance %.3g\n", worst);
+
+    /* with boundary_interp 0 the whole cage is the patches: the middle faces listed alone give the same mesh */
+    tsr_mesh all, mid;
+    tsr_mesh_init(&all, 0, NULL);
+    tsr_mesh_init(&mid, 0, NULL);
+    uint32_t faces[NP];
+    for (uint32_t p = 0; p < NP; p++)
+        faces[p] = TSR_SUBD_BEZIER_FACE(p);
+    CHECK(tsr_subd_tessellate_uniform(s, 5, &all, &err) == TSR_OK);
+    CHECK(tsr_subd_tessellate_uniform_faces(s, 5, faces, NP, &mid, &err) == TSR_OK);
+    CHECK_MSG(mid.triangle_count == NP * 50 && mid.vertex_count == NP * 36, "%u triangles, %u vertices",
+              mid.triangle_count, mid.vertex_count);
+    CHECK(all.triangle_count == mid.triangle_count && all.vertex_count == mid.vertex_count &&
+          !memcmp(all.indices, mid.indices, 3 * sizeof(uint32_t) * mid.triangle_count) &&
+          !memcmp(all.positions, mid.positions, 3 * sizeof(float) * mid.vertex_count));
+    tsr_mesh_free(&all);
+    tsr_mesh_free(&mid);
+    tsr_subd_destroy(s);
+    tsr_cage_free(&cage);
+
+    /* refusals */
+    CHECK(tsr_subd_cage_from_bezier(ctrl, 0, NULL, &cage, &err) == TSR_ERR_EMPTY);
+    CHECK(tsr_subd_cage_from_bezier(NULL, 1, NULL, &cage, &err) == TSR_ERR_ARGUMENT);
+    ctrl[48 * 2 + 7] = NAN;
+    CHECK(tsr_subd_cage_from_bezier(ctrl, NP, NULL, &cage, &err) == TSR_ERR_VALUE && strstr(err.message, "patch 2"));
+    CHECK(cage.points == NULL && cage.num_points == 0);
+}
+
+/* The faces of a list alone: in the list's order, each face's triangles
+ * those of the whole tessellation (the same corners, up to the last bits
+ * of points the two runs evaluate from different faces), and its vertices
+ * welded among the listed faces only. */
+TEST(uniform_faces_subset)
+{
+    cage_buf b;
+    cube(&b);
+    tsr_subd *s = make(&b.c, TSR_SUBD_CATMARK);
+    if (!s)
+        return;
+    static const uint32_t list[3] = {4, 1, 3}; /* left, bottom, back: they meet at vertex 2 */
+    tsr_error err = {0};
+    for (uint32_t r = 1; r <= 6; r++) {
+        tsr_mesh all, sub;
+        tsr_mesh_init(&all, 0, NULL);
+        tsr_mesh_init(&sub, 0, NULL);
+        CHECK(tsr_subd_tessellate_uniform(s, r, &all, &err) == TSR_OK);
+        CHECK_MSG(tsr_subd_tessellate_uniform_faces(s, r, list, 3, &sub, &err) == TSR_OK, "%s", err.message);
+        uint32_t per = 2 * r * r;
+        CHECK_MSG(sub.triangle_count == 3 * per, "rate %u: %u triangles", r, sub.triangle_count);
+        /* three faces pairwise sharing an edge, all three a vertex */
+        CHECK_MSG(sub.vertex_count == 3 * (r + 1) * (r + 1) - 3 * (r + 1) + 1, "rate %u: %u vertices", r,
+                  sub.vertex_count);
+        double worst = 0;
+        for (uint32_t q = 0; q < 3 && sub.triangle_count == 3 * per; q++)
+            for (uint32_t t = 0; t < per; t++)
+                for (int a = 0; a < 3; a++) {
+                    const float *x = sub.positions + 3 * sub.indices[3 * (q * per + t) + a];
+                    const float *y = all.positions + 3 * all.indices[3 * (list[q] * per + t) + a];
+                    for (int c = 0; c < 3; c++)
+                        worst = fmax(worst, fabs((double)x[c] - y[c]));
+                }
+        CHECK_MSG(worst <= 1e-6, "rate %u: listed faces' triangles off the whole tessellation's by %g", r, worst);
+        tsr_mesh_free(&sub);
+        /* every face, in order: the whole tessellation, bit for bit */
+        static const uint32_t every[6] = {0, 1, 2, 3, 4, 5};
+        tsr_mesh_init(&sub, 0, NULL);
+        CHECK(tsr_subd_tessellate_uniform_faces(s, r, every, 6, &sub, &err) == TSR_OK);
+        CHECK(sub.triangle_count == all.triangle_count && sub.vertex_count == all.vertex_count &&
+              !memcmp(sub.indices, all.indices, 3 * sizeof(uint32_t) * all.triangle_count) &&
+              !memcmp(sub.positions, all.positions, 3 * sizeof(float) * all.vertex_count));
+        tsr_mesh_free(&sub);
+        tsr_mesh_free(&all);
+    }
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    static const uint32_t bad[2] = {2, 6}, twice[3] = {2, 0, 2};
+    CHECK(tsr_subd_tessellate_uniform_faces(s, 3, bad, 2, &m, &err) == TSR_ERR_ARGUMENT &&
+          strstr(err.message, "face 6"));
+    CHECK(tsr_subd_tessellate_uniform_faces(s, 3, twice, 3, &m, &err) == TSR_ERR_ARGUMENT &&
+          strstr(err.message, "twice"));
+    CHECK(tsr_subd_tessellate_uniform_faces(s, 0, list, 3, &m, &err) == TSR_ERR_ARGUMENT);
+    CHECK(tsr_subd_tessellate_uniform_faces(s, 3, NULL, 1, &m, &err) == TSR_ERR_ARGUMENT);
+    CHECK(tsr_subd_tessellate_uniform_faces(s, 3, NULL, 0, &m, &err) == TSR_OK);
+    CHECK(m.vertex_count == 0 && m.triangle_count == 0);
+    tsr_mesh_free(&m);
+    tsr_subd_destroy(s);
+}
+
 TEST_MAIN(T(bilinear_quad_is_bilinear_interpolation), T(bilinear_ngon_subpatches), T(planar_grid_stays_in_plane),
           T(regular_face_is_bicubic_bspline), T(cube_limit_values_and_symmetry), T(holes_and_boundaries_have_no_limit),
           T(shared_edges_agree), T(bounds_contain_samples), T(bad_cages_refused), T(degenerate_patch_corner_normal),
-          T(uniform_tessellation_closed), T(data_osd_shapes))
+          T(uniform_tessellation_closed), T(bezier_cage_reproduces_patches), T(uniform_faces_subset),
+          T(data_osd_shapes))
