@@ -240,7 +240,11 @@ typedef struct tsr_validation {
     uint32_t duplicate_triangles;  /* same three vertices as another */
     uint32_t nonmanifold_edges;    /* used by more than two triangles */
     uint32_t misoriented_edges;    /* two triangles traverse it the same way */
-    uint32_t t_junctions;          /* vertex inside another triangle's edge */
+    uint32_t t_junctions;          /* vertex inside an open (one triangle) or
+                                      non-manifold edge of another triangle;
+                                      not inside an edge two triangles
+                                      share: no gap there (coincident
+                                      sheets) */
     uint32_t coincident_vertices;  /* distinct indices at one position */
     uint32_t downward_triangles;   /* normal z <= 0 (counted when expect_up) */
     uint32_t boundary_edges;

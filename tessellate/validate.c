@@ -472,15 +472,18 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                             }
                         }
             }
-            /* T-junctions: for each undirected edge (visited from its
-             * lower-numbered half-edge or its boundary half-edge), the
+            /* T-junctions: for each open or non-manifold edge, the
              * vertices in the cells of its inflated bounding box. When the
-             * box covers more cells than there are vertices, scan all. */
+             * box covers more cells than there are vertices, scan all. An
+             * edge two triangles share closes the surface there: a vertex
+             * on it (of a coincident sheet: a surface folded onto itself,
+             * back-to-back faces) leaves no gap, and a real T-junction
+             * always leaves its long edge open on one side. */
             for (uint32_t h = 0; h < he.count; h++) {
                 uint32_t a = he_from(&sub, h), b = he_to(&sub, h), tw = he.twin[h];
                 if (a == b)
                     continue;
-                if (tw != TSR_NO_TWIN && tw != TSR_NONMANIFOLD && tw < h)
+                if (tw != TSR_NO_TWIN && tw != TSR_NONMANIFOLD)
                     continue;
                 const float *pa = m->positions + 3 * (size_t)a, *pb = m->positions + 3 * (size_t)b;
                 float bl[3], bh[3];

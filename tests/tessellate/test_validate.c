@@ -75,6 +75,39 @@ TEST(nonmanifold_edge)
     tsr_mesh_free(&m);
 }
 
+TEST(coincident_sheets_no_t_junction)
+{
+    /* A closed two-sided square: the front as two triangles along the
+     * diagonal (0,0)-(2,2), the back, facing the other way, as a fan about
+     * (1, 1), which lies on the front's diagonal. Every edge is shared by
+     * two triangles: no gap anywhere, so no T-junction, though the centre
+     * vertex lies inside the diagonal. */
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    float pts[][3] = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {2, 2, 0}, {1, 1, 0}};
+    for (int i = 0; i < 5; i++)
+        tsr_mesh_add_vertex(&m, pts[i], NULL, NULL);
+    tsr_mesh_add_triangle(&m, 0, 1, 3);
+    tsr_mesh_add_triangle(&m, 0, 3, 2);
+    tsr_mesh_add_triangle(&m, 1, 0, 4);
+    tsr_mesh_add_triangle(&m, 3, 1, 4);
+    tsr_mesh_add_triangle(&m, 2, 3, 4);
+    tsr_mesh_add_triangle(&m, 0, 2, 4);
+    tsr_validation v = validate(&m, false);
+    CHECK(v.t_junctions == 0);
+    CHECK(v.boundary_edges == 0);
+    CHECK(v.nonmanifold_edges == 0 && v.misoriented_edges == 0);
+    /* the front's diagonal split at the centre on one side only: the front
+     * becomes (0,1,3) and (0,4,2), (4,3,2): the edge 0-3 is open now and
+     * the centre vertex lies inside it, a real T-junction */
+    m.indices[3] = 0, m.indices[4] = 4, m.indices[5] = 2;
+    tsr_mesh_add_triangle(&m, 4, 3, 2);
+    v = validate(&m, false);
+    CHECK(v.t_junctions == 1);
+    CHECK(v.first_t_junction[0] == 4);
+    tsr_mesh_free(&m);
+}
+
 TEST(t_junction)
 {
     /* Left: one square as two triangles; right: two squares stacked, each
@@ -253,6 +286,7 @@ TEST(random_grids_with_one_defect)
     }
 }
 
-TEST_MAIN(T(grid_is_valid), T(flipped_triangle), T(nonmanifold_edge), T(t_junction), T(t_junction_in_3d_long_edge),
+TEST_MAIN(T(grid_is_valid), T(flipped_triangle), T(nonmanifold_edge), T(coincident_sheets_no_t_junction), T(t_junction),
+          T(t_junction_in_3d_long_edge),
           T(degenerate_and_duplicate), T(closed_tetrahedron), T(holes_count_loops), T(coincident_vertices_make_a_crack),
           T(bad_index_and_nan_position), T(random_grids_with_one_defect))
