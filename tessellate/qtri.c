@@ -1959,7 +1959,46 @@ static double clampd(double v, double lo, double hi)
     return v < lo ? lo : v > hi ? hi : v;
 }
 
-/* Splits the pieces at the points and crossings found by a build. */
+/* The part of piece pi around parameter t (0 at its end a, 1 at b)
+ * between the points that split it, sp[0..n) sorted by split_cmp: its
+ * ends, the lower vertex id first. */
+static void sub_piece(const qt *q, const qsplit *sp, size_t n, uint32_t pi, double t, uint32_t e[2])
+{
+    const qpiece *p = &q->pc[pi];
+    size_t lo = 0, hi = n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (sp[mid].p < pi)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    uint32_t u = p->a, w = p->b;
+    for (size_t i = lo; i < n && sp[i].p == pi; i++) {
+        if (sp[i].t <= t)
+            u = sp[i].v;
+        else {
+            w = sp[i].v;
+            break;
+        }
+    }
+    e[0] = u < w ? u : w;
+    e[1] = u < w ? w : u;
+}
+
+/* Splits the pieces at the points and crossings found by a build. A
+ * crossing is computed from the parts of the two pieces between the points
+ * that split them in this round, each from its lower vertex id, the part
+ * with the lower ids first, so that it depends on those parts alone: two
+ * collinear overlapping pieces, one split at the other's end inside it,
+ * become one piece there (segments counted twice, which the even-odd rule
+ * does not count), and a third piece crossing both must cross that one
+ * piece at one vertex. Computed from each whole piece, the two crossings
+ * fell an ulp apart, the pieces stayed apart, two chains with slivers or
+ * fallback cells between them, each counted by the region: crossing them
+ * cost two where the Delaunay method, whose later segment follows the
+ * earlier's chain, counts none, and a region behind them reached at depth
+ * one from elsewhere was kept. */
 static tsr_status apply_interactions(qt *q)
 {
     qsort(q->it, q->nit, sizeof *q->it, inter_cmp);
@@ -1967,23 +2006,38 @@ static tsr_status apply_interactions(qt *q)
     qpiece *np = NULL;
     if (!sp)
         return q->status = TSR_ERR_NOMEM;
-    size_t ns = 0;
-    for (size_t i = 0; i < q->nit; i++) {
+    size_t ns = 0, n0;
+    for (size_t i = 0; i < q->nit && q->it[i].kind == 0; i++) { /* the points first (inter_cmp) */
         const qinter *it = &q->it[i];
         if (i && inter_cmp(it, it - 1) == 0)
             continue;
         const qpiece *p = &q->pc[it->p];
-        const double *A = V(q, p->a), *B = V(q, p->b);
-        if (it->kind == 0) {
-            sp[ns++] = (qsplit){it->p, it->other, along(A, B, V(q, it->other))};
+        sp[ns++] = (qsplit){it->p, it->other, along(V(q, p->a), V(q, p->b), V(q, it->other))};
+    }
+    qsort(sp, ns, sizeof *sp, split_cmp);
+    n0 = ns;
+    for (size_t i = 0; i < q->nit; i++) {
+        const qinter *it = &q->it[i];
+        if (it->kind == 0 || (i && inter_cmp(it, it - 1) == 0))
             continue;
-        }
-        const qpiece *r = &q->pc[it->other];
-        double a[2] = {A[0], A[1]}, b[2] = {B[0], B[1]}, cc[2], dd[2];
-        memcpy(cc, V(q, r->a), sizeof cc);
-        memcpy(dd, V(q, r->b), sizeof dd);
-        double ux = b[0] - a[0], uy = b[1] - a[1], vx = dd[0] - cc[0], vy = dd[1] - cc[1];
+        const qpiece *p = &q->pc[it->p], *r = &q->pc[it->other];
+        const double *A = V(q, p->a), *B = V(q, p->b), *C = V(q, r->a), *D = V(q, r->b);
+        /* where along each piece, roughly: which part of it crosses */
+        double ux = B[0] - A[0], uy = B[1] - A[1], vx = D[0] - C[0], vy = D[1] - C[1];
         double den = ux * vy - uy * vx;
+        double tp = ((C[0] - A[0]) * vy - (C[1] - A[1]) * vx) / den;
+        double tr = ((C[0] - A[0]) * uy - (C[1] - A[1]) * ux) / den;
+        uint32_t e[2][2];
+        sub_piece(q, sp, n0, it->p, tp, e[0]);
+        sub_piece(q, sp, n0, it->other, tr, e[1]);
+        int f = e[1][0] < e[0][0] || (e[1][0] == e[0][0] && e[1][1] < e[0][1]);
+        double a[2], b[2], cc[2], dd[2];
+        memcpy(a, V(q, e[f][0]), sizeof a);
+        memcpy(b, V(q, e[f][1]), sizeof b);
+        memcpy(cc, V(q, e[!f][0]), sizeof cc);
+        memcpy(dd, V(q, e[!f][1]), sizeof dd);
+        ux = b[0] - a[0], uy = b[1] - a[1], vx = dd[0] - cc[0], vy = dd[1] - cc[1];
+        den = ux * vy - uy * vx;
         double t = ((cc[0] - a[0]) * vy - (cc[1] - a[1]) * vx) / den;
         if (!(t >= 0))
             t = 0;

@@ -834,6 +834,52 @@ TEST(even_odd_parity_of_overlaps)
     }
 }
 
+/* The fuzz finds quadtree_evenodd_region_kept_where_delaunay_keeps_none and
+ * its hole seed sibling, cut down: segment 0 runs along y = x from
+ * (-16, -16) to (8, 8), segment 2 from (5, 5) back to (-16, -16) along it,
+ * and segment 1 crosses both; segment 3 joins the crossing segment's end
+ * to (5, 5). The pair tests split segment 0 at (5, 5), so both cover one
+ * piece there, counted twice: the even-odd rule does not count it, nothing
+ * is enclosed, and the Delaunay method keeps nothing. The crossing was
+ * computed once from each whole segment, two vertices an ulp apart: the
+ * two halves stayed two chains (90 fallback cells along them), crossing
+ * them cost two, and the triangle between segments 1, 3 and the line,
+ * reached across segment 1 alone, was kept (area 39.06). */
+TEST(even_odd_overlapping_segments_crossed_at_one_vertex)
+{
+    static const double xy[] = {5, 5, 8, 0, 8, 8, -16, 3, -16, -16};
+    static const uint32_t seg[] = {4, 2, 1, 3, 0, 4, 3, 0};
+    tsr_pslg in = {xy, 5, seg, 4, NULL, 0};
+    if (!delaunay_available())
+        SKIP("the Delaunay method is not available yet");
+    for (int r = 0; r < 2; r++) {
+        tsr_tri_options o = {.region = r ? TSR_REGION_ENCLOSED : TSR_REGION_EVEN_ODD};
+        double area[2] = {0, 0};
+        uint32_t crossings[2] = {0, 0};
+        for (int m = 0; m < 2; m++) {
+            tsr_triangulation t;
+            tsr_error err;
+            o.method = m ? TSR_TRI_QUADTREE : TSR_TRI_DELAUNAY;
+            CHECK_MSG(tsr_triangulate(&in, &o, &t, NULL, &err) == TSR_OK, "%s", err.message);
+            for (uint32_t i = 0; i < t.nt; i++) {
+                const double *a = t.xy + 2 * t.tri[3 * i], *b = t.xy + 2 * t.tri[3 * i + 1];
+                const double *c = t.xy + 2 * t.tri[3 * i + 2];
+                area[m] += 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+            }
+            crossings[m] = t.intersections;
+            CHECK(!t.fell_back);
+            tsr_tri_check c;
+            CHECK(tsr_triangulation_check(&in, &o, &t, &c) == TSR_OK);
+            CHECK_MSG(c.ok, "region %d, method %d: checker: %s", (int)o.region, m, c.first_problem);
+            tsr_triangulation_free(&t);
+        }
+        CHECK_MSG(fabs(area[1] - area[0]) <= 1e-12 * 64, "region %d: quadtree kept %.17g, Delaunay %.17g",
+                  (int)o.region, area[1], area[0]);
+        CHECK_MSG(crossings[1] == 1 && crossings[0] == 1, "region %d: %u crossings (Delaunay %u), not 1",
+                  (int)o.region, crossings[1], crossings[0]);
+    }
+}
+
 /* Points on a small lattice joined at random: duplicates, collinear
  * overlaps, points inside segments, crossings at lattice points and
  * between them; with the default depth and with a shallow one (many
@@ -1115,5 +1161,6 @@ TEST_MAIN(T(single_triangle), T(round_coordinates_square_with_hole), T(star_poly
           T(vertex_on_segment_and_collinear_overlap), T(duplicates_and_degenerate_segments),
           T(vertex_near_cell_corner_and_grid_lines), T(high_degree_vertex), T(max_area),
           T(near_coincident_features_fall_back), T(segment_hugging_square_side_beside_fallback_cell),
-          T(even_odd_parity_of_overlaps), T(lattice_segments_degenerate), T(unsupported_inputs),
+          T(even_odd_parity_of_overlaps), T(even_odd_overlapping_segments_crossed_at_one_vertex),
+          T(lattice_segments_degenerate), T(unsupported_inputs),
           T(region_from_cells_matches_general_pass), T(allocator_failures))
