@@ -839,6 +839,7 @@ typedef struct nodeval {
     float cam;     /* with a camera: pixels per unit of error (its
                       tsr_camera_box_factor, rounded up); else 1 */
     uint8_t force; /* split it: a finer neighbour's stitched tile needs it */
+    uint8_t level;
 } nodeval;
 
 /* The nets of the four children of one node (level l - 1) of one piece,
@@ -1028,6 +1029,7 @@ static const nodeval *node_info(pctx *c, tsr_qnode n)
         c->cur = c->nv[*have];
     } else {
         node_compute(c, n, &c->cur);
+        c->cur.level = n.level;
         c->cur.cam = c->opt->camera ? f_up(tsr_camera_box_factor(c->opt->camera, c->cur.lo, c->cur.hi,
                                                                    c->surf.error_isotropic))
                                     : 1;
@@ -1134,23 +1136,35 @@ static bool refine(void *user, const tsr_surface *s, tsr_qnode n)
 }
 
 /* A Bézier piece's tile size N: of tile, tile + 2, ... up to maxN (4 tile
- * - 2), the one whose selection (without the stitched check) has the
- * fewest quads (ties: the smallest). The rates N 2^l of the pieces then
- * step by (N + 2) / N, not by 2, and linked edges of different rates meet through fans
- * (emit_piece). Node values are per unit tile, so the memo serves every
- * N. */
+ * - 2), the one whose selection (without the stitched check and the 2:1
+ * balance) has the fewest quads (ties: the smallest). The rates N 2^l of
+ * the pieces then step by (N + 2) / N, not by 2, and linked edges of
+ * different rates meet through fans (emit_piece). One selection at N =
+ * tile computes the values of every node any larger N visits (node values
+ * are per unit tile; a node's error only falls with depth, so a larger N
+ * splits a subset of the nodes tile splits): each N's split count then
+ * comes from the memo, and its leaves are 1 + 3 splits. */
 static tsr_status choose_tile(pctx *c, uint32_t tile, uint32_t maxN)
 {
+    c->N = tile;
+    c->inv_n2 = 1.0 / ((double)tile * tile);
+    c->cur_key = 0;
+    if (tile >= maxN)
+        return TSR_OK;
+    tsr_status st = tsr_quadtree_select(c->qt, refine, c);
+    if (st != TSR_OK)
+        return st;
     uint64_t best = UINT64_MAX;
-    uint32_t bestN = tile;
-    for (uint32_t N = tile; N <= maxN && tile < maxN; N += 2) {
+    uint32_t bestN = tile, deepest = c->surf.levels - 1;
+    for (uint32_t N = tile; N <= maxN; N += 2) {
         c->N = N;
         c->inv_n2 = 1.0 / ((double)N * N);
-        c->cur_key = 0;
-        tsr_status st = tsr_quadtree_select(c->qt, refine, c);
-        if (st != TSR_OK)
-            return st;
-        uint64_t cost = (uint64_t)tsr_quadtree_leaf_count(c->qt) * N * N;
+        uint64_t splits = 0;
+        for (uint32_t k = 0; k < c->nnv; k++) {
+            const nodeval *v = &c->nv[k];
+            splits += v->level < deepest && node_measure(c, v, node_d(c, v, 0)) > c->tol;
+        }
+        uint64_t cost = (1 + 3 * splits) * N * N;
         if (cost < best) {
             best = cost;
             bestN = N;
