@@ -31,18 +31,23 @@
  *    entered once per segment) over a vertex -> neighbours adjacency, so
  *    nearly coincident segments, whose chains are both within tolerance,
  *    cannot mislead it. Where the kept region may be smaller than the
- *    hull (not HULL, or hole seeds), the chain may have gaps: from p it
- *    may jump to the next vertex q on the segment when no kept triangle at
- *    p covers the direction to b and none at q covers the direction back
- *    to p (the piece lies outside the region). The candidates q are the
- *    used vertices near the line in order of progress, then b; one that
- *    refuses is passed over only when it lies strictly off the segment's
- *    line and the segment meets the interior of none of its kept triangles
- *    (both exact): it is near the line only within the tolerance, as a
- *    crossing of a segment beside this one, whose triangles may well cover
- *    the direction back while the segment passes them by. A gap whose two
- *    ends are outside the region but whose middle crosses a kept triangle
- *    through edge interiors only is not detected here.
+ *    hull (not HULL, or hole seeds), the chain may have gaps: from p,
+ *    when no kept triangle at p covers the direction to b, it may jump to
+ *    a vertex q near the line and further along it (the used vertices so
+ *    placed in order of progress, then b; the first that qualifies) when
+ *    the straight piece p-q lies outside the kept region, decided exactly
+ *    (gap_clear): no kept triangle at p or q covers its direction (closed
+ *    wedges, so a kept edge along it counts), no kept triangle's interior
+ *    meets it, and no used vertex strictly between them lying exactly on
+ *    the segment's line or on the piece has a kept triangle covering the
+ *    direction to p or q. The vertices the piece merely passes, within the
+ *    tolerance, do not refuse it: a crossing of a segment beside this one,
+ *    or the other rounding of one crossing, whose sliver the segment
+ *    enters by an ulp or whose triangles cover the direction back, while
+ *    the piece from p onwards stays outside. The piece stands for the
+ *    segment within the tolerance: a kept sliver thinner than that between
+ *    the two is not seen, as a chain vertex off the line by as much is
+ *    accepted.
  *  - Area: the sum of triangle areas (Neumaier's compensated sum) against
  *    an expected area computed from the input alone, when it can be:
  *      HULL, no hole seeds: the convex hull of the points (monotone chain
@@ -637,6 +642,9 @@ typedef struct ck {
     uint32_t *seen, stamp;    /* vertex -> last search that entered it */
     struct cand *cand;        /* a gap's candidate ends */
     size_t ncand, cand_cap;
+    uint32_t *corr;           /* kept triangles near the segment searched */
+    size_t ncorr, corr_cap;
+    uint32_t corr_stamp;      /* the search corr was gathered for (0: none) */
     bool *boundary;           /* vertex on an edge of one triangle */
     uint32_t *hull_memo;      /* 2 per vertex: hull edges through it */
     double maxabs;            /* largest output coordinate magnitude */
@@ -658,6 +666,7 @@ static void ck_free(ck *c)
     free(c->stack);
     free(c->seen);
     free(c->cand);
+    free(c->corr);
     free(c->boundary);
     free(c->hull_memo);
 }
@@ -796,17 +805,84 @@ static bool meets_interior(const ck *c, uint32_t t, const double *a, const doubl
     return pos > 0 && neg > 0;
 }
 
-/* Does the segment of l pass vertex q by, off its kept triangles? True
- * when q lies strictly off the segment's line (exact) and no kept triangle
- * at q has its interior meeting the segment: q is near the line only
- * within the tolerance, and nothing of the region at q is on the segment. */
-static bool passes_by(const ck *c, const line *l, uint32_t q)
+/* The kept (ccw) triangles near the segment of l, in c->corr, gathered
+ * once per search: those whose bounding box meets the segment's, grown by
+ * its tolerance, and that do not lie wholly beyond twice the tolerance on
+ * one side of its line (a floating-point filter with room to spare: a gap
+ * runs between vertices within the tolerance). False when out of memory. */
+static bool corridor(ck *c, const line *l)
 {
-    if (tsr_orient2d(l->a, l->b, vxy(c, q)) == 0)
+    if (c->corr_stamp == c->stamp)
+        return true;
+    c->corr_stamp = c->stamp;
+    c->ncorr = 0;
+    double x0 = fmin(l->a[0], l->b[0]) - l->tol, x1 = fmax(l->a[0], l->b[0]) + l->tol;
+    double y0 = fmin(l->a[1], l->b[1]) - l->tol, y1 = fmax(l->a[1], l->b[1]) + l->tol;
+    double far = 2 * l->tol * l->len; /* in units of the cross product */
+    for (uint32_t t = 0; t < c->out->nt; t++) {
+        if (c->tri_state[t] != 2)
+            continue;
+        const uint32_t *v = c->out->tri + 3 * (size_t)t;
+        int above = 0, below = 0;
+        double tx0 = INFINITY, tx1 = -INFINITY, ty0 = INFINITY, ty1 = -INFINITY;
+        for (int k = 0; k < 3; k++) {
+            const double *q = vxy(c, v[k]);
+            tx0 = fmin(tx0, q[0]), tx1 = fmax(tx1, q[0]), ty0 = fmin(ty0, q[1]), ty1 = fmax(ty1, q[1]);
+            double cr = l->dx * (q[1] - l->a[1]) - l->dy * (q[0] - l->a[0]);
+            above += cr > far;
+            below += cr < -far;
+        }
+        if (above == 3 || below == 3 || tx1 < x0 || tx0 > x1 || ty1 < y0 || ty0 > y1)
+            continue;
+        if (c->ncorr == c->corr_cap) {
+            size_t cap = c->corr_cap ? 2 * c->corr_cap : 256;
+            uint32_t *n = realloc(c->corr, cap * sizeof *n);
+            if (!n)
+                return false;
+            c->corr = n;
+            c->corr_cap = cap;
+        }
+        c->corr[c->ncorr++] = t;
+    }
+    return true;
+}
+
+/* May the search jump from p over a gap to candidate k (of c->cand)? The
+ * straight piece p-q between the two output vertices (both within the
+ * segment's tolerance) must lie outside the kept region, decided exactly:
+ * no kept triangle at p or q covers its direction (closed wedges, so a
+ * kept edge along it counts), no kept triangle's interior meets it, and no
+ * used vertex between them (strictly further along than p, short of q)
+ * lying exactly on the segment's line or on the piece has a kept triangle
+ * covering the direction to p or to q (the segment would run along a kept
+ * edge, or into the region, there). Vertices the piece only passes near,
+ * within the tolerance, need not refuse it: the piece itself is tested. */
+static bool gap_clear(ck *c, const line *l, uint32_t p, size_t k)
+{
+    uint32_t q = c->cand[k].v;
+    const double *pp = vxy(c, p), *qq = vxy(c, q);
+    if (covers(c, p, qq) || (c->used[q] && covers(c, q, pp)))
         return false;
-    for (uint32_t i = c->vt_off[q]; i < c->vt_off[q + 1]; i++)
-        if (meets_interior(c, c->vt[i] / 3, l->a, l->b))
+    double x0 = fmin(pp[0], qq[0]), x1 = fmax(pp[0], qq[0]), y0 = fmin(pp[1], qq[1]), y1 = fmax(pp[1], qq[1]);
+    for (size_t i = 0; i < c->ncorr; i++) {
+        const uint32_t *v = c->out->tri + 3 * (size_t)c->corr[i];
+        const double *a = vxy(c, v[0]), *b = vxy(c, v[1]), *d = vxy(c, v[2]);
+        if (fmax(fmax(a[0], b[0]), d[0]) < x0 || fmin(fmin(a[0], b[0]), d[0]) > x1 ||
+            fmax(fmax(a[1], b[1]), d[1]) < y0 || fmin(fmin(a[1], b[1]), d[1]) > y1)
+            continue;
+        if (meets_interior(c, c->corr[i], pp, qq))
             return false;
+    }
+    for (size_t i = 0; i < c->ncand; i++) {
+        uint32_t r = c->cand[i].v;
+        const double *rr = vxy(c, r);
+        if (r == q || r == p || !c->used[r] || !forward(l, pp, rr) || !forward(l, rr, qq))
+            continue;
+        if (tsr_orient2d(l->a, l->b, rr) != 0 && tsr_orient2d(pp, qq, rr) != 0)
+            continue;
+        if (covers(c, r, pp) || covers(c, r, qq))
+            return false;
+    }
     return true;
 }
 
@@ -877,8 +953,9 @@ static bool push_frame(ck *c, uint32_t v, pos t)
 /* Looks for input segment s as a chain from output vertex va to vb (see
  * the header comment): a depth-first search over listed constrained edges
  * to vertices near the line and further along it, and, where the region
- * allows, gap jumps. Every vertex is entered at most once, so the search
- * costs the neighbourhoods of the vertices near the segment. Returns 1 when
+ * allows, gap jumps (gap_clear; one per vertex). Every vertex is entered
+ * at most once, so the search costs the neighbourhoods of the vertices
+ * near the segment, plus, per gap tried, the kept triangles near it. Returns 1 when
  * found (its vertices recorded as lying on s), 0 when missing (problem
  * noted at the furthest vertex reached), -1 when out of memory. */
 static int walk_segment(ck *c, uint32_t s, uint32_t va, uint32_t vb, bool gaps)
@@ -920,17 +997,16 @@ static int walk_segment(ck *c, uint32_t s, uint32_t va, uint32_t vb, bool gaps)
         if (gaps && !f->gap_done) {
             f->gap_done = true;
             if (!covers(c, f->v, l.b)) {
-                if (!gap_candidates(c, &l, f->v, vb))
+                if (!gap_candidates(c, &l, f->v, vb) || !corridor(c, &l))
                     return -1;
                 bool jumped = false;
                 for (size_t i = 0; i < c->ncand && !jumped; i++) {
                     uint32_t q = c->cand[i].v;
-                    if (c->seen[q] != c->stamp && !(c->used[q] && covers(c, q, vxy(c, f->v)))) {
+                    if (c->seen[q] != c->stamp && gap_clear(c, &l, f->v, i)) {
                         if (!push_frame(c, q, c->cand[i].t))
                             return -1;
                         jumped = true;
-                    } else if (q == vb || !passes_by(c, &l, q))
-                        break;
+                    }
                 }
                 if (jumped)
                     continue;

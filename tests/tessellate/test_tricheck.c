@@ -447,6 +447,98 @@ TEST(enclosed_gap_rejects_segment_through_triangle_at_near_vertex)
     CHECK(strstr(r.first_problem, "input segment 0") != NULL);
 }
 
+TEST(enclosed_gap_passes_sliver_straddling_segment)
+{
+    /* the kept region is the sliver A p q, p and q an ulp either side of
+     * the segment A(0,0)-B(4,0) and 2 ulps apart, all three edges listed:
+     * the segment runs through the sliver (within rounding) and leaves it
+     * between p and q. Each of p, q is the other's gap candidate and
+     * covers the direction back, and the segment meets the sliver's
+     * interior; the straight piece from either to B meets no kept
+     * triangle, so the gap runs from there to B */
+    static double xy[] = {0, 0, 4, 0, 2, 0, 2, 0, 3, -1, 3.6, -1, 3.3, 1};
+    xy[5] = -0x1p-52, xy[7] = 0x1p-52;
+    static uint32_t seg[] = {0, 1};
+    static uint32_t tri[] = {0, 2, 3, 4, 5, 6};
+    static uint32_t edge[] = {0, 2, 2, 3, 0, 3};
+    static uint32_t eseg[] = {0, 0, 0};
+    tsr_pslg in = {xy, 2, seg, 1, NULL, 0};
+    tsr_tri_options opt = {.region = TSR_REGION_ENCLOSED, .method = TSR_TRI_QUADTREE};
+    tsr_triangulation out = output(xy, 4, 2, tri, 1, edge, eseg, 3);
+    tsr_tri_check r = run(&in, &opt, &out);
+    CHECK(r.ok && r.missing_segments == 0);
+    /* a kept triangle beyond, across the segment with its corners far
+     * from it: the segment runs through the region there */
+    out = output(xy, 7, 2, tri, 2, edge, eseg, 3);
+    r = run(&in, &opt, &out);
+    CHECK(!r.ok && r.missing_segments == 1);
+    CHECK(strstr(r.first_problem, "input segment 0") != NULL);
+}
+
+TEST(enclosed_gap_passes_vertex_whose_triangle_segment_clips_behind)
+{
+    /* the chain of A(0,0)-B(8,0) jumps from A to m, an ulp below the
+     * line, and follows m-p, p on it; q, 1e-9 above the line just ahead of
+     * p, has the kept triangle m p q, which covers the direction back to p
+     * and which the segment enters near m (it passes between m and q),
+     * behind p. The piece from p to B meets no kept triangle: the gap
+     * runs from p to B past q */
+    static double xy[] = {0, 0, 8, 0, 1, 0, 1.0000001, 0, 1.0000002, 1e-9, 1, 1};
+    xy[5] = -0x1p-52;
+    static uint32_t seg[] = {0, 1};
+    static uint32_t tri[] = {2, 3, 4, 2, 4, 5};
+    static uint32_t edge[] = {2, 3};
+    static uint32_t eseg[] = {0};
+    tsr_pslg in = {xy, 2, seg, 1, NULL, 0};
+    tsr_tri_options opt = {.region = TSR_REGION_ENCLOSED, .method = TSR_TRI_QUADTREE};
+    tsr_triangulation out = output(xy, 6, 2, tri, 2, edge, eseg, 1);
+    tsr_tri_check r = run(&in, &opt, &out);
+    CHECK(r.ok && r.missing_segments == 0);
+    /* with the chain edge m-p not listed the segment is missing inside */
+    out.nedge = 0;
+    r = run(&in, &opt, &out);
+    CHECK(!r.ok && r.missing_segments == 1);
+}
+
+TEST(enclosed_gap_rejects_segment_through_triangle_between_far_vertices)
+{
+    /* the kept triangle (3,-1) (5,-1) (4,1) lies across the dangling
+     * segment A(0,0)-B(8,0), none of its corners near it: the segment runs
+     * through the region with no constrained edge, though both its ends
+     * are outside and no vertex near it refuses the gap */
+    static double xy[] = {0, 0, 8, 0, 3, -1, 5, -1, 4, 1};
+    static uint32_t seg[] = {0, 1};
+    static uint32_t tri[] = {2, 3, 4};
+    tsr_pslg in = {xy, 2, seg, 1, NULL, 0};
+    tsr_tri_options opt = {.region = TSR_REGION_ENCLOSED, .method = TSR_TRI_QUADTREE};
+    tsr_triangulation out = output(xy, 5, 2, tri, 1, NULL, NULL, 0);
+    tsr_tri_check r = run(&in, &opt, &out);
+    CHECK(!r.ok && r.missing_segments == 1);
+    CHECK(strstr(r.first_problem, "input segment 0") != NULL);
+}
+
+TEST(enclosed_rejects_segment_along_unlisted_kept_edge)
+{
+    /* the kept triangles u v w and y u z have their edges y-u and u-v on
+     * the segment A(0,0)-B(6,0), unlisted: the segment runs along the
+     * region's boundary without constrained edges; the gaps A-y and v-B
+     * alone are outside */
+    static double xy[] = {0, 0, 6, 0, 2, 0, 4, 0, 3, 1, 1, 0, 1.5, 1};
+    static uint32_t seg[] = {0, 1};
+    static uint32_t tri[] = {2, 3, 4, 5, 2, 6};
+    tsr_pslg in = {xy, 2, seg, 1, NULL, 0};
+    tsr_tri_options opt = {.region = TSR_REGION_ENCLOSED, .method = TSR_TRI_QUADTREE};
+    tsr_triangulation out = output(xy, 7, 2, tri, 2, NULL, NULL, 0);
+    tsr_tri_check r = run(&in, &opt, &out);
+    CHECK(!r.ok && r.missing_segments == 1);
+    /* listed, the same edges make the chain */
+    static uint32_t edge[] = {5, 2, 2, 3};
+    static uint32_t eseg[] = {0, 0};
+    out = output(xy, 7, 2, tri, 2, edge, eseg, 2);
+    r = run(&in, &opt, &out);
+    CHECK(r.ok && r.missing_segments == 0);
+}
+
 TEST(accepts_chain_step_back_within_rounding)
 {
     /* the chain of (0,0)-(4,4) passes v1 (2,2) and then v2 an ulp below
@@ -588,7 +680,11 @@ TEST_MAIN(T(accepts_delaunay_rhombus), T(rejects_non_delaunay_edge), T(constrain
           T(accepts_rounded_crossing_point), T(rejects_chain_off_the_segment), T(accepts_splits_next_to_segment_end),
           T(accepts_point_exactly_on_segment), T(enclosed_allows_segment_outside_region),
           T(enclosed_rejects_segment_missing_inside), T(enclosed_gap_passes_vertex_beside_segment),
-          T(enclosed_gap_rejects_segment_through_triangle_at_near_vertex), T(accepts_chain_step_back_within_rounding),
+          T(enclosed_gap_rejects_segment_through_triangle_at_near_vertex),
+          T(enclosed_gap_passes_sliver_straddling_segment),
+          T(enclosed_gap_passes_vertex_whose_triangle_segment_clips_behind),
+          T(enclosed_gap_rejects_segment_through_triangle_between_far_vertices),
+          T(enclosed_rejects_segment_along_unlisted_kept_edge), T(accepts_chain_step_back_within_rounding),
           T(rejects_angle_below_bound), T(small_input_angle_excuses_triangle),
           T(below_resolution_excused_only_when_reported), T(rejects_area_above_bound),
           T(empty_output_of_collinear_points), T(hole_seeds_leave_area_unchecked))
