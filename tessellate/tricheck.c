@@ -622,6 +622,9 @@ static int cmp_hedge(const void *a, const void *b)
     return x->h < y->h ? -1 : x->h > y->h;
 }
 
+/* hull edges remembered per output vertex (features_at) */
+#define HULL_MEMO 4
+
 typedef struct ck {
     const tsr_pslg *in;
     const tsr_tri_options *opt;
@@ -646,7 +649,7 @@ typedef struct ck {
     size_t ncorr, corr_cap;
     uint32_t corr_stamp;      /* the search corr was gathered for (0: none) */
     bool *boundary;           /* vertex on an edge of one triangle */
-    uint32_t *hull_memo;      /* 2 per vertex: hull edges through it */
+    uint32_t *hull_memo;      /* HULL_MEMO per vertex: hull edges through it */
     double maxabs;            /* largest output coordinate magnitude */
 } ck;
 
@@ -1094,14 +1097,27 @@ static uint32_t features_at(ck *c, uint32_t v, const double *hull_xy, uint32_t n
         n++;
     }
     /* hull edges: only a vertex on the output's boundary can lie on one;
-     * the (at most two) found are remembered per vertex */
+     * those found (at most HULL_MEMO) are remembered per vertex. A hull
+     * corner's own two edges go first: within the tolerance it may lie on
+     * a neighbour's too (beside a hull edge 1e-11 long), and that one must
+     * not crowd its own out */
     if (nh == 0 || !c->boundary[v])
         return n;
-    uint32_t *memo = c->hull_memo + 2 * (size_t)v;
+    uint32_t *memo = c->hull_memo + HULL_MEMO * (size_t)v;
     if (memo[0] == UINT32_MAX - 1) {
-        memo[0] = memo[1] = UINT32_MAX;
+        uint32_t k = 0;
         const double *q = vxy(c, v);
-        for (uint32_t h = 0, k = 0; h < nh && k < 2; h++) {
+        for (uint32_t h = 0; h < nh && k == 0; h++) {
+            const double *a = hull_xy + 2 * (size_t)h;
+            if (a[0] == q[0] && a[1] == q[1]) {
+                memo[k++] = h;
+                if ((h + nh - 1) % nh != h)
+                    memo[k++] = (h + nh - 1) % nh;
+            }
+        }
+        for (uint32_t h = 0; h < nh && k < HULL_MEMO; h++) {
+            if ((k > 0 && memo[0] == h) || (k > 1 && memo[1] == h))
+                continue;
             const double *a = hull_xy + 2 * (size_t)h, *b = hull_xy + 2 * (size_t)((h + 1) % nh);
             line l;
             line_init(&l, a, b, c->maxabs);
@@ -1113,8 +1129,10 @@ static uint32_t features_at(ck *c, uint32_t v, const double *hull_xy, uint32_t n
             if (line_near(&l, q, &t, &d) && t.ta >= -1e-12 * l.len2 && t.tb >= -1e-12 * l.len2)
                 memo[k++] = h;
         }
+        while (k < HULL_MEMO)
+            memo[k++] = UINT32_MAX;
     }
-    for (int k = 0; k < 2 && memo[k] != UINT32_MAX && n < cap; k++) {
+    for (int k = 0; k < HULL_MEMO && memo[k] != UINT32_MAX && n < cap; k++) {
         f[n].a = hull_xy + 2 * (size_t)memo[k];
         f[n].b = hull_xy + 2 * (size_t)((memo[k] + 1) % nh);
         n++;
@@ -1213,12 +1231,12 @@ static tsr_status run_check(ck *c, geom *g)
     qsort(he, nh, sizeof *he, cmp_hedge);
     c->edges = malloc((nh + 1) * sizeof *c->edges);
     c->boundary = calloc((size_t)nv + 1, sizeof *c->boundary);
-    c->hull_memo = malloc((2 * (size_t)nv + 2) * sizeof *c->hull_memo);
+    c->hull_memo = malloc((HULL_MEMO * (size_t)nv + HULL_MEMO) * sizeof *c->hull_memo);
     if (!c->boundary || !c->hull_memo) {
         free(he);
         return TSR_ERR_NOMEM;
     }
-    for (size_t i = 0; i < 2 * (size_t)nv; i++)
+    for (size_t i = 0; i < HULL_MEMO * (size_t)nv; i++)
         c->hull_memo[i] = UINT32_MAX - 1;
     c->ncons = 0;
     c->cons = malloc(((size_t)out->nedge + 1) * sizeof *c->cons);
