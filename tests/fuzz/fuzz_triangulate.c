@@ -20,7 +20,10 @@
  * Checked: no allocation above 256 MiB; valid input gives TSR_OK (or
  * NOMEM), invalid input TSR_ERR_ARGUMENT with a message; every result
  * passes fuzz_check_triangulation (fuzz.h), the independent checker among
- * others. max_steiner is 4000 so that every run stays short. */
+ * others; a quadtree result keeps the area the Delaunay method keeps on
+ * the same input (within 1e-8 of the box diagonal squared: slivers of
+ * rounding), which the checker cannot see where segments dangle.
+ * max_steiner is 4000 so that every run stays short. */
 #include "fuzz.h"
 
 #include <math.h>
@@ -67,6 +70,18 @@ static double coordinate(uint8_t b, bool invalid, bool *bad)
     default:
         return k;
     }
+}
+
+/* Sum of the kept triangles' areas. */
+static double kept_area(const tsr_triangulation *t)
+{
+    double a = 0;
+    for (uint32_t k = 0; k < t->nt; k++) {
+        const double *p = t->xy + 2 * (size_t)t->tri[3 * k], *q = t->xy + 2 * (size_t)t->tri[3 * k + 1],
+                     *r = t->xy + 2 * (size_t)t->tri[3 * k + 2];
+        a += 0.5 * ((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]));
+    }
+    return a;
 }
 
 int fuzz_triangulate(const uint8_t *data, size_t size)
@@ -121,6 +136,33 @@ int fuzz_triangulate(const uint8_t *data, size_t size)
         fuzz_fail("triangulate: valid input refused, status %d: %s", (int)s, err.message);
 
     fuzz_check_triangulation(&in, &o, &t, "triangulate");
+    /* the quadtree method keeps the Delaunay method's region: same area
+     * (within slivers of rounding), whatever the refinement */
+    if (o.method == TSR_TRI_QUADTREE && t.nt) {
+        tsr_tri_options od = o;
+        od.method = TSR_TRI_DELAUNAY;
+        tsr_triangulation td;
+        size_t limit2 = (size_t)256 << 20;
+        tsr_allocator alloc2;
+        fuzz_limited_allocator(&alloc2, &limit2);
+        tsr_status sd = tsr_triangulate(&in, &od, &td, &alloc2, &err);
+        if (sd == TSR_OK) {
+            double aq = kept_area(&t), ad = kept_area(&td), lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+            for (uint32_t i = 0; i < nv; i++)
+                for (int k = 0; k < 2; k++) {
+                    lo[k] = fmin(lo[k], xy[2 * i + k]);
+                    hi[k] = fmax(hi[k], xy[2 * i + k]);
+                }
+            double d2 = (hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]);
+            if (fabs(aq - ad) > 1e-8 * d2)
+                fuzz_fail("triangulate: quadtree keeps area %.17g, the Delaunay method %.17g (box diagonal^2 %g)", aq,
+                          ad, d2);
+            tsr_triangulation_free(&td);
+        } else if (sd != TSR_ERR_NOMEM) {
+            fuzz_fail("triangulate: the Delaunay method refused what the quadtree took: status %d: %s", (int)sd,
+                      err.message);
+        }
+    }
     tsr_triangulation_free(&t);
     return 0;
 }
