@@ -13,6 +13,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "patches/ptess.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -885,17 +886,30 @@ static void node_rect(const pctx *c, tsr_qnode n, double r[4])
     (void)c;
 }
 
+/* The next float towards +infinity (dir 1) or -infinity (dir -1) of a
+ * finite f: nextafterf without the call. */
+static inline float f_step(float f, int dir)
+{
+    if (f == 0)
+        return dir > 0 ? FLT_TRUE_MIN : -FLT_TRUE_MIN;
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    u = ((u >> 31) != 0) == (dir > 0) ? u - 1 : u + 1; /* away from zero: +1 */
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
 /* Floats at or beyond a double, on the side asked. */
 static inline float f_up(double x)
 {
     float f = (float)x;
-    return (double)f < x ? nextafterf(f, INFINITY) : f;
+    return (double)f < x && isfinite(f) ? f_step(f, 1) : f;
 }
 
 static inline float f_down(double x)
 {
     float f = (float)x;
-    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+    return (double)f > x && isfinite(f) ? f_step(f, -1) : f;
 }
 
 /* The homogeneous net of a Bézier piece's node: from the cache of its
@@ -1467,6 +1481,58 @@ static uint32_t vertex_of(builder *b, lpoint q, const double *pre)
     return *slot;
 }
 
+/* The tensor-product sums of tile_positions: per row j the column sums
+ * Q_a = sum_b Bv_b w_ab P_ab (homogeneous), then per used vertex sum_a
+ * Bu_a Q_a. Inlined, so that constant degrees unroll. */
+static inline void bez_tile(const double *C, const double *W, int du, int dv, const double *Bu, const double *Bv,
+                            uint32_t N, const uint8_t *used, double *P)
+{
+    uint32_t row = N + 1;
+    int nu = du + 1;
+    for (uint32_t j = 0; j <= N; j++) {
+        double Q[TSR_PATCH_MAX_DEGREE + 1][4];
+        const double *bv = Bv + (size_t)j * (TSR_PATCH_MAX_DEGREE + 1);
+        for (int a2 = 0; a2 < nu; a2++) {
+            double q0 = 0, q1 = 0, q2 = 0, q3 = 0;
+            for (int b2 = 0; b2 <= dv; b2++) {
+                double w = W ? W[b2 * nu + a2] : 1, f = bv[b2] * w;
+                const double *c = C + 3 * (b2 * nu + a2);
+                q0 += f * c[0];
+                q1 += f * c[1];
+                q2 += f * c[2];
+                q3 += f;
+            }
+            Q[a2][0] = q0;
+            Q[a2][1] = q1;
+            Q[a2][2] = q2;
+            Q[a2][3] = q3;
+        }
+        for (uint32_t i = 0; i <= N; i++) {
+            if (!used[j * row + i])
+                continue;
+            const double *bu = Bu + (size_t)i * (TSR_PATCH_MAX_DEGREE + 1);
+            double x = 0, y = 0, z = 0, w = 0;
+            for (int a2 = 0; a2 < nu; a2++) {
+                x += bu[a2] * Q[a2][0];
+                y += bu[a2] * Q[a2][1];
+                z += bu[a2] * Q[a2][2];
+                if (W)
+                    w += bu[a2] * Q[a2][3];
+            }
+            double *o = P + 3 * (j * row + i);
+            if (W) {
+                o[0] = x / w;
+                o[1] = y / w;
+                o[2] = z / w;
+            } else {
+                o[0] = x;
+                o[1] = y;
+                o[2] = z;
+            }
+        }
+    }
+}
+
 /* Positions of a leaf's tile vertices (those used set in used) into P
  * (3 per vertex, (N+1)^2): a tensor-product evaluation for a Bézier piece
  * (the Bernstein values of the tile's columns and rows, then per vertex
@@ -1509,50 +1575,10 @@ static bool tile_positions(builder *b, const piece *p, double r[4], uint32_t N, 
             t = r[3];
         bernstein(dv, t, Bv + (size_t)j * (TSR_PATCH_MAX_DEGREE + 1));
     }
-    const double *C = p->bez.ctrl, *W = p->bez.weights;
-    int nu = du + 1;
-    for (uint32_t j = 0; j <= N; j++) {
-        /* the column sums Q_a = sum_b Bv_b w_ab P_ab (homogeneous) */
-        double Q[TSR_PATCH_MAX_DEGREE + 1][4];
-        const double *bv = Bv + (size_t)j * (TSR_PATCH_MAX_DEGREE + 1);
-        for (int a2 = 0; a2 < nu; a2++) {
-            double q0 = 0, q1 = 0, q2 = 0, q3 = 0;
-            for (int b2 = 0; b2 <= dv; b2++) {
-                double w = W ? W[b2 * nu + a2] : 1, f = bv[b2] * w;
-                const double *c = C + 3 * (b2 * nu + a2);
-                q0 += f * c[0];
-                q1 += f * c[1];
-                q2 += f * c[2];
-                q3 += f;
-            }
-            Q[a2][0] = q0;
-            Q[a2][1] = q1;
-            Q[a2][2] = q2;
-            Q[a2][3] = q3;
-        }
-        for (uint32_t i = 0; i <= N; i++) {
-            if (!used[j * row + i])
-                continue;
-            const double *bu = Bu + (size_t)i * (TSR_PATCH_MAX_DEGREE + 1);
-            double x = 0, y = 0, z = 0, w = 0;
-            for (int a2 = 0; a2 < nu; a2++) {
-                x += bu[a2] * Q[a2][0];
-                y += bu[a2] * Q[a2][1];
-                z += bu[a2] * Q[a2][2];
-                w += bu[a2] * Q[a2][3];
-            }
-            double *o = P + 3 * (j * row + i);
-            if (W) {
-                o[0] = x / w;
-                o[1] = y / w;
-                o[2] = z / w;
-            } else {
-                o[0] = x;
-                o[1] = y;
-                o[2] = z;
-            }
-        }
-    }
+    if (!p->bez.weights && du == 3 && dv == 3)
+        bez_tile(p->bez.ctrl, NULL, 3, 3, Bu, Bv, N, used, P); /* constants: unrolled */
+    else
+        bez_tile(p->bez.ctrl, p->bez.weights, du, dv, Bu, Bv, N, used, P);
     b->out->evaluations += row * row;
     return true;
 }

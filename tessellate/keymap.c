@@ -44,7 +44,7 @@ bool tsr_keymap_reserve(tsr_keymap *m, size_t n, const tsr_allocator *a)
 
 uint32_t *tsr_keymap_slot(tsr_keymap *m, uint64_t key, bool *found, const tsr_allocator *a)
 {
-    if ((m->count + 1) * 2 > m->mask + 1 && !rehash(m, m->mask ? 2 * (m->mask + 1) : 1024, a))
+    if ((m->count + 1) * 2 > m->mask + 1 && !rehash(m, m->mask ? 2 * (m->mask + 1) : 16, a))
         return NULL;
     uint64_t k = key + 1;
     size_t h = mix64(k) & m->mask;
