@@ -60,9 +60,20 @@ typedef struct patcache {
     tsr_tile_patterns pat;
     uint8_t *used;       /* per stitch mask, per tile vertex */
     uint64_t used_n[16]; /* how many per mask */
+    uint16_t *on[16];    /* per mask, per triangle: bits 4k .. 4k+3, the tile
+                            edges its edge k (corner k to k + 1) lies on */
+    uint16_t *on_store;
 } patcache;
 
 enum { NPAT = TSR_TILE_MAX / 2 + 1 };
+
+/* The tile edges (bit e: edge e, 0 south, 1 east, 2 north, 3 west) that
+ * tile vertex (i, j) of an N-quad tile lies on. */
+static inline unsigned tile_onmask(uint32_t i, uint32_t j, uint32_t N)
+{
+    return (unsigned)((j == 0) | (i == N) << 1 | (j == N) << 2 | (i == 0) << 3);
+}
+
 
 struct tsr_pmodel {
     tsr_allocator alloc;
@@ -108,6 +119,7 @@ void tsr_pmodel_destroy(tsr_pmodel *m)
         if (pc) {
             tsr_tile_patterns_free(&pc->pat);
             tsr_free(a, pc->used);
+            tsr_free(a, pc->on_store);
             tsr_free(a, pc);
         }
     }
@@ -1734,8 +1746,9 @@ static bool emit_split(builder *b, uint32_t source, const pvert t[3], const pcha
     return emit_split(b, source, t2, c2);
 }
 
-static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *pat, uint32_t *local)
+static tsr_status emit_piece(builder *b, uint32_t pi, const patcache *pc, uint32_t *local)
 {
+    const tsr_tile_patterns *pat = &pc->pat;
     pctx *c = &b->ctx[pi];
     const piece *p = &b->m->pieces[pi];
     uint32_t N = c->N, row = N + 1, Z = lattice_size(b->ctx, pi);
@@ -1743,7 +1756,7 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
     const tsr_qleaf *lv = tsr_quadtree_leaves(c->qt);
     for (uint32_t j = 0; j <= N; j++)
         for (uint32_t i = 0; i <= N; i++)
-            b->onmask[j * row + i] = (uint8_t)((j == 0) | (i == N) << 1 | (j == N) << 2 | (i == 0) << 3);
+            b->onmask[j * row + i] = (uint8_t)tile_onmask(i, j, N);
     for (uint32_t li = 0; li < nl; li++) {
         tsr_qnode n = lv[li].node;
         uint32_t w = N << (c->surf.levels - n.level), step = w / N, x0 = n.x * w, y0 = n.y * w;
@@ -1789,12 +1802,22 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const tsr_tile_patterns *p
             }
             continue;
         }
+        const uint16_t *ton = pc->on[mask];
+        unsigned lmask3 = lmask | lmask << 4 | lmask << 8;
         for (uint32_t t = 0; t < pat->count[mask]; t++) {
             uint32_t idx[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
             if (p->mirrored) {
                 uint32_t tmp = idx[1];
                 idx[1] = idx[2];
                 idx[2] = tmp;
+            }
+            if (!(ton[t] & lmask3)) { /* no edge on a linked tile edge */
+                uint32_t v[3] = {local[idx[0]], local[idx[1]], local[idx[2]]};
+                double uv[6] = {vuv[2 * idx[0]], vuv[2 * idx[0] + 1], vuv[2 * idx[1]],
+                                vuv[2 * idx[1] + 1], vuv[2 * idx[2]], vuv[2 * idx[2] + 1]};
+                if (!add_tri(b, p->source, v, uv))
+                    return TSR_ERR_NOMEM;
+                continue;
             }
             pvert tv[3];
             for (int k = 0; k < 3; k++)
@@ -2125,17 +2148,40 @@ static const patcache *patterns_of(const tsr_pmodel *cm, uint32_t N)
         return NULL;
     }
     memset(pc->used, 0, (size_t)16 * r2);
+    size_t total = 0;
     for (unsigned mk = 0; mk < 16; mk++) {
         for (uint32_t t = 0; t < 3 * pc->pat.count[mk]; t++)
             pc->used[(size_t)mk * r2 + pc->pat.tri[mk][t]] = 1;
         for (uint32_t k = 0; k < r2; k++)
             pc->used_n[mk] += pc->used[(size_t)mk * r2 + k];
+        total += pc->pat.count[mk];
+    }
+    pc->on_store = tsr_alloc(a, (total + 1) * sizeof *pc->on_store);
+    if (!pc->on_store) {
+        tsr_tile_patterns_free(&pc->pat);
+        tsr_free(a, pc->used);
+        tsr_free(a, pc);
+        return NULL;
+    }
+    uint16_t *on = pc->on_store;
+    for (unsigned mk = 0; mk < 16; mk++) {
+        pc->on[mk] = on;
+        for (uint32_t t = 0; t < pc->pat.count[mk]; t++) {
+            unsigned bits = 0;
+            for (int k = 0; k < 3; k++) {
+                uint32_t va = pc->pat.tri[mk][3 * t + k], vb = pc->pat.tri[mk][3 * t + (k + 1) % 3];
+                unsigned ea = tile_onmask(va % (N + 1), va / (N + 1), N), eb = tile_onmask(vb % (N + 1), vb / (N + 1), N);
+                bits |= (ea & eb) << (4 * k);
+            }
+            *on++ = (uint16_t)bits;
+        }
     }
     patcache *expected = NULL;
     if (!atomic_compare_exchange_strong_explicit(&m->pats[N / 2], &expected, pc, memory_order_acq_rel,
                                                  memory_order_acquire)) {
         tsr_tile_patterns_free(&pc->pat); /* another run was first */
         tsr_free(a, pc->used);
+        tsr_free(a, pc->on_store);
         tsr_free(a, pc);
         pc = expected;
     }
@@ -2317,7 +2363,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         if (m->sources[m->pieces[p].source].trimmed)
             continue;
         b.used = pats[ctx[p].N / 2]->used;
-        st = emit_piece(&b, p, &pats[ctx[p].N / 2]->pat, local);
+        st = emit_piece(&b, p, pats[ctx[p].N / 2], local);
     }
     /* trimmed sources: the loops sampled finely enough in (u, v) */
     for (uint32_t s = 0; s < m->nsources && st == TSR_OK; s++) {
