@@ -33,7 +33,11 @@ typedef struct tsr_pslg {
     uint32_t nv;
     const uint32_t *seg; /* 2 point indices per segment (< nv) */
     uint32_t nseg;
-    const double *holes; /* 2 per hole seed point */
+    const double *holes; /* 2 per hole seed point; a seed exactly on a
+                            segment (or on an input point) names no side:
+                            it removes one of the regions it touches,
+                            which one is unspecified (the two methods may
+                            differ), so place seeds off the segments */
     uint32_t nholes;
 } tsr_pslg;
 

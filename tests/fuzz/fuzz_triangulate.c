@@ -22,9 +22,11 @@
  * passes fuzz_check_triangulation (fuzz.h), the independent checker among
  * others; a quadtree result keeps the area the Delaunay method keeps on
  * the same input (within 1e-8 of the box diagonal squared: slivers of
- * rounding), which the checker cannot see where segments dangle.
+ * rounding), which the checker cannot see where segments dangle, unless
+ * a hole seed lies on a segment or point (its side is unspecified).
  * max_steiner is 4000 so that every run stays short. */
 #include "fuzz.h"
+#include "tessellate/predicates.h"
 
 #include <math.h>
 #include <string.h>
@@ -70,6 +72,25 @@ static double coordinate(uint8_t b, bool invalid, bool *bad)
     default:
         return k;
     }
+}
+
+/* A hole seed exactly on a segment or an input point: its region is
+ * unspecified (triangulate.h), so the methods may rightly differ. */
+static bool seed_on_feature(const tsr_pslg *in)
+{
+    for (uint32_t h = 0; h < in->nholes; h++) {
+        const double *q = in->holes + 2 * (size_t)h;
+        for (uint32_t i = 0; i < in->nv; i++)
+            if (in->xy[2 * (size_t)i] == q[0] && in->xy[2 * (size_t)i + 1] == q[1])
+                return true;
+        for (uint32_t s = 0; s < in->nseg; s++) {
+            const double *a = in->xy + 2 * (size_t)in->seg[2 * (size_t)s], *b = in->xy + 2 * (size_t)in->seg[2 * (size_t)s + 1];
+            if (tsr_orient2d(a, b, q) == 0 && fmin(a[0], b[0]) <= q[0] && q[0] <= fmax(a[0], b[0]) &&
+                fmin(a[1], b[1]) <= q[1] && q[1] <= fmax(a[1], b[1]))
+                return true;
+        }
+    }
+    return false;
 }
 
 /* Sum of the kept triangles' areas. */
@@ -138,7 +159,7 @@ int fuzz_triangulate(const uint8_t *data, size_t size)
     fuzz_check_triangulation(&in, &o, &t, "triangulate");
     /* the quadtree method keeps the Delaunay method's region: same area
      * (within slivers of rounding), whatever the refinement */
-    if (o.method == TSR_TRI_QUADTREE && t.nt) {
+    if (o.method == TSR_TRI_QUADTREE && t.nt && !seed_on_feature(&in)) {
         tsr_tri_options od = o;
         od.method = TSR_TRI_DELAUNAY;
         tsr_triangulation td;
