@@ -754,16 +754,30 @@ extern "C" tsr_status tsr_subd_face_bounds(const tsr_subd *s, uint32_t face, uin
     }
 }
 
-extern "C" tsr_status tsr_subd_tessellate_uniform(const tsr_subd *s, uint32_t rate, tsr_mesh *out, tsr_error *err)
+/* tessellate() with a face list checked first (faces not NULL: each below
+ * the face count, none twice), C++ failures turned into statuses and the
+ * mesh's counts restored. */
+static tsr_status uniform_guarded(const tsr_subd *s, uint32_t rate, const uint32_t *faces, uint32_t num_faces,
+                                  tsr_mesh *out, tsr_error *err)
 {
-    if (!s || !out)
-        return tsr_error_set(err, TSR_ERR_ARGUMENT, "uniform tessellation: NULL surface or mesh");
-    if (rate < 1 || rate > TSR_SUBD_MAX_RATE)
-        return tsr_error_set(err, TSR_ERR_ARGUMENT, "uniform tessellation: rate %u outside 1..%u", rate,
-                             TSR_SUBD_MAX_RATE);
     uint32_t v0 = out->vertex_count, t0 = out->triangle_count;
     try {
-        return tessellate(s, rate, nullptr, 0, out, err);
+        if (faces) {
+            Vec<uint8_t> listed(s->num_faces, 0, Alloc<uint8_t>(s->alloc));
+            for (uint32_t q = 0; q < num_faces; q++) {
+                uint32_t f = faces[q];
+                if (f >= s->num_faces)
+                    return tsr_error_set(err, TSR_ERR_ARGUMENT,
+                                         "uniform tessellation: face %u (list entry %u) is not "
+                                         "below the face count %u",
+                                         f, q, s->num_faces);
+                if (listed[f])
+                    return tsr_error_set(err, TSR_ERR_ARGUMENT,
+                                         "uniform tessellation: face %u is listed twice (entry %u)", f, q);
+                listed[f] = 1;
+            }
+        }
+        return tessellate(s, rate, faces, num_faces, out, err);
     } catch (const std::bad_alloc &) {
         out->vertex_count = v0, out->triangle_count = t0;
         return tsr_error_set(err, TSR_ERR_NOMEM, "uniform tessellation: out of memory");
@@ -771,6 +785,16 @@ extern "C" tsr_status tsr_subd_tessellate_uniform(const tsr_subd *s, uint32_t ra
         out->vertex_count = v0, out->triangle_count = t0;
         return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "uniform tessellation: OpenSubdiv failed");
     }
+}
+
+extern "C" tsr_status tsr_subd_tessellate_uniform(const tsr_subd *s, uint32_t rate, tsr_mesh *out, tsr_error *err)
+{
+    if (!s || !out)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "uniform tessellation: NULL surface or mesh");
+    if (rate < 1 || rate > TSR_SUBD_MAX_RATE)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "uniform tessellation: rate %u outside 1..%u", rate,
+                             TSR_SUBD_MAX_RATE);
+    return uniform_guarded(s, rate, nullptr, 0, out, err);
 }
 
 extern "C" tsr_status tsr_subd_tessellate_uniform_faces(const tsr_subd *s, uint32_t rate, const uint32_t *faces,
@@ -783,29 +807,7 @@ extern "C" tsr_status tsr_subd_tessellate_uniform_faces(const tsr_subd *s, uint3
                              TSR_SUBD_MAX_RATE);
     if (!num_faces)
         return TSR_OK;
-    uint32_t v0 = out->vertex_count, t0 = out->triangle_count;
-    try {
-        Vec<uint8_t> listed(s->num_faces, 0, Alloc<uint8_t>(s->alloc));
-        for (uint32_t q = 0; q < num_faces; q++) {
-            uint32_t f = faces[q];
-            if (f >= s->num_faces)
-                return tsr_error_set(err, TSR_ERR_ARGUMENT,
-                                     "uniform tessellation: face %u (list entry %u) is not "
-                                     "below the face count %u",
-                                     f, q, s->num_faces);
-            if (listed[f])
-                return tsr_error_set(err, TSR_ERR_ARGUMENT, "uniform tessellation: face %u is listed twice (entry %u)",
-                                     f, q);
-            listed[f] = 1;
-        }
-        return tessellate(s, rate, faces, num_faces, out, err);
-    } catch (const std::bad_alloc &) {
-        out->vertex_count = v0, out->triangle_count = t0;
-        return tsr_error_set(err, TSR_ERR_NOMEM, "uniform tessellation: out of memory");
-    } catch (...) {
-        out->vertex_count = v0, out->triangle_count = t0;
-        return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "uniform tessellation: OpenSubdiv failed");
-    }
+    return uniform_guarded(s, rate, faces, num_faces, out, err);
 }
 
 // The basis change, per direction, from Bézier points b to the uniform

@@ -1486,7 +1486,10 @@ TEST(trimmed_linked_conform)
     free(b.s);
 }
 
-TEST(camera_near_finer)
+/* The long quarter cylinder (rational, along x from 0 to VL) and a camera
+ * looking along it from near its start: parsed into *set; false (after a
+ * failed CHECK) when it does not parse. */
+static bool long_cylinder_scene(tsr_patch_set *set, tsr_camera *cam)
 {
     sbuf b = {0};
     const double A[3][2] = {{1, 0}, {1, 1}, {0, 1}}, w[3] = {1, H2, 1};
@@ -1494,23 +1497,30 @@ TEST(camera_near_finer)
         for (int i = 0; i < 3; i++)
             sb_printf(&b, "v %.17g %.17g %.17g %.17g\n", VL * j, VR * A[i][0], VR * A[i][1], w[i]);
     sb_printf(&b, "cstype rat bezier\ndeg 2 1\nsurf 0 1 0 1 -6 -5 -4 -3 -2 -1\nend\n");
-    tsr_patch_set set;
-    tsr_pmodel *m = NULL;
-    if (!parse_set(&b, "long_cylinder.obj", &set)) {
-        free(b.s);
-        return;
-    }
-    tsr_camera cam;
-    memset(&cam, 0, sizeof cam);
+    bool ok = parse_set(&b, "long_cylinder.obj", set);
+    free(b.s);
+    if (!ok)
+        return false;
+    memset(cam, 0, sizeof *cam);
     const double eye[3] = {-2, 2.5, 1.8}, target[3] = {10, 0.3, 0.3};
-    memcpy(cam.eye, eye, sizeof eye);
-    memcpy(cam.target, target, sizeof target);
-    cam.fovy_deg = 50;
-    cam.width = 1024;
-    cam.height = 768;
-    cam.near_dist = 0.05;
-    cam.pixel_error = 0.5;
-    CHECK(tsr_camera_prepare(&cam));
+    memcpy(cam->eye, eye, sizeof eye);
+    memcpy(cam->target, target, sizeof target);
+    cam->fovy_deg = 50;
+    cam->width = 1024;
+    cam->height = 768;
+    cam->near_dist = 0.05;
+    cam->pixel_error = 0.5;
+    CHECK(tsr_camera_prepare(cam));
+    return true;
+}
+
+TEST(camera_near_finer)
+{
+    tsr_patch_set set;
+    tsr_camera cam;
+    tsr_pmodel *m = NULL;
+    if (!long_cylinder_scene(&set, &cam))
+        return;
     /* the regions compared are in view: their corners project inside */
     const double probes[4][3] = {{1, 1, 0}, {1, 0, 1}, {20, 1, 0}, {20, 0, 1}};
     for (int k = 0; k < 4; k++) {
@@ -1583,7 +1593,6 @@ TEST(camera_near_finer)
     }
     tsr_pmodel_destroy(m);
     tsr_patch_set_free(&set);
-    free(b.s);
 }
 
 /* Runs share a model: the second run (tile patterns now kept with the
@@ -1613,29 +1622,11 @@ static bool same_mesh(const tsr_ptess_result *a, const tsr_ptess_result *b)
 
 TEST(runs_share_model)
 {
-    sbuf b = {0};
-    const double A[3][2] = {{1, 0}, {1, 1}, {0, 1}}, w[3] = {1, H2, 1};
-    for (int j = 0; j < 2; j++)
-        for (int i = 0; i < 3; i++)
-            sb_printf(&b, "v %.17g %.17g %.17g %.17g\n", VL * j, VR * A[i][0], VR * A[i][1], w[i]);
-    sb_printf(&b, "cstype rat bezier\ndeg 2 1\nsurf 0 1 0 1 -6 -5 -4 -3 -2 -1\nend\n");
     tsr_patch_set set;
-    tsr_pmodel *m = NULL, *m2 = NULL;
-    if (!parse_set(&b, "long_cylinder.obj", &set)) {
-        free(b.s);
-        return;
-    }
     tsr_camera cam;
-    memset(&cam, 0, sizeof cam);
-    const double eye[3] = {-2, 2.5, 1.8}, target[3] = {10, 0.3, 0.3};
-    memcpy(cam.eye, eye, sizeof eye);
-    memcpy(cam.target, target, sizeof target);
-    cam.fovy_deg = 50;
-    cam.width = 1024;
-    cam.height = 768;
-    cam.near_dist = 0.05;
-    cam.pixel_error = 0.5;
-    CHECK(tsr_camera_prepare(&cam));
+    tsr_pmodel *m = NULL, *m2 = NULL;
+    if (!long_cylinder_scene(&set, &cam))
+        return;
     if (make_model(&set, &m) && make_model(&set, &m2)) {
         tsr_ptess_options opt = {0};
         opt.camera = &cam;
@@ -1668,7 +1659,6 @@ TEST(runs_share_model)
     tsr_pmodel_destroy(m);
     tsr_pmodel_destroy(m2);
     tsr_patch_set_free(&set);
-    free(b.s);
 }
 
 /* ---- the contract's refusals ---------------------------------------------------------- */
