@@ -1593,9 +1593,14 @@ static int eval(qt *q, uint32_t n, bool emit)
             } else if (m->n <= 1)
                 ok = !m->ends && (m->n == 0 || m->grid[0] != GRID_NONE);
             else {
+                /* a chord exactly through the vertex is not simple (the
+                 * pair tests split its piece there): its rounded side
+                 * points can leave the vertex a sliver off it, and the
+                 * fan's flat triangle under the vertex would join the
+                 * sectors on both sides */
                 m->use = 1;
                 nchord++;
-                ok = m->n == 2 && !m->ends;
+                ok = m->n == 2 && !m->ends && tsr_orient2d(V(q, p->a), V(q, p->b), P) != 0;
             }
         }
     } else {
@@ -1866,11 +1871,27 @@ static tsr_status fallback(qt *q, const qcell *c)
     for (size_t i = 0; i < 3 * (size_t)res.nt; i++)
         q->tri[q->ntri++] = map[res.tri[i]];
     for (uint32_t i = 0; i < res.nedge; i++) {
-        uint32_t s = res.edge_segment[i];
+        uint32_t s = res.edge_segment[i], u = map[res.edge[2 * (size_t)i]], w = map[res.edge[2 * (size_t)i + 1]];
         if (s >= nchain)
             continue; /* the cell's own boundary */
-        if (!add_edge(q, map[res.edge[2 * (size_t)i]], map[res.edge[2 * (size_t)i + 1]], sseg[s]))
+        if (!add_edge(q, u, w, sseg[s]))
             goto done;
+        /* The Delaunay method names only the lowest of the chains merged
+         * on this edge (overlapping, exactly collinear: two pieces a
+         * rounding apart whose clipped ends fell on one ring point, say).
+         * The others cover it too, and even-odd counts every cover. */
+        const double *S0 = lxy + 2 * (size_t)seg[2 * (size_t)s], *S1 = lxy + 2 * (size_t)seg[2 * (size_t)s + 1];
+        const double *E0 = res.xy + 2 * (size_t)res.edge[2 * (size_t)i],
+                     *E1 = res.xy + 2 * (size_t)res.edge[2 * (size_t)i + 1];
+        double mid[2] = {0.5 * (E0[0] + E1[0]), 0.5 * (E0[1] + E1[1])}, tm = along(S0, S1, mid);
+        for (size_t t = 0; t < nchain; t++) {
+            const double *T0 = lxy + 2 * (size_t)seg[2 * t], *T1 = lxy + 2 * (size_t)seg[2 * t + 1];
+            if (t == s || tsr_orient2d(S0, S1, T0) != 0 || tsr_orient2d(S0, S1, T1) != 0)
+                continue;
+            double t0 = along(S0, S1, T0), t1 = along(S0, S1, T1);
+            if (tm > fmin(t0, t1) && tm < fmax(t0, t1) && !add_edge(q, u, w, sseg[t]))
+                goto done;
+        }
     }
     st = TSR_OK;
 done:

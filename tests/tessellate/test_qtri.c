@@ -834,6 +834,38 @@ TEST(even_odd_parity_of_overlaps)
     }
 }
 
+/* Kept area and crossings of both methods on in under region r; the
+ * quadtree's result also passes the checker. */
+static void both_methods(const tsr_pslg *in, tsr_region r, double area[2], uint32_t crossings[2],
+                         uint32_t *fallback_cells)
+{
+    tsr_tri_options o = {.region = r};
+    for (int m = 0; m < 2; m++) {
+        tsr_triangulation t;
+        tsr_error err;
+        area[m] = 0;
+        crossings[m] = 0;
+        o.method = m ? TSR_TRI_QUADTREE : TSR_TRI_DELAUNAY;
+        if (tsr_triangulate(in, &o, &t, NULL, &err) != TSR_OK) {
+            CHECK_MSG(false, "method %d: %s", m, err.message);
+            continue;
+        }
+        for (uint32_t i = 0; i < t.nt; i++) {
+            const double *a = t.xy + 2 * t.tri[3 * i], *b = t.xy + 2 * t.tri[3 * i + 1];
+            const double *c = t.xy + 2 * t.tri[3 * i + 2];
+            area[m] += 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+        }
+        crossings[m] = t.intersections;
+        CHECK(!t.fell_back);
+        if (m)
+            *fallback_cells = t.fallback_cells;
+        tsr_tri_check c;
+        CHECK(tsr_triangulation_check(in, &o, &t, &c) == TSR_OK);
+        CHECK_MSG(c.ok, "region %d, method %d: checker: %s", (int)o.region, m, c.first_problem);
+        tsr_triangulation_free(&t);
+    }
+}
+
 /* The fuzz finds quadtree_evenodd_region_kept_where_delaunay_keeps_none and
  * its hole seed sibling, cut down: segment 0 runs along y = x from
  * (-16, -16) to (8, 8), segment 2 from (5, 5) back to (-16, -16) along it,
@@ -853,31 +885,67 @@ TEST(even_odd_overlapping_segments_crossed_at_one_vertex)
     if (!delaunay_available())
         SKIP("the Delaunay method is not available yet");
     for (int r = 0; r < 2; r++) {
-        tsr_tri_options o = {.region = r ? TSR_REGION_ENCLOSED : TSR_REGION_EVEN_ODD};
-        double area[2] = {0, 0};
-        uint32_t crossings[2] = {0, 0};
-        for (int m = 0; m < 2; m++) {
-            tsr_triangulation t;
-            tsr_error err;
-            o.method = m ? TSR_TRI_QUADTREE : TSR_TRI_DELAUNAY;
-            CHECK_MSG(tsr_triangulate(&in, &o, &t, NULL, &err) == TSR_OK, "%s", err.message);
-            for (uint32_t i = 0; i < t.nt; i++) {
-                const double *a = t.xy + 2 * t.tri[3 * i], *b = t.xy + 2 * t.tri[3 * i + 1];
-                const double *c = t.xy + 2 * t.tri[3 * i + 2];
-                area[m] += 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
-            }
-            crossings[m] = t.intersections;
-            CHECK(!t.fell_back);
-            tsr_tri_check c;
-            CHECK(tsr_triangulation_check(&in, &o, &t, &c) == TSR_OK);
-            CHECK_MSG(c.ok, "region %d, method %d: checker: %s", (int)o.region, m, c.first_problem);
-            tsr_triangulation_free(&t);
-        }
-        CHECK_MSG(fabs(area[1] - area[0]) <= 1e-12 * 64, "region %d: quadtree kept %.17g, Delaunay %.17g",
-                  (int)o.region, area[1], area[0]);
-        CHECK_MSG(crossings[1] == 1 && crossings[0] == 1, "region %d: %u crossings (Delaunay %u), not 1",
-                  (int)o.region, crossings[1], crossings[0]);
+        double area[2];
+        uint32_t crossings[2], fb = 0;
+        both_methods(&in, r ? TSR_REGION_ENCLOSED : TSR_REGION_EVEN_ODD, area, crossings, &fb);
+        CHECK_MSG(fabs(area[1] - area[0]) <= 1e-12 * 64, "region %d: quadtree kept %.17g, Delaunay %.17g", r,
+                  area[1], area[0]);
+        CHECK_MSG(crossings[1] == 1 && crossings[0] == 1, "region %d: %u crossings (Delaunay %u), not 1", r,
+                  crossings[1], crossings[0]);
     }
+}
+
+/* The fuzz find quadtree_evenodd_keeps_less_than_delaunay_2, cut down:
+ * segment 0 runs from (2, -14) through the vertex (-7, -15) to (-16, -16);
+ * five more segments leave that vertex upwards. In the vertex's leaf the
+ * segment passed as a chord between two rounded side points, the vertex
+ * 1e-15 above it: the fan from the vertex made a flat triangle under it
+ * that joined the sectors left and right of the upward segments, and the
+ * triangle enclosed by segments 0, 1 and 3 (area 64.2) was lost. A chord
+ * exactly through a leaf's vertex now makes the leaf not simple, and the
+ * pair tests split the segment there. */
+TEST(chord_through_vertex_split_there)
+{
+    const double e = 1 + 0x1p-40;
+    const double xy[] = {-7, -15, 2, -14, 7 * e, 15 * e, 15, 6 * e, -16, -16, 6, 6, 2, 6, 6, 2, -0.009765625, 5};
+    static const uint32_t seg[] = {1, 4, 1, 5, 2, 0, 7, 0, 8, 0, 5, 0, 6, 0};
+    tsr_pslg in = {xy, 9, seg, 7, NULL, 0};
+    if (!delaunay_available())
+        SKIP("the Delaunay method is not available yet");
+    for (int r = 0; r < 2; r++) {
+        double area[2];
+        uint32_t crossings[2], fb = 0;
+        both_methods(&in, r ? TSR_REGION_ENCLOSED : TSR_REGION_EVEN_ODD, area, crossings, &fb);
+        CHECK_MSG(fabs(area[1] - area[0]) <= 1e-12 * 1024, "region %d: quadtree kept %.17g, Delaunay %.17g", r,
+                  area[1], area[0]);
+    }
+}
+
+/* After the fuzz find quadtree_evenodd_keeps_less_than_delaunay, closed:
+ * the triangle (-7, -7), (-1/146.3, -7 - 6.4e-12), (15 + 1.4e-11, 2); the
+ * segment from (-7, -7) to (-3 - 2.7e-12, -7 - 6.4e-12), 2.7e-12 below the
+ * triangle's side, and from there to (15 + 1.4e-11, 2), both given twice;
+ * a lone point 9e-12 from (-7, -7).
+ * Near (-7, -7) the cells go to the Delaunay fallback, where the two lines
+ * meet a cell side at one rounded point: their chains merge into one edge,
+ * which that method names by its lowest chain alone. The edge counted as
+ * covered twice (even), the triangle's side had a gap there, and the
+ * quadtree kept nothing. Every chain on a merged edge now keeps its cover
+ * (three: odd). */
+TEST(fallback_keeps_every_cover_of_merged_chains)
+{
+    const double e = 1 + 0x1p-40;
+    const double xy[] = {-7, -7, -0.0068359375, -7 * e, 15 * e, 2, -3 * e, -7 * e, -7 * e, -7 * e};
+    static const uint32_t seg[] = {0, 1, 1, 2, 2, 0, 0, 3, 3, 0, 2, 3, 3, 2};
+    tsr_pslg in = {xy, 5, seg, 7, NULL, 0};
+    if (!delaunay_available())
+        SKIP("the Delaunay method is not available yet");
+    double area[2];
+    uint32_t crossings[2], fb = 0;
+    both_methods(&in, TSR_REGION_EVEN_ODD, area, crossings, &fb);
+    CHECK_MSG(fabs(area[1] - area[0]) <= 1e-12 * 512, "quadtree kept %.17g, Delaunay %.17g", area[1], area[0]);
+    CHECK_MSG(area[0] > 30, "the Delaunay method kept %.17g, not the triangle", area[0]);
+    CHECK_MSG(fb > 0, "no cell went to the fallback: the test no longer reaches the merge");
 }
 
 /* Points on a small lattice joined at random: duplicates, collinear
@@ -1162,5 +1230,6 @@ TEST_MAIN(T(single_triangle), T(round_coordinates_square_with_hole), T(star_poly
           T(vertex_near_cell_corner_and_grid_lines), T(high_degree_vertex), T(max_area),
           T(near_coincident_features_fall_back), T(segment_hugging_square_side_beside_fallback_cell),
           T(even_odd_parity_of_overlaps), T(even_odd_overlapping_segments_crossed_at_one_vertex),
+          T(chord_through_vertex_split_there), T(fallback_keeps_every_cover_of_merged_chains),
           T(lattice_segments_degenerate), T(unsupported_inputs),
           T(region_from_cells_matches_general_pass), T(allocator_failures))
