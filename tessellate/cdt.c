@@ -1014,6 +1014,17 @@ static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa
                  * constraint again and make a second crossing vertex an
                  * ulp from the first. */
                 int ky = (ia + 2) % 3;
+                if (on_original(d, oa, ob, a, b, y)) {
+                    /* y, beside the piece from a rounded crossing, lies
+                     * exactly on the input segment: the piece ends there
+                     * (the walk below starts past y and would leave it
+                     * beside the segment, a sliver off it) */
+                    uint32_t old = cdt_mark(d, t, ky);
+                    uint32_t lo = CDT_LABEL(old) < CDT_LABEL(mark) ? CDT_LABEL(old) : CDT_LABEL(mark);
+                    tsr__cdt_mark_edge(d, t, ky, old ? lo | (~(old ^ mark) & CDT_EVEN) : mark);
+                    *reached = y;
+                    return STEP_DONE;
+                }
                 bool nx = cdt_mark(d, t, ia) && near_original(d, oa, ob, a, b, x);
                 bool ny = cdt_mark(d, t, ky) && near_original(d, oa, ob, a, b, y);
                 if (nx && ny) /* both: the one nearer the line */

@@ -257,6 +257,43 @@ TEST(points_on_segments)
     build_free(&b);
 }
 
+/* Fuzz find quadtree_evenodd_keeps_more_than_delaunay, cut down: the
+ * segment x = 2 from (2, -14) to (2, 5) is crossed at y = -5.55 (a rounded
+ * vertex, 1e-15 right of the line), and the input point (2, 3) lies
+ * exactly on it. From the crossing, (2, 3) was a neighbour just left of
+ * the piece's direction, and the walk started past it: the constrained
+ * edge ran from the crossing to (2, 5) a sliver beside (2, 3), and the
+ * region flooded round it (even-odd: 68.4 kept of 144.5). Both methods,
+ * every region: the segment's chain passes through (2, 3). */
+TEST(point_on_segment_beside_rounded_crossing)
+{
+    const double xy[] = {-7, -7, 15 * (1 + 0x1p-40), 2, -15, -15, 2, -14, -16, -16, 2, 5, 2, 3};
+    static const uint32_t seg[] = {1, 4, 0, 3, 2, 3, 3, 5, 6, 2};
+    tsr_pslg in = {xy, 7, seg, 5, NULL, 0};
+    double area[2] = {0, 0};
+    for (int m = 0; m < 2; m++)
+        for (int r = 0; r < 3; r++) {
+            tsr_tri_options o = method_opts[m];
+            o.region = r == 0 ? TSR_REGION_HULL : r == 1 ? TSR_REGION_ENCLOSED : TSR_REGION_EVEN_ODD;
+            tsr_triangulation t;
+            tsr_error err;
+            if (tsr_triangulate(&in, &o, &t, NULL, &err) != TSR_OK) {
+                CHECK_MSG(false, "method %d region %d: %s", m, r, err.message);
+                continue;
+            }
+            uint32_t g = t.vertex_of_input[6], at_g = 0;
+            for (uint32_t e = 0; e < t.nedge; e++)
+                at_g += t.edge_segment[e] == 3 && (t.edge[2 * e] == g || t.edge[2 * e + 1] == g);
+            if (r == 0) /* every edge kept: both sides of (2, 3) on the chain */
+                CHECK_MSG(at_g == 2, "method %d: %u edges of segment 3 at (2, 3), not 2", m, at_g);
+            if (r == 2)
+                area[m] = tri_area(&t);
+            tsr_triangulation_free(&t);
+        }
+    CHECK_MSG(fabs(area[0] - area[1]) <= 1e-12 * 1024, "even-odd: Delaunay kept %.17g, quadtree %.17g", area[0],
+              area[1]);
+}
+
 TEST(integer_grid_1000)
 {
     build b = {0};
@@ -791,7 +828,7 @@ TEST(small_angle_beside_short_hull_edge)
 }
 
 TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T(segments_crossing_at_one_point),
-          T(overlapping_collinear_segments), T(points_on_segments), T(integer_grid_1000),
+          T(overlapping_collinear_segments), T(points_on_segments), T(point_on_segment_beside_rounded_crossing), T(integer_grid_1000),
           T(hole_touching_outer_boundary), T(self_touching_ring), T(polygon_with_1024_holes), T(hole_seeds),
           T(quality_refinement), T(small_input_angles_terminate), T(thin_spikes_quality),
           T(vertex_ulps_inside_hull_edge), T(segment_ulps_inside_hull_edge), T(vertex_ulps_inside_hull_corner),
