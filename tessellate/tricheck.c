@@ -935,8 +935,10 @@ static bool gap_candidates(ck *c, const line *l, uint32_t p, uint32_t vb)
 typedef struct frame {
     uint32_t v, next;
     pos t;
-    bool gap_done;
+    uint32_t gap_next; /* the next gap candidate to try; GAPS_DONE when none is left */
 } frame;
+
+#define GAPS_DONE UINT32_MAX
 
 static bool push_frame(ck *c, uint32_t v, pos t)
 {
@@ -948,7 +950,7 @@ static bool push_frame(ck *c, uint32_t v, pos t)
         c->stack = f;
         c->stack_cap = cap;
     }
-    c->stack[c->nstack++] = (frame){v, c->adj_off[v], t, false};
+    c->stack[c->nstack++] = (frame){v, c->adj_off[v], t, 0};
     c->seen[v] = c->stamp;
     return true;
 }
@@ -997,15 +999,22 @@ static int walk_segment(ck *c, uint32_t s, uint32_t va, uint32_t vb, bool gaps)
         }
         if (pushed)
             continue;
-        if (gaps && !f->gap_done) {
-            f->gap_done = true;
-            if (!covers(c, f->v, l.b)) {
+        if (gaps && f->gap_next != GAPS_DONE) {
+            /* a jump that leads nowhere is backed out of and the next
+             * candidate tried: the nearest clear one may be a vertex
+             * within the tolerance that is no point of the segment */
+            if (f->gap_next == 0 && covers(c, f->v, l.b))
+                f->gap_next = GAPS_DONE;
+            else {
                 if (!gap_candidates(c, &l, f->v, vb) || !corridor(c, &l))
                     return -1;
+                uint32_t v = f->v, from = f->gap_next;
+                f->gap_next = GAPS_DONE;
                 bool jumped = false;
-                for (size_t i = 0; i < c->ncand && !jumped; i++) {
+                for (size_t i = from; i < c->ncand && !jumped; i++) {
                     uint32_t q = c->cand[i].v;
-                    if (c->seen[q] != c->stamp && gap_clear(c, &l, f->v, i)) {
+                    if (c->seen[q] != c->stamp && gap_clear(c, &l, v, i)) {
+                        c->stack[c->nstack - 1].gap_next = (uint32_t)i + 1;
                         if (!push_frame(c, q, c->cand[i].t))
                             return -1;
                         jumped = true;

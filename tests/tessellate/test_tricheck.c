@@ -500,6 +500,29 @@ TEST(enclosed_gap_passes_vertex_whose_triangle_segment_clips_behind)
     CHECK(!r.ok && r.missing_segments == 1);
 }
 
+TEST(enclosed_gap_backs_out_of_dead_end)
+{
+    /* the dangling segment A(0,0)-B(10,0) passes below the kept triangle
+     * D Q R: D 1e-10 and Q 1e-11 above the line, both within its
+     * tolerance, R far. The first gap from A goes to D, whose triangle
+     * covers the direction on to B (Q lies below the ray D-B): a dead
+     * end. The search backs out and jumps from A to Q, then from Q to B
+     * (fuzz find quadtree_gap_dead_end_at_near_vertex). */
+    static double xy[] = {0, 0, 10, 0, 5, 1e-10, 9, 1e-11, 9, 1, 9.5, -1, 9.8, -1, 9.6, 1};
+    static uint32_t seg[] = {0, 1};
+    static uint32_t tri[] = {2, 3, 4, 5, 6, 7};
+    tsr_pslg in = {xy, 2, seg, 1, NULL, 0};
+    tsr_tri_options opt = {.region = TSR_REGION_ENCLOSED, .method = TSR_TRI_QUADTREE};
+    tsr_triangulation out = output(xy, 5, 2, tri, 1, NULL, NULL, 0);
+    tsr_tri_check r = run(&in, &opt, &out);
+    CHECK(r.missing_segments == 0); /* (the area differs: D Q R is enclosed by nothing) */
+    /* a kept triangle across the segment beyond Q: missing there */
+    out = output(xy, 8, 2, tri, 2, NULL, NULL, 0);
+    r = run(&in, &opt, &out);
+    CHECK(!r.ok && r.missing_segments == 1);
+    CHECK(strstr(r.first_problem, "input segment 0") != NULL);
+}
+
 TEST(enclosed_gap_rejects_segment_through_triangle_between_far_vertices)
 {
     /* the kept triangle (3,-1) (5,-1) (4,1) lies across the dangling
@@ -683,7 +706,7 @@ TEST_MAIN(T(accepts_delaunay_rhombus), T(rejects_non_delaunay_edge), T(constrain
           T(enclosed_gap_rejects_segment_through_triangle_at_near_vertex),
           T(enclosed_gap_passes_sliver_straddling_segment),
           T(enclosed_gap_passes_vertex_whose_triangle_segment_clips_behind),
-          T(enclosed_gap_rejects_segment_through_triangle_between_far_vertices),
+          T(enclosed_gap_backs_out_of_dead_end), T(enclosed_gap_rejects_segment_through_triangle_between_far_vertices),
           T(enclosed_rejects_segment_along_unlisted_kept_edge), T(accepts_chain_step_back_within_rounding),
           T(rejects_angle_below_bound), T(small_input_angle_excuses_triangle),
           T(below_resolution_excused_only_when_reported), T(rejects_area_above_bound),
