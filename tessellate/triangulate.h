@@ -51,7 +51,13 @@ typedef enum tsr_region {
     TSR_REGION_ENCLOSED,
     /* keep what lies inside an odd number of closed segment loops:
      * counted by the segments crossed on the way in from outside (rings
-     * with holes, nested islands); hole seeds also apply */
+     * with holes, nested islands); hole seeds also apply. An edge covered
+     * by an even number of segments does not count. Where segments do
+     * not close (a point met by an odd number of segment ends, each copy
+     * counted), the count is the least on any way in, which features
+     * closer than rounding can change: the quadtree method's fallback
+     * cells may merge such features onto one edge, and then keep another
+     * region than the Delaunay method. Closed input is not affected. */
     TSR_REGION_EVEN_ODD,
 } tsr_region;
 

@@ -23,7 +23,10 @@
  * others; a quadtree result keeps the area the Delaunay method keeps on
  * the same input (within 1e-8 of the box diagonal squared: slivers of
  * rounding), which the checker cannot see where segments dangle, unless
- * a hole seed lies on a segment or point (its side is unspecified).
+ * a hole seed lies on a segment or point (its side is unspecified), or,
+ * under the even-odd rule, segments dangle and quadtree cells went to the
+ * Delaunay fallback (features within rounding of each other merged there
+ * can change the least number crossed on the way in; triangulate.h).
  * max_steiner is 4000 so that every run stays short. */
 #include "fuzz.h"
 #include "tessellate/predicates.h"
@@ -93,6 +96,27 @@ static bool seed_on_feature(const tsr_pslg *in)
     return false;
 }
 
+/* Do the segments close (every distinct point meets an even number of
+ * segment ends, each copy counted)? Under the even-odd rule an open input's
+ * region is the least number of segments crossed on the way in, which
+ * features closer than rounding can change (triangulate.h). */
+static bool closed_input(const tsr_pslg *in)
+{
+    for (uint32_t i = 0; i < in->nv; i++) {
+        const double *p = in->xy + 2 * (size_t)i;
+        uint32_t ends = 0;
+        for (uint32_t s = 0; s < in->nseg; s++) {
+            const double *a = in->xy + 2 * (size_t)in->seg[2 * (size_t)s], *b = in->xy + 2 * (size_t)in->seg[2 * (size_t)s + 1];
+            if (a[0] == b[0] && a[1] == b[1])
+                continue; /* degenerate: ignored */
+            ends += (a[0] == p[0] && a[1] == p[1]) + (b[0] == p[0] && b[1] == p[1]);
+        }
+        if (ends % 2)
+            return false;
+    }
+    return true;
+}
+
 /* Sum of the kept triangles' areas. */
 static double kept_area(const tsr_triangulation *t)
 {
@@ -159,7 +183,8 @@ int fuzz_triangulate(const uint8_t *data, size_t size)
     fuzz_check_triangulation(&in, &o, &t, "triangulate");
     /* the quadtree method keeps the Delaunay method's region: same area
      * (within slivers of rounding), whatever the refinement */
-    if (o.method == TSR_TRI_QUADTREE && t.nt && !seed_on_feature(&in)) {
+    if (o.method == TSR_TRI_QUADTREE && !seed_on_feature(&in) &&
+        (o.region != TSR_REGION_EVEN_ODD || t.fallback_cells == 0 || closed_input(&in))) {
         tsr_tri_options od = o;
         od.method = TSR_TRI_DELAUNAY;
         tsr_triangulation td;
