@@ -88,6 +88,7 @@ struct tsr_pmodel {
     double *values; /* control points and weights of the pieces */
     double lo[3], hi[3];
     uint32_t links, collapsed, mirrored, trimmed;
+    uint32_t flat; /* subd patches without area, left out */
 };
 
 static const tsr_allocator *ma(const tsr_pmodel *m) { return m->alloc.realloc ? &m->alloc : NULL; }
@@ -447,6 +448,38 @@ tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *al
 
 static int half_of(double x) { return x <= 0.25 ? 0 : x <= 0.75 ? 1 : 2; }
 
+/* Whether the limit of patch (face, sub) has area: |du x dv| beyond 1e-10
+ * of the squared diagonal of the face's box plus 1e-20 of the model's
+ * (diag2; the face's box may be a point) somewhere on a 7 x 7 grid inside
+ * the patch (the centre first, where a patch with area nearly always
+ * shows it, so most patches cost one evaluation). A cage face whose
+ * vertices repeat so that its limit is a curve (67 67 68 68, or 81 81 81
+ * 82 along a non-manifold edge) or a point (110 110 110 110) has du x dv
+ * zero up to rounding everywhere; a patch with one collapsed edge, or a
+ * real sliver, has it far beyond the threshold inside. */
+static bool subd_patch_has_area(const tsr_subd *subd, uint32_t face, uint32_t sub, double diag2)
+{
+    double lo[3], hi[3];
+    if (tsr_subd_face_bounds(subd, face, sub, lo, hi) != TSR_OK)
+        return true;
+    double l2 = 0;
+    for (int c = 0; c < 3; c++)
+        l2 += (hi[c] - lo[c]) * (hi[c] - lo[c]);
+    double tol = 1e-10 * l2 + 1e-20 * diag2;
+    for (int k = -1; k < 49; k++) {
+        if (k == 24)
+            continue; /* the centre, done first */
+        int kk = k < 0 ? 24 : k;
+        double uv[2] = {(kk % 7 + 1) / 8.0, (kk / 7 + 1) / 8.0}, pos[3], du[3], dv[3];
+        if (tsr_subd_eval(subd, face, sub, uv, 1, pos, du, dv) != TSR_OK)
+            return true;
+        double n[3] = {du[1] * dv[2] - du[2] * dv[1], du[2] * dv[0] - du[0] * dv[2], du[0] * dv[1] - du[1] * dv[0]};
+        if (!(sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) <= tol))
+            return true;
+    }
+    return false;
+}
+
 tsr_status tsr_pmodel_from_subd(const tsr_subd *subd, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err)
 {
     if (!out)
@@ -455,37 +488,77 @@ tsr_status tsr_pmodel_from_subd(const tsr_subd *subd, const tsr_allocator *alloc
     if (!subd)
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "patch model: no subdivision surface");
     uint32_t nf = tsr_subd_face_count(subd);
-    uint64_t n = 0;
+    uint64_t all = 0;
     for (uint32_t f = 0; f < nf; f++)
         if (tsr_subd_face_has_limit(subd, f))
-            n += tsr_subd_face_patches(subd, f);
-    if (n == 0)
+            all += tsr_subd_face_patches(subd, f);
+    if (all == 0)
         return tsr_error_set(err, TSR_ERR_EMPTY, "patch model: no face has a limit surface");
-    if (n >= (1u << 24))
+    if (all >= (1u << 24))
         return tsr_error_set(err, TSR_ERR_TOO_LARGE, "patch model: %llu patches, more than 2^24",
-                             (unsigned long long)n);
+                             (unsigned long long)all);
     tsr_pmodel *m = model_new(alloc);
     if (!m)
         return tsr_error_set(err, TSR_ERR_NOMEM, "patch model: out of memory");
     const tsr_allocator *a = ma(m);
     m->subd = subd;
-    m->npieces = m->nsources = (uint32_t)n;
+    /* piece_of[first[f] + s]: the piece of patch (f, s), UINT32_MAX for a
+     * patch whose limit has no area (a curve or a point: nothing a
+     * triangle could cover without zero area), which gets none */
+    uint32_t *first = tsr_alloc(a, ((size_t)nf + 1) * sizeof *first);
+    uint32_t *piece_of = tsr_alloc(a, (size_t)all * sizeof *piece_of);
+    if (!first || !piece_of) {
+        tsr_free(a, first);
+        tsr_free(a, piece_of);
+        tsr_pmodel_destroy(m);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "patch model: out of memory");
+    }
+    double blo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, bhi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX}, diag2 = 0;
+    for (uint32_t f = 0; f < nf; f++) {
+        double lo[3], hi[3];
+        if (tsr_subd_face_has_limit(subd, f) && tsr_subd_face_bounds(subd, f, 0, lo, hi) == TSR_OK) {
+            box_add(blo, bhi, lo);
+            box_add(blo, bhi, hi);
+        }
+    }
+    for (int c = 0; c < 3; c++)
+        diag2 += bhi[c] >= blo[c] ? (bhi[c] - blo[c]) * (bhi[c] - blo[c]) : 0;
+    uint32_t n = 0, slot = 0;
+    for (uint32_t f = 0; f < nf; f++) {
+        first[f] = slot;
+        if (!tsr_subd_face_has_limit(subd, f))
+            continue;
+        uint32_t np = tsr_subd_face_patches(subd, f);
+        for (uint32_t s = 0; s < np; s++, slot++) {
+            piece_of[slot] = subd_patch_has_area(subd, f, s, diag2) ? n++ : UINT32_MAX;
+            m->flat += piece_of[slot] == UINT32_MAX;
+        }
+    }
+    first[nf] = slot;
+    if (n == 0) {
+        tsr_free(a, first);
+        tsr_free(a, piece_of);
+        tsr_pmodel_destroy(m);
+        return tsr_error_set(err, TSR_ERR_EMPTY, "patch model: no face has a limit surface with area");
+    }
+    m->npieces = m->nsources = n;
     m->pieces = tsr_alloc(a, (size_t)n * sizeof *m->pieces);
     m->sources = tsr_alloc(a, (size_t)n * sizeof *m->sources);
-    uint32_t *first = tsr_alloc(a, ((size_t)nf + 1) * sizeof *first);
-    if (!m->pieces || !m->sources || !first) {
+    if (!m->pieces || !m->sources) {
         tsr_free(a, first);
+        tsr_free(a, piece_of);
         tsr_pmodel_destroy(m);
         return tsr_error_set(err, TSR_ERR_NOMEM, "patch model: out of memory");
     }
     memset(m->pieces, 0, (size_t)n * sizeof *m->pieces);
     uint32_t k = 0;
     for (uint32_t f = 0; f < nf; f++) {
-        first[f] = k;
         if (!tsr_subd_face_has_limit(subd, f))
             continue;
         uint32_t np = tsr_subd_face_patches(subd, f);
-        for (uint32_t s = 0; s < np; s++, k++) {
+        for (uint32_t s = 0; s < np; s++) {
+            if (piece_of[first[f] + s] == UINT32_MAX)
+                continue;
             piece *pc = &m->pieces[k];
             pc->source = k;
             pc->kind = KIND_SUBD;
@@ -503,15 +576,15 @@ tsr_status tsr_pmodel_from_subd(const tsr_subd *subd, const tsr_allocator *alloc
             src->domain[1] = src->domain[3] = 1;
             src->first_piece = k;
             src->pu = src->pv = 1;
+            k++;
         }
     }
-    first[nf] = k;
     /* collapsed edges (a cage face with a repeated vertex): the limit along
      * the patch edge is one point, as a Bézier edge whose control points
      * coincide; sampled at 9 points, within 1e-9 of the diagonal. Only a
      * piece with one such edge (a triangle in space, like the teapot's
-     * lid) gets it; one with more has no area to speak of and is left as
-     * it is (cages of faces like 1 1 2 2) */
+     * lid) gets it (one with more, like a face 1 1 2 2, has no area and
+     * no piece) */
     double ctol = 1e-9 * model_diag(m);
     for (uint32_t p = 0; p < m->npieces; p++) {
         piece *pc = &m->pieces[p];
@@ -543,14 +616,15 @@ tsr_status tsr_pmodel_from_subd(const tsr_subd *subd, const tsr_allocator *alloc
             tsr_subd_link l[2];
             uint32_t c = tsr_subd_patch_neighbours(subd, pc->face, pc->sub, (uint32_t)e, l);
             for (uint32_t i = 0; i < c; i++) {
-                if (!tsr_subd_face_has_limit(subd, l[i].face))
+                if (!tsr_subd_face_has_limit(subd, l[i].face) || piece_of[first[l[i].face] + l[i].sub] == UINT32_MAX)
                     continue;
-                add_link(m, p, e, first[l[i].face] + l[i].sub, (int)l[i].edge, l[i].reversed, half_of(l[i].t0),
-                         half_of(l[i].t1), half_of(l[i].s0), half_of(l[i].s1));
+                add_link(m, p, e, piece_of[first[l[i].face] + l[i].sub], (int)l[i].edge, l[i].reversed,
+                         half_of(l[i].t0), half_of(l[i].t1), half_of(l[i].s0), half_of(l[i].s1));
             }
         }
     }
     tsr_free(a, first);
+    tsr_free(a, piece_of);
     tsr_status st = orient(m);
     if (st != TSR_OK) {
         tsr_pmodel_destroy(m);
@@ -573,6 +647,7 @@ void tsr_pmodel_get_info(const tsr_pmodel *m, tsr_pmodel_info *info)
     info->collapsed_edges = m->collapsed;
     info->mirrored = m->mirrored;
     info->trimmed_sources = m->trimmed;
+    info->flat_patches = m->flat;
     memcpy(info->lo, m->lo, sizeof info->lo);
     memcpy(info->hi, m->hi, sizeof info->hi);
 }

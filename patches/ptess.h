@@ -9,7 +9,12 @@
  *    covering the source's rectangle rect = {u0, u1, v0, v1} of the
  *    patch's own (u, v) parameters: u = u0 + s (u1 - u0), v likewise;
  *  - from a tsr_subd, a source is a patch (face, sub) of subd.h, with one
- *    piece over the whole [0,1]^2 (rect {0, 1, 0, 1}).
+ *    piece over the whole [0,1]^2 (rect {0, 1, 0, 1}); a patch whose
+ *    limit has no area (du x dv vanishes all over it: a cage face whose
+ *    repeated vertices make its limit a curve, like 1 1 2 2 or 1 1 1 2,
+ *    or a point, 1 1 1 1) is no source: no triangle could cover it
+ *    without zero area, so it is left out (counted in flat_patches), and
+ *    its curve or point is drawn only where the faces around it reach it.
  *
  * Links. Piece edges are numbered as in subd.h: 0 south (t = 0), 1 east
  * (s = 1), 2 north (t = 1), 3 west (s = 0), the parameter along an edge
@@ -25,7 +30,7 @@
  * A piece edge whose control points all coincide (within the same
  * tolerance: the teapot's lid top and bottom centre), or a subd patch
  * edge whose limit is one point at 9 samples (a cage face with a repeated
- * vertex), when it is the piece's only such edge, is *collapsed*: all its
+ * vertex, like 1 2 3 3), when it is the piece's only such edge, is *collapsed*: all its
  * points are one vertex and it takes no links. Pieces are oriented consistently through
  * their links (a piece whose (s, t) orientation disagrees with the first
  * piece of its connected part is *mirrored*: its triangles are emitted
@@ -107,8 +112,14 @@ tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *al
 
 /* Builds the model of a subdivision surface (which must outlive the
  * model): one source per patch (face, sub) of every face with a limit
- * surface, numbered face by face. Errors as above (TSR_ERR_EMPTY when no
- * face has a limit surface). */
+ * surface, numbered face by face, except the patches whose limit has no
+ * area (above; tsr_pmodel_info.flat_patches counts them): |du x dv| at
+ * most 1e-10 of the squared diagonal of tsr_subd_face_bounds plus 1e-20
+ * of the squared diagonal of all faces' bounds, at every point of a 7 x 7
+ * grid inside the patch. Links to them are dropped. Errors as
+ * above (TSR_ERR_EMPTY when no face has a limit surface with area). Cost:
+ * one tsr_subd_eval with derivatives per patch with area (49 for one
+ * without), besides 36 for the collapsed edges. */
 tsr_status tsr_pmodel_from_subd(const tsr_subd *subd, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err);
 
 void tsr_pmodel_destroy(tsr_pmodel *m);
@@ -119,7 +130,8 @@ typedef struct tsr_pmodel_info {
     uint32_t collapsed_edges; /* piece edges collapsed to a point */
     uint32_t mirrored;        /* pieces flipped to agree with their neighbours */
     uint32_t trimmed_sources;
-    double lo[3], hi[3]; /* box of the model */
+    uint32_t flat_patches; /* subd patches left out: their limit has no area */
+    double lo[3], hi[3];   /* box of the model */
 } tsr_pmodel_info;
 
 void tsr_pmodel_get_info(const tsr_pmodel *m, tsr_pmodel_info *info);

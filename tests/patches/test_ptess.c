@@ -2064,6 +2064,159 @@ TEST(data_teapot)
     tsr_patch_set_free(&set);
 }
 
+/* ---- subdivision faces whose limit has no area ---------------------------------- */
+
+/* Two 9-face rings of OpenSubdiv's catmark_nonman_edges: in each, the
+ * middle face repeats its vertices (67 67 68 68, a curve between two
+ * points; 81 81 81 82, another curve), and a lone face 110 110 110 110 (a
+ * point). Bfr evaluates them, but du x dv vanishes all over: the limit is
+ * a curve or a point, which no triangle can carry without zero area. */
+static const char curve_faces_obj[] =
+    "v -1.75 0 -0.50\nv -1.42 0 -0.50\nv -1.08 0 -0.50\nv -0.75 0 -0.50\nv -0.75 0 -0.17\nv -0.75 0 0.17\n"
+    "v -0.75 0 0.50\nv -1.08 0 0.50\nv -1.42 0 0.50\nv -1.75 0 0.50\nv -1.75 0 0.17\nv -1.75 0 -0.17\n"
+    "v -1.25 -0.30 -0.17\nv -1.25 -0.30 0.17\n"
+    "f 1 2 13 12\nf 2 3 13 13\nf 3 4 5 13\nf 13 5 6 14\nf 14 6 7 8\nf 14 14 8 9\nf 11 14 9 10\nf 12 13 14 11\n"
+    "f 13 13 14 14\n"
+    "v -0.50 0 -0.50\nv -0.17 0 -0.50\nv 0.17 0 -0.50\nv 0.50 0 -0.50\nv 0.50 0 -0.17\nv 0.50 0 0.17\n"
+    "v 0.50 0 0.50\nv 0.17 0 0.50\nv -0.17 0 0.50\nv -0.50 0 0.50\nv -0.50 0 0.17\nv -0.50 0 -0.17\n"
+    "v 0.00 -0.30 -0.17\nv -0.17 -0.30 0.17\n"
+    "f 15 16 27 26\nf 16 17 27 27\nf 17 18 19 27\nf 27 19 20 27\nf 27 20 21 22\nf 28 27 22 23\nf 25 28 23 24\n"
+    "f 26 27 28 25\nf 27 27 27 28\n"
+    "v -1.75 0 -1.75\nv -1.42 0 -1.75\nv -1.08 0 -1.75\nv -0.75 0 -1.75\nv -0.75 0 -1.42\nv -0.75 0 -1.08\n"
+    "v -0.75 0 -0.75\nv -1.08 0 -0.75\nv -1.42 0 -0.75\nv -1.75 0 -0.75\nv -1.75 0 -1.08\nv -1.75 0 -1.42\n"
+    "v -1.25 -0.30 -1.25\n"
+    "f 29 30 41 40\nf 30 31 41 41\nf 31 32 33 41\nf 41 33 34 41\nf 41 34 35 36\nf 41 41 36 37\nf 39 41 37 38\n"
+    "f 40 41 41 39\nf 41 41 41 41\n"
+    "t interpolateboundary 1/0/0 1\n";
+
+/* Distance from p to triangle (a, b, c), all in double. */
+static double point_tri_dist(const double p[3], const double a[3], const double b[3], const double c[3])
+{
+    double ab[3], ac[3], n[3];
+    for (int k = 0; k < 3; k++)
+        ab[k] = b[k] - a[k], ac[k] = c[k] - a[k];
+    cross3(ab, ac, n);
+    double nn = dot3(n, n);
+    if (nn > 0) { /* inside the prism over the triangle: the distance to its plane */
+        double ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]}, q[3];
+        double d = dot3(ap, n) / nn;
+        for (int k = 0; k < 3; k++)
+            q[k] = p[k] - d * n[k];
+        double e0[3], e1[3], x[3];
+        const double *v[3] = {a, b, c};
+        bool inside = true;
+        for (int k = 0; k < 3 && inside; k++) {
+            for (int j = 0; j < 3; j++)
+                e0[j] = v[(k + 1) % 3][j] - v[k][j], e1[j] = q[j] - v[k][j];
+            cross3(e0, e1, x);
+            inside = dot3(x, n) >= 0;
+        }
+        if (inside)
+            return fabs(d) * sqrt(nn);
+    }
+    double best = INFINITY;
+    const double *v[3] = {a, b, c};
+    for (int k = 0; k < 3; k++) { /* the edges */
+        const double *s = v[k], *t = v[(k + 1) % 3];
+        double st[3] = {t[0] - s[0], t[1] - s[1], t[2] - s[2]}, sp[3] = {p[0] - s[0], p[1] - s[1], p[2] - s[2]};
+        double l2 = dot3(st, st), u = l2 > 0 ? dot3(sp, st) / l2 : 0;
+        u = u < 0 ? 0 : u > 1 ? 1 : u;
+        double q[3] = {s[0] + u * st[0], s[1] + u * st[1], s[2] + u * st[2]};
+        best = fmin(best, dist3(p, q));
+    }
+    return best;
+}
+
+/* Faces whose limit is a curve or a point have nothing a triangle could
+ * cover without zero area: they get no source and no triangles, while
+ * every face with area keeps its sources, the mesh has no degenerate
+ * triangle, every sample of every source is covered within the tolerance,
+ * and the curves and points themselves lie on the mesh (on the borders of
+ * the faces around them) within it. */
+TEST(subd_curve_faces_no_zero_area)
+{
+    tsr_cage cage;
+    tsr_error e = {0};
+    CHECK_MSG(tsr_cage_parse(curve_faces_obj, sizeof curve_faces_obj - 1, "curve_faces.obj", NULL, &cage, &e) == TSR_OK,
+              "%s", e.message);
+    tsr_subd *subd = NULL;
+    CHECK_MSG(tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, &subd, &e) == TSR_OK, "%s", e.message);
+    tsr_cage_free(&cage);
+    if (!subd)
+        return;
+    uint32_t nf = tsr_subd_face_count(subd);
+    CHECK(nf == 27);
+    tsr_pmodel *m = NULL;
+    CHECK(tsr_pmodel_from_subd(subd, NULL, &m, &e) == TSR_OK);
+    if (!m) {
+        tsr_subd_destroy(subd);
+        return;
+    }
+    tsr_pmodel_info info;
+    tsr_pmodel_get_info(m, &info);
+    double size = dist3(info.lo, info.hi), E = 1e-3 * size;
+    /* which faces have area, found here from du x dv over the face */
+    bool flat[27] = {false};
+    for (uint32_t f = 0; f < nf && f < 27; f++) {
+        CHECK(tsr_subd_face_has_limit(subd, f) && tsr_subd_face_patches(subd, f) == 1);
+        double most = 0;
+        for (int k = 0; k < 81; k++) {
+            double uv[2] = {(k % 9 + 0.5) / 9.5, (k / 9 + 0.5) / 9.5}, pos[3], du[3], dv[3], n[3];
+            CHECK(tsr_subd_eval(subd, f, 0, uv, 1, pos, du, dv) == TSR_OK);
+            cross3(du, dv, n);
+            most = fmax(most, sqrt(dot3(n, n)));
+        }
+        flat[f] = most <= 1e-12 * size * size;
+    }
+    CHECK(flat[8] && flat[17] && flat[26]);
+    uint32_t want = 0;
+    for (uint32_t f = 0; f < nf; f++)
+        want += !flat[f];
+    CHECK_MSG(info.sources == want && info.pieces == want, "%u sources, %u faces with area", info.sources, want);
+    for (uint32_t s = 0; s < info.sources; s++) {
+        tsr_psource_info si;
+        CHECK(tsr_pmodel_source_info(m, s, &si) && si.patch < 27 && !flat[si.patch]);
+    }
+    tsr_ptess_options opt = {0};
+    opt.max_error = E;
+    tsr_ptess_result r;
+    CHECK(run_ptess(m, &opt, &r));
+    tsr_validation v = validate(&r.mesh);
+    describe("curve faces", &v);
+    CHECK_MSG(v.degenerate_triangles == 0, "%u degenerate triangles, first %u (source %u)", v.degenerate_triangles,
+              v.first_degenerate,
+              v.first_degenerate < r.mesh.triangle_count ? r.tri_source[v.first_degenerate] : UINT32_MAX);
+    CHECK(v.bad_indices == 0 && v.duplicate_triangles == 0 && v.nonmanifold_edges == 0 && v.misoriented_edges == 0);
+    tsr_ptess_measure_result mr;
+    CHECK(tsr_ptess_measure(m, &r, 16, NULL, false, NULL, &mr) == TSR_OK);
+    CHECK_MSG(mr.uncovered == 0, "%llu uncovered samples", (unsigned long long)mr.uncovered);
+    /* an estimate for subd pieces (ptess.h): allow what the tool's retries would fix */
+    CHECK_MSG(mr.max_error <= 2 * E, "measured %g, tolerance %g", mr.max_error, E);
+    /* the flat faces' curves and points lie on the mesh */
+    double far = 0;
+    for (uint32_t f = 0; f < nf; f++) {
+        if (!flat[f])
+            continue;
+        for (int k = 0; k < 25; k++) {
+            double uv[2] = {(k % 5) / 4.0, (k / 5) / 4.0}, p[3];
+            CHECK(tsr_subd_eval(subd, f, 0, uv, 1, p, NULL, NULL) == TSR_OK);
+            double d = INFINITY;
+            for (uint32_t t = 0; t < r.mesh.triangle_count; t++) {
+                double c[3][3];
+                for (int q = 0; q < 3; q++)
+                    for (int x = 0; x < 3; x++)
+                        c[q][x] = r.mesh.positions[3 * (size_t)r.mesh.indices[3 * (size_t)t + q] + x];
+                d = fmin(d, point_tri_dist(p, c[0], c[1], c[2]));
+            }
+            far = fmax(far, d);
+        }
+    }
+    CHECK_MSG(far <= 2 * E, "a flat face's limit lies %g from the mesh (tolerance %g)", far, E);
+    tsr_ptess_result_free(&r);
+    tsr_pmodel_destroy(m);
+    tsr_subd_destroy(subd);
+}
+
 /* ---- data: OpenSubdiv cages -------------------------------------------------------- */
 
 typedef struct subd_ctx {
@@ -2230,4 +2383,6 @@ TEST(data_osd_cages)
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
-          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(camera_near_finer), T(runs_share_model), T(bad_options), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
+          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform),
+          T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area),
+          T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
