@@ -297,9 +297,14 @@ static void help_patches(FILE *f)
         "midpoint of every triangle edge; for a camera, in pixels between their projections. Every mesh is also\n"
         "validated (oriented, edge-manifold, no bad, degenerate or duplicate triangles, no T-junctions) and\n"
         "searched for cracks: boundary edges lying along another boundary edge (within 1e-6 of the model's\n"
-        "diagonal), where surfaces that should be joined are not (along a non-manifold edge of a cage,\n"
-        "which ptess.h does not join, they count as seams). Exits 1 when a run exceeds its tolerance, leaves\n"
-        "a sample of an untrimmed patch uncovered, or fails a check.\n\n"
+        "diagonal), where surfaces that should be joined are not. Along a patch edge without neighbour (for a\n"
+        "subdivision cage, as tsr_subd_patch_neighbours says: the boundary, a hole, a non-manifold edge),\n"
+        "which ptess.h joins to nothing, such edges count as seams, not cracks, and a T-junction (a vertex,\n"
+        "of any sheet, inside an open edge) is no failure: it is reported as unlinked-edge-t-junctions\n"
+        "(JSON: unlinked_edge_t_junctions), apart from the T-junctions that fail (JSON: t_junctions), those on\n"
+        "any other open edge, such as a linked patch edge left open. A patch set's links are not known to the\n"
+        "check: there every T-junction fails. Exits 1 when a run exceeds its tolerance, leaves a sample of an\n"
+        "untrimmed patch uncovered, or fails a check.\n\n"
         "IN is a Bezier patch file (.bpt), an OBJ with free-form surfaces (cstype/surf), or a polygon OBJ read as\n"
         "the cage of a subdivision surface (Catmull-Clark; bilinear when the file name starts with \"bilinear\").\n\n"
         "options:\n"
@@ -323,6 +328,8 @@ static void help_patches(FILE *f)
         "                        most half their tolerance, up to N times (default 6; 0: never), as ptess.h\n"
         "                        prescribes; Bezier pieces are never retried, their bound is a proof\n"
         "  --scheme S            catmark or bilinear: the subdivision scheme of a polygon OBJ\n"
+        "  --assume-linked       take every patch edge as linked: nothing counts as a seam and every\n"
+        "                        T-junction fails (what a crack between joined patches would give)\n"
         "  --json                print the results as JSON\n"
         "  -h, --help            this help\n");
 }
@@ -393,34 +400,41 @@ static double seg_dist2(const float *p, const float *a, const float *b)
 }
 
 
-typedef struct seam_pair {
-    uint32_t edge, vertex;
-} seam_pair;
+typedef struct vertex_key {
+    double x; /* the coordinate along the sweep axis */
+    uint32_t v;
+} vertex_key;
 
-static int cmp_seam_pair(const void *x, const void *y)
+static int cmp_vertex_key(const void *x, const void *y)
 {
-    const seam_pair *a = x, *b = y;
-    if (a->edge != b->edge)
-        return a->edge < b->edge ? -1 : 1;
-    return a->vertex < b->vertex ? -1 : a->vertex > b->vertex;
+    const vertex_key *a = x, *b = y;
+    return a->x < b->x ? -1 : a->x > b->x;
 }
 
 typedef struct boundary_report {
-    uint32_t boundary;       /* boundary edges */
-    uint32_t cracks;         /* boundary edges along another one, where ptess.h joins surfaces */
-    uint32_t seams;          /* the same along unlinked patch edges (non-manifold cage edges) */
-    uint32_t seam_junctions; /* (vertex, edge) T-junctions of tsr_mesh_validate between unlinked boundaries */
+    uint32_t boundary; /* boundary edges */
+    uint32_t cracks;   /* boundary edges along another one, where ptess.h joins surfaces */
+    uint32_t seams;    /* the same along unlinked patch edges (no neighbour: boundary, non-manifold cage edge) */
+    uint32_t unlinked_junctions; /* (vertex, edge) T-junctions of tsr_mesh_validate whose edge is unlinked */
 } boundary_report;
 
 /* Cracks: boundary edges (one triangle) of the welded mesh lying within
  * eps of another boundary edge (both endpoints within eps of its segment),
  * found by a sweep along x. Half-edges marked in `unlinked` (may be NULL)
- * lie where ptess.h joins nothing by contract (a non-manifold edge of a
- * cage, where three or more sheets meet): coincidences among those are
- * seams, not cracks, and the T-junctions that tsr_mesh_validate finds
- * between them (a boundary vertex of one sheet inside a boundary edge of
- * another, counted as the validator counts them, with the same eps) are
- * counted in seam_junctions, to be discounted from its total. */
+ * lie on a patch edge that has no neighbour in the model (the cage's
+ * boundary, a hole, a non-manifold edge where three or more sheets meet or
+ * two run the same way), where ptess.h joins nothing by contract:
+ * coincidences among those are seams, not cracks.
+ *
+ * unlinked_junctions: the T-junctions that tsr_mesh_validate counts (a
+ * referenced vertex other than its ends within eps of an open edge,
+ * tsr_point_on_open_segment, one per vertex and half-edge) whose open edge
+ * is unlinked. Whatever the vertex is (a boundary or an interior vertex of
+ * another sheet lying along that edge), nothing was to be joined there and
+ * no gap opens: the edge is open because the model says so. These are
+ * counted here, on the same terms as the validator, to be discounted from
+ * its total; a T-junction on any other open edge (a linked patch edge left
+ * open: a crack between joined patches) stays in it. */
 static tsr_status check_boundary(const tsr_mesh *m, double eps, const bool *unlinked, boundary_report *rep)
 {
     memset(rep, 0, sizeof *rep);
@@ -432,15 +446,16 @@ static tsr_status check_boundary(const tsr_mesh *m, double eps, const bool *unli
         nb += he.twin[h] == TSR_NO_TWIN;
     boundary_edge *e = malloc((nb ? nb : 1) * sizeof *e);
     bool *hit = calloc(nb ? nb : 1, sizeof *hit);
-    seam_pair *pairs = NULL;
-    size_t npairs = 0, cap = 0;
+    bool *used = calloc((size_t)m->vertex_count + 1, sizeof *used);
+    vertex_key *vk = NULL;
     tsr_status st = TSR_OK;
-    if (!e || !hit) {
+    if (!e || !hit || !used) {
         st = TSR_ERR_NOMEM;
         tsr_halfedges_free(&he);
         goto done;
     }
     nb = 0;
+    bool any_unlinked = false;
     for (uint32_t h = 0; h < he.count; h++) {
         if (he.twin[h] != TSR_NO_TWIN)
             continue;
@@ -448,6 +463,7 @@ static tsr_status check_boundary(const tsr_mesh *m, double eps, const bool *unli
         b->a = m->indices[h];
         b->b = m->indices[3 * (h / 3) + (h % 3 + 1) % 3];
         b->unlinked = unlinked && unlinked[h];
+        any_unlinked |= b->unlinked;
         for (int k = 0; k < 3; k++) {
             double pa = m->positions[3 * (size_t)b->a + k], pb = m->positions[3 * (size_t)b->b + k];
             b->lo[k] = (pa < pb ? pa : pb) - eps;
@@ -457,7 +473,7 @@ static tsr_status check_boundary(const tsr_mesh *m, double eps, const bool *unli
     tsr_halfedges_free(&he);
     qsort(e, nb, sizeof *e, cmp_boundary_edge);
     double eps2 = eps * eps;
-    for (uint32_t i = 0; i < nb && st == TSR_OK; i++)
+    for (uint32_t i = 0; i < nb; i++)
         for (uint32_t j = i + 1; j < nb && e[j].lo[0] <= e[i].hi[0]; j++) {
             if (e[j].lo[1] > e[i].hi[1] || e[j].hi[1] < e[i].lo[1] || e[j].lo[2] > e[i].hi[2] ||
                 e[j].hi[2] < e[i].lo[2])
@@ -468,45 +484,64 @@ static tsr_status check_boundary(const tsr_mesh *m, double eps, const bool *unli
                 hit[i] = true;
             if (seg_dist2(b0, a0, a1) <= eps2 && seg_dist2(b1, a0, a1) <= eps2)
                 hit[j] = true;
-            if (!e[i].unlinked || !e[j].unlinked)
-                continue;
-            if (npairs + 4 > cap) {
-                size_t nc = cap ? 2 * cap : 256;
-                seam_pair *q = realloc(pairs, nc * sizeof *q);
-                if (!q) {
-                    st = TSR_ERR_NOMEM;
-                    break;
-                }
-                pairs = q;
-                cap = nc;
-            }
-            pairs[npairs++] = (seam_pair){i, e[j].a};
-            pairs[npairs++] = (seam_pair){i, e[j].b};
-            pairs[npairs++] = (seam_pair){j, e[i].a};
-            pairs[npairs++] = (seam_pair){j, e[i].b};
         }
-    if (st != TSR_OK)
-        goto done;
     for (uint32_t i = 0; i < nb; i++) {
         rep->cracks += hit[i] && !e[i].unlinked;
         rep->seams += hit[i] && e[i].unlinked;
     }
     rep->boundary = nb;
-    if (npairs)
-        qsort(pairs, npairs, sizeof *pairs, cmp_seam_pair);
-    for (size_t k = 0; k < npairs; k++) {
-        if (k > 0 && !cmp_seam_pair(&pairs[k], &pairs[k - 1]))
+    if (!any_unlinked)
+        goto done;
+    /* The vertices the triangles use, sorted along the box's longest axis;
+     * each unlinked edge tests those within its box along that axis. */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    uint32_t nv = 0;
+    for (size_t k = 0; k < 3 * (size_t)m->triangle_count; k++)
+        if (m->indices[k] < m->vertex_count && !used[m->indices[k]]) {
+            used[m->indices[k]] = true;
+            nv++;
+            for (int c = 0; c < 3; c++) {
+                double x = m->positions[3 * (size_t)m->indices[k] + c];
+                lo[c] = x < lo[c] ? x : lo[c];
+                hi[c] = x > hi[c] ? x : hi[c];
+            }
+        }
+    int ax = hi[1] - lo[1] > hi[0] - lo[0] ? 1 : 0;
+    ax = hi[2] - lo[2] > hi[ax] - lo[ax] ? 2 : ax;
+    vk = malloc((nv ? nv : 1) * sizeof *vk);
+    if (!vk) {
+        st = TSR_ERR_NOMEM;
+        goto done;
+    }
+    nv = 0;
+    for (uint32_t v = 0; v < m->vertex_count; v++)
+        if (used[v])
+            vk[nv++] = (vertex_key){m->positions[3 * (size_t)v + ax], v};
+    qsort(vk, nv, sizeof *vk, cmp_vertex_key);
+    for (uint32_t i = 0; i < nb; i++) {
+        const boundary_edge *E = &e[i];
+        if (!E->unlinked || E->a == E->b)
             continue;
-        const boundary_edge *E = &e[pairs[k].edge];
-        if (pairs[k].vertex != E->a && pairs[k].vertex != E->b &&
-            tsr_point_on_open_segment(m->positions + 3 * (size_t)pairs[k].vertex, m->positions + 3 * (size_t)E->a,
-                            m->positions + 3 * (size_t)E->b, eps))
-            rep->seam_junctions++;
+        uint32_t l = 0, r = nv; /* first key >= E->lo[ax] */
+        while (l < r) {
+            uint32_t mid = l + (r - l) / 2;
+            if (vk[mid].x < E->lo[ax])
+                l = mid + 1;
+            else
+                r = mid;
+        }
+        const float *pa = m->positions + 3 * (size_t)E->a, *pb = m->positions + 3 * (size_t)E->b;
+        for (uint32_t k = l; k < nv && vk[k].x <= E->hi[ax]; k++) {
+            uint32_t v = vk[k].v;
+            if (v != E->a && v != E->b && tsr_point_on_open_segment(m->positions + 3 * (size_t)v, pa, pb, eps))
+                rep->unlinked_junctions++;
+        }
     }
 done:
     free(e);
     free(hit);
-    free(pairs);
+    free(used);
+    free(vk);
     return st;
 }
 
@@ -548,7 +583,8 @@ typedef struct patch_run {
     double bound, seconds;
     uint32_t triangles, vertices, leaves, rounds, rescaled;
     boundary_report bnd;
-    uint32_t t_junctions;
+    uint32_t t_junctions;            /* counted: failures */
+    uint32_t t_junctions_discounted; /* along unlinked patch edges (bnd.unlinked_junctions): no failure */
     bool watertight, conforming, ok;
     char failed[600];  /* why the tessellation itself failed, or "" */
     char invalid[300]; /* tsr_validation_describe of the mesh */
@@ -556,11 +592,12 @@ typedef struct patch_run {
 
 /* Runs the tessellator (again, with smaller tolerances for the pieces of
  * sources whose error is an estimate, while they measure beyond it), then
- * validates the final mesh. CLI_FAIL only when out of memory; a failing
- * check is recorded in pr. */
+ * validates the final mesh. assume_linked: take every patch edge as
+ * linked (nothing is a seam, no T-junction discounted). CLI_FAIL only when
+ * out of memory; a failing check is recorded in pr. */
 static int patch_run_do(const tsr_pmodel *m, const tsr_pmodel_info *info, const tsr_subd *subd,
                         const tsr_ptess_options *base, uint32_t per_side, uint32_t retries, double crack_eps,
-                        patch_run *pr)
+                        bool assume_linked, patch_run *pr)
 {
     tsr_ptess_options o = *base;
     o.camera = pr->has_camera ? &pr->cam : NULL;
@@ -635,8 +672,13 @@ static int patch_run_do(const tsr_pmodel *m, const tsr_pmodel_info *info, const 
     tsr_validation val;
     tsr_validate_options vo = {0};
     vo.epsilon = crack_eps;
-    bool *unlinked = subd ? subd_unlinked_halfedges(m, subd, &res) : NULL;
-    if ((subd && !unlinked) || tsr_mesh_validate(&res.mesh, &vo, &val) != TSR_OK ||
+    /* Which patch edges have no neighbour is known from the model, apart
+     * from the mesh: for a subdivision cage, tsr_subd_patch_neighbours. A
+     * patch set's links are not exposed (ptess.h), so there every patch
+     * edge counts as linked and nothing is discounted. */
+    bool want_unlinked = subd && !assume_linked;
+    bool *unlinked = want_unlinked ? subd_unlinked_halfedges(m, subd, &res) : NULL;
+    if ((want_unlinked && !unlinked) || tsr_mesh_validate(&res.mesh, &vo, &val) != TSR_OK ||
         check_boundary(&res.mesh, crack_eps, unlinked, &pr->bnd) != TSR_OK) {
         free(unlinked);
         tsr_ptess_result_free(&res);
@@ -648,10 +690,17 @@ static int patch_run_do(const tsr_pmodel *m, const tsr_pmodel_info *info, const 
     pr->watertight = val.bad_indices == 0 && val.nonfinite_positions == 0 && val.degenerate_triangles == 0 &&
                      val.duplicate_triangles == 0 && val.nonmanifold_edges == 0 && val.misoriented_edges == 0 &&
                      val.first_bad_triangle == UINT32_MAX && pr->bnd.cracks == 0;
-    /* T-junctions between sheets that ptess.h does not join are no
-     * failure; any other is */
-    pr->t_junctions =
-        val.t_junctions - (pr->bnd.seam_junctions < val.t_junctions ? pr->bnd.seam_junctions : val.t_junctions);
+    /* The rule: a T-junction (a vertex inside an open edge) is a failure
+     * unless that open edge lies on a patch edge without neighbour, where
+     * ptess.h joins nothing by contract (the edge is open because the
+     * model is, whatever sheet the vertex belongs to: coplanar overlapping
+     * cage faces put interior vertices of one sheet on the other's open
+     * edge, catmark_val2_nonman). A T-junction on an open edge of a linked
+     * patch edge (a crack between joined patches) or of no patch edge still
+     * fails. The discounted ones are reported apart, not hidden. */
+    pr->t_junctions_discounted =
+        pr->bnd.unlinked_junctions < val.t_junctions ? pr->bnd.unlinked_junctions : val.t_junctions;
+    pr->t_junctions = val.t_junctions - pr->t_junctions_discounted;
     pr->conforming = pr->t_junctions == 0;
     tsr_validation_describe(&val, pr->invalid, sizeof pr->invalid);
     pr->ok = pr->meas.max_error <= pr->tol * (1 + 1e-9) && pr->meas.uncovered == 0 && pr->watertight &&
@@ -709,7 +758,7 @@ static cJSON *patch_run_json(const patch_run *pr)
     cJSON_AddNumberToObject(c, "cracks", pr->bnd.cracks);
     cJSON_AddNumberToObject(c, "t_junctions", pr->t_junctions);
     cJSON_AddNumberToObject(c, "nonmanifold_seam_edges", pr->bnd.seams);
-    cJSON_AddNumberToObject(c, "nonmanifold_seam_junctions", pr->bnd.seam_junctions);
+    cJSON_AddNumberToObject(c, "unlinked_edge_t_junctions", pr->t_junctions_discounted);
     cJSON_AddNumberToObject(c, "boundary_edges", pr->bnd.boundary);
     cJSON_AddNumberToObject(c, "rounds", pr->rounds);
     cJSON_AddNumberToObject(c, "rescaled_pieces", pr->rescaled);
@@ -730,7 +779,7 @@ static int run_patches(int argc, char **argv)
     uint32_t ncams = 8, seed = 1, tile = 4, max_level = 0, per_side = 64, retries = 6;
     double max_error = 0;
     const char *scheme = NULL;
-    bool json = false;
+    bool json = false, assume_linked = false;
     char **cam_args = calloc((size_t)argc + 1, sizeof *cam_args);
     int ncam_args = 0, rc = CLI_OK;
     if (!cam_args) {
@@ -748,6 +797,8 @@ static int run_patches(int argc, char **argv)
             return CLI_OK;
         } else if (!strcmp(a, "--json"))
             json = true;
+        else if (!strcmp(a, "--assume-linked"))
+            assume_linked = true;
         else if (!strcmp(a, "--camera") && has_value)
             cam_args[ncam_args++] = argv[++i];
         else if (!strcmp(a, "--scheme") && has_value) {
@@ -853,7 +904,7 @@ static int run_patches(int argc, char **argv)
         patch_run *r = &runs[k];
         if (k == 0)
             r->tol = tol;
-        rc = patch_run_do(p.model, &info, p.subd, &base, per_side, retries, 1e-6 * diag, r);
+        rc = patch_run_do(p.model, &info, p.subd, &base, per_side, retries, 1e-6 * diag, assume_linked, r);
         if (rc != CLI_OK)
             break;
         failures += !r->ok;
@@ -862,12 +913,15 @@ static int run_patches(int argc, char **argv)
         if (json)
             continue;
         patch_run_reasons(r, why, sizeof why);
-        char retried[128] = "";
+        char retried[192] = "";
         if (r->rounds > 1)
             snprintf(retried, sizeof retried, "  rounds %u (%u pieces rescaled)", r->rounds, r->rescaled);
         if (r->bnd.seams)
             snprintf(retried + strlen(retried), sizeof retried - strlen(retried), "  nonmanifold-seam-edges %u",
                      r->bnd.seams);
+        if (r->t_junctions_discounted)
+            snprintf(retried + strlen(retried), sizeof retried - strlen(retried), "  unlinked-edge-t-junctions %u",
+                     r->t_junctions_discounted);
         if (k == 0)
             printf(
                 "view-independent  max_error %.6g (tolerance %.6g, bound %.6g)  rms %.3g  triangles %u  vertices %u  "

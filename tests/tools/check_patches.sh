@@ -92,6 +92,44 @@ echo "ok json keys"
 grep -q "FAIL beyond-tolerance" "$dir/tight.txt" || fail "no beyond-tolerance failure: $(cat "$dir/tight.txt")"
 echo "ok an impossible tolerance fails"
 
+# T-junctions along patch edges without neighbour are no failure, and only
+# those. Two coplanar cage triangles on one edge, 3 4 1 and 3 4 2, overlap
+# (catmark_val2_nonman's faces 13 and 14): their shared edge runs the same
+# way in both (non-manifold: no neighbour), their other edges are boundary,
+# and with the boundary interpolated each limit sheet's open edge from a
+# corner to the midpoint of a cage edge runs along the other's median:
+# interior vertices of one sheet lie inside the other's open edges. Nothing
+# is to be joined there (ptess.h links no such edge), so the check passes
+# and reports them apart, as unlinked_edge_t_junctions.
+cat > "$dir/overlap.obj" <<'EOF'
+v 0.3 0 -0.7
+v 0.7 0 -0.7
+v 0.3 -0.2 -0.9
+v 0.7 -0.2 -0.9
+f 3 4 1
+f 3 4 2
+t interpolateboundary 1/0/0 1
+EOF
+json_count() { # KEY FILE: the view-independent run's count (its keys come before the cameras')
+  grep -o "\"$1\":[[:space:]]*[0-9]*" "$2" | head -1 | grep -o '[0-9]*$'
+}
+expect_ok "overlapping cage triangles" "$dir/overlap.obj" --cameras 2
+"$tessera" check patches "$dir/overlap.obj" --cameras 0 --json > "$dir/overlap.json" || fail "overlap: json check failed"
+counted=$(json_count t_junctions "$dir/overlap.json")
+discounted=$(json_count unlinked_edge_t_junctions "$dir/overlap.json")
+[ "$counted" = 0 ] || fail "overlap: '$counted' T-junctions counted"
+[ -n "$discounted" ] && [ "$discounted" -gt 0 ] || fail "overlap: no unlinked-edge T-junction reported: vacuous"
+echo "ok overlap: $discounted T-junctions along unlinked edges reported, none counted"
+# The other half: the same T-junctions on edges taken as linked, as a crack
+# between joined patches would leave them (ptess.h leaves no linked edge
+# open, so the check is told to assume the links), all fail.
+"$tessera" check patches "$dir/overlap.obj" --cameras 0 --assume-linked > "$dir/linked.txt" 2>&1
+[ $? -eq 1 ] || fail "T-junctions on linked edges passed: $(tail -1 "$dir/linked.txt")"
+grep -q "^view-independent .* FAIL.* t-junctions $discounted\( \|$\)" "$dir/linked.txt" \
+  || fail "linked: not the $discounted T-junctions counted: $(grep ^view "$dir/linked.txt")"
+! grep -q "unlinked-edge-t-junctions" "$dir/linked.txt" || fail "linked: T-junctions discounted: $(grep ^view "$dir/linked.txt")"
+echo "ok the same T-junctions on linked edges fail:$(grep -o ' FAIL.*' "$dir/linked.txt" | head -1)"
+
 # bad input fails cleanly, naming the file
 expect_bad "missing file" "$dir/missing.bpt"
 : > "$dir/empty.obj"
@@ -125,7 +163,8 @@ expect_ok teapot "$data/patches/teapot.bpt"
 head -n 200 "$data/patches/teapot.bpt" > "$dir/truncated.bpt"
 expect_bad "truncated bpt" "$dir/truncated.bpt"
 
-for shape in catmark_cube catmark_cube_creases1 catmark_gregory_test1 catmark_fan catmark_hole_test1 bilinear_cube; do
+for shape in catmark_cube catmark_cube_creases1 catmark_gregory_test1 catmark_fan catmark_hole_test1 bilinear_cube \
+             catmark_val2_nonman; do
   expect_ok "$shape" "$data/patches/osd/$shape.obj" --cameras 3
 done
 # the scheme can be forced: the cube's cage as a bilinear surface is the cage itself
