@@ -975,6 +975,16 @@ static bool chains_fit(const tsr_cdt *d, uint32_t a, uint32_t q)
     return true;
 }
 
+/* Edge k of t covered by one more segment with the given mark: the lower
+ * label, and the parity of the number of segments covering it (a first
+ * cover takes the mark as it is). */
+static void cover_edge(tsr_cdt *d, uint32_t t, int k, uint32_t mark)
+{
+    uint32_t old = cdt_mark(d, t, k);
+    uint32_t lo = CDT_LABEL(old) < CDT_LABEL(mark) ? CDT_LABEL(old) : CDT_LABEL(mark);
+    tsr__cdt_mark_edge(d, t, k, old ? lo | (~(old ^ mark) & CDT_EVEN) : mark);
+}
+
 static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa, uint32_t ob, uint32_t mark, int depth,
                                  uint32_t *reached)
 {
@@ -996,11 +1006,7 @@ static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa
              * rounded crossing) ending exactly on the input segment */
             if ((ox == 0 && (X[0] - A[0]) * (B[0] - A[0]) + (X[1] - A[1]) * (B[1] - A[1]) > 0) ||
                 on_original(d, oa, ob, a, b, x)) {
-                /* an edge covered again: the lower label, and the parity of
-                 * the number of segments covering it */
-                uint32_t old = cdt_mark(d, t, ia);
-                uint32_t lo = CDT_LABEL(old) < CDT_LABEL(mark) ? CDT_LABEL(old) : CDT_LABEL(mark);
-                tsr__cdt_mark_edge(d, t, ia, old ? lo | (~(old ^ mark) & CDT_EVEN) : mark);
+                cover_edge(d, t, ia, mark);
                 *reached = x;
                 return STEP_DONE;
             }
@@ -1019,9 +1025,7 @@ static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa
                      * exactly on the input segment: the piece ends there
                      * (the walk below starts past y and would leave it
                      * beside the segment, a sliver off it) */
-                    uint32_t old = cdt_mark(d, t, ky);
-                    uint32_t lo = CDT_LABEL(old) < CDT_LABEL(mark) ? CDT_LABEL(old) : CDT_LABEL(mark);
-                    tsr__cdt_mark_edge(d, t, ky, old ? lo | (~(old ^ mark) & CDT_EVEN) : mark);
+                    cover_edge(d, t, ky, mark);
                     *reached = y;
                     return STEP_DONE;
                 }
@@ -1030,10 +1034,7 @@ static step_result recover_piece(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t oa
                 if (nx && ny) /* both: the one nearer the line */
                     nx = fabs(ox) <= fabs(tsr_orient2d(A, B, P(d, y)));
                 if (nx || ny) {
-                    int k = nx ? ia : ky;
-                    uint32_t old = cdt_mark(d, t, k);
-                    uint32_t lo = CDT_LABEL(old) < CDT_LABEL(mark) ? CDT_LABEL(old) : CDT_LABEL(mark);
-                    tsr__cdt_mark_edge(d, t, k, lo | (~(old ^ mark) & CDT_EVEN));
+                    cover_edge(d, t, nx ? ia : ky, mark); /* marked: covered again */
                     *reached = nx ? x : y;
                     return STEP_DONE;
                 }
