@@ -176,6 +176,17 @@ typedef struct tsr_tin_options {
      * fifth fewer triangles, in 1.3-2x the time); without them the
      * triangulation is (constrained) Delaunay */
     bool no_flip;
+    /* delaunay with a bound and no budget: the window is cut into blocks
+     * of about block x block cells, each meshed on its own with its border
+     * fixed as a window's is (so blocks meet with identical vertices and
+     * the mesh is conforming across them), on up to `threads` threads at
+     * once. The blocks depend on the window's size and `block` alone, so
+     * the mesh is the same whatever the thread count. block 0: 256;
+     * block >= the window's size: one block (the whole window). threads
+     * 0: one per online processor. With a budget (or no bound) the window
+     * is one block on one thread: a budget is global. The heightfield's
+     * allocator is then called from several threads at once. */
+    uint32_t block, threads;
     /* A window: mesh only columns x .. x+w-1, rows y .. y+h-1 (w = h = 0:
      * everything). Vertices keep the whole heightfield's coordinates, so
      * meshes of adjacent windows (sharing their border row or column)
@@ -192,9 +203,10 @@ typedef struct tsr_tin_report {
     double target_error;      /* the tolerance refinement worked to (world units) */
     double border_error;      /* the border simplification's tolerance */
     double estimated_error;   /* the mesher's own estimate of the max error (not measured) */
-    uint32_t border_vertices; /* vertices fixed on the border and no-data boundaries */
+    uint32_t border_vertices; /* vertices fixed on the border, no-data boundaries and block seams (per block) */
     uint32_t insertions;      /* delaunay: points inserted by the greedy pass */
     uint32_t flips;           /* delaunay: data-dependent edge flips made */
+    uint32_t blocks;          /* delaunay: blocks meshed (tsr_tin_options.block) */
     bool budget_reached;      /* a budget stopped refinement */
 } tsr_tin_report;
 

@@ -45,8 +45,10 @@
 #include "terrain_internal.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* ---- the candidate queue: an 8-ary max-heap of (key, slot) words with
  * lazy deletion. Each triangle slot keeps its own record (error and
@@ -197,9 +199,20 @@ typedef struct tvx {
     float z;
 } tvx;
 
+/* Where a block lies: the whole heightfield (row stride w), the block's
+ * origin in it, and whether the block or the ring of samples around it
+ * has no-data (then its border is cut into runs as no-data boundaries
+ * are, at the same points as its neighbours cut theirs). */
+typedef struct tin_ctx {
+    const float *data;
+    uint32_t w, h, x, y;
+    bool nodata;
+} tin_ctx;
+
 typedef struct tin {
     const float *data;
     uint32_t w, h;
+    tin_ctx ctx;
     const tsr_allocator *a;
     tsr_cdt *cdt;
     heap q;
@@ -338,6 +351,18 @@ static inline bool cell_ok(const tin *t, int64_t c, int64_t r)
         return false;
     const float *p = t->data + (size_t)r * t->w + (size_t)c;
     return !isnan(p[0]) && !isnan(p[1]) && !isnan(p[t->w]) && !isnan(p[t->w + 1]);
+}
+
+/* cell_ok, but for cells outside the block from the whole heightfield */
+static inline bool cell_ctx(const tin *t, int64_t c, int64_t r)
+{
+    if (c >= 0 && r >= 0 && c + 1 < t->w && r + 1 < t->h)
+        return cell_ok(t, c, r);
+    int64_t gc = c + t->ctx.x, gr = r + t->ctx.y;
+    if (gc < 0 || gr < 0 || gc + 1 >= t->ctx.w || gr + 1 >= t->ctx.h)
+        return false;
+    const float *p = t->ctx.data + (size_t)gr * t->ctx.w + (size_t)gc;
+    return !isnan(p[0]) && !isnan(p[1]) && !isnan(p[t->ctx.w]) && !isnan(p[t->ctx.w + 1]);
 }
 
 /* floor(a / b) for b > 0 and |a| < 2^50: the double quotient truncated,
@@ -907,9 +932,21 @@ static inline bool run_edge(const tin *t, int axis, uint32_t line, uint32_t i)
 {
     return axis ? vedge(t, line, i) : hedge(t, i, line);
 }
+/* Crossings count on both sides of the line, outside the block too: a
+ * block's side is cut where its neighbour's cells change (the same points
+ * the neighbour cuts its side at), so both mesh their shared part alike. */
+static inline bool hedge_ctx(const tin *t, int64_t c, int64_t r)
+{
+    return cell_ctx(t, c, r - 1) != cell_ctx(t, c, r);
+}
+static inline bool vedge_ctx(const tin *t, int64_t c, int64_t r)
+{
+    return cell_ctx(t, c - 1, r) != cell_ctx(t, c, r);
+}
 static inline bool run_crossed(const tin *t, int axis, uint32_t line, uint32_t i)
 {
-    return axis ? hedge(t, line, i) || hedge(t, (int64_t)line - 1, i) : vedge(t, i, line) || vedge(t, i, (int64_t)line - 1);
+    return axis ? hedge_ctx(t, line, i) || hedge_ctx(t, (int64_t)line - 1, i)
+                : vedge_ctx(t, i, line) || vedge_ctx(t, i, (int64_t)line - 1);
 }
 
 /* The boundary: the outer border's four sides, or, with no-data, every
@@ -1039,11 +1076,12 @@ static bool on_boundary(const tin *t, uint32_t smp)
     return t->nodata && !(cell_ok(t, c, r) && cell_ok(t, c - 1, r) && cell_ok(t, c, r - 1) && cell_ok(t, c - 1, r - 1));
 }
 
-static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double btol, bool fixed_border,
-                                uint32_t max_tri, uint32_t max_vert, const tsr_tin_options *o, tsr_mesh *mesh,
-                                tsr_tin_report *rep, tsr_error *err)
+static tsr_status mesh_delaunay(const tsr_heightfield *hf, const tin_ctx *ctx, double target, double btol,
+                                bool fixed_border, uint32_t max_tri, uint32_t max_vert, const tsr_tin_options *o,
+                                tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err)
 {
     tin t = {0};
+    t.ctx = *ctx;
     t.fixed_border = fixed_border;
     t.flip = !o->no_flip;
     t.data = hf->data;
@@ -1054,8 +1092,7 @@ static tsr_status mesh_delaunay(const tsr_heightfield *hf, double target, double
     if (ns >= UINT32_MAX)
         return tsr_error_set(err, TSR_ERR_TOO_LARGE, "delaunay mesh: %ux%u samples exceed 32-bit sample indices",
                              t.w, t.h);
-    for (size_t i = 0; i < ns && !t.nodata; i++)
-        t.nodata = isnan(t.data[i]);
+    t.nodata = ctx->nodata;
     t.cdt = tsr_cdt_create(t.a);
     if (!t.cdt)
         return tsr_error_set(err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
@@ -1250,6 +1287,286 @@ fail:
     tin_free(&t);
     if (st == TSR_ERR_NOMEM)
         return tsr_error_set(err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
+    return st;
+}
+
+/* ---- blocks: the delaunay mesh of a window, cut into blocks ---------- */
+
+/* Whether the window x, y, w, h or the ring of samples around it (inside
+ * the heightfield) has no-data. */
+static bool ring_nodata(const tsr_heightfield *hf, uint32_t x, uint32_t y, uint32_t w, uint32_t h)
+{
+    uint32_t x0 = x ? x - 1 : 0, y0 = y ? y - 1 : 0;
+    uint32_t x1 = x + w < hf->width ? x + w : hf->width - 1, y1 = y + h < hf->height ? y + h : hf->height - 1;
+    for (uint32_t r = y0; r <= y1; r++) {
+        const float *row = hf->data + (size_t)r * hf->width;
+        for (uint32_t c = x0; c <= x1; c++)
+            if (isnan(row[c]))
+                return true;
+    }
+    return false;
+}
+
+typedef struct tin_block {
+    uint32_t x, y, w, h; /* in the whole heightfield */
+    tsr_mesh mesh;       /* window coordinates (x - window x) dx, ... */
+    tsr_tin_report rep;
+    tsr_status st;
+    tsr_error err;
+    double done; /* progress, 0..1 */
+} tin_block;
+
+typedef struct tin_job {
+    const tsr_heightfield *hf;
+    const tsr_tin_options *o;
+    double target, btol;
+    uint32_t wx, wy; /* the window's origin */
+    tin_block *b;
+    uint32_t nb, next;
+    bool failed;
+    double cells; /* in all blocks */
+    pthread_mutex_t lock;
+} tin_job;
+
+typedef struct block_progress_user {
+    tin_job *job;
+    uint32_t i;
+} block_progress_user;
+
+/* A block's progress into the window's (serialised: the caller's
+ * function need not be thread-safe). */
+static void block_progress(void *user, double f)
+{
+    block_progress_user *u = user;
+    tin_job *j = u->job;
+    pthread_mutex_lock(&j->lock);
+    j->b[u->i].done = f;
+    double sum = 0;
+    for (uint32_t i = 0; i < j->nb; i++)
+        sum += j->b[i].done * (double)(j->b[i].w - 1) * (j->b[i].h - 1);
+    j->o->progress(j->o->progress_user, sum / j->cells);
+    pthread_mutex_unlock(&j->lock);
+}
+
+static void mesh_block(tin_job *j, uint32_t i)
+{
+    tin_block *b = &j->b[i];
+    const tsr_heightfield *hf = j->hf;
+    const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
+    tsr_mesh_init(&b->mesh, 0, a);
+    tin_ctx ctx = {hf->data, hf->width, hf->height, b->x, b->y, ring_nodata(hf, b->x, b->y, b->w, b->h)};
+    bool any = !ctx.nodata;
+    for (uint32_t r = b->y; r + 1 < b->y + b->h && !any; r++)
+        for (uint32_t c = b->x; c + 1 < b->x + b->w && !any; c++) {
+            const float *p = hf->data + (size_t)r * hf->width + c;
+            any = !isnan(p[0]) && !isnan(p[1]) && !isnan(p[hf->width]) && !isnan(p[hf->width + 1]);
+        }
+    if (!any) { /* no cell: no triangle */
+        b->st = TSR_OK;
+        return;
+    }
+    tsr_heightfield *crop = NULL;
+    const tsr_heightfield *src = hf;
+    if (b->x || b->y || b->w != hf->width || b->h != hf->height) {
+        crop = tsr_heightfield_crop(hf, b->x, b->y, b->w, b->h, a);
+        if (!crop) {
+            b->st = tsr_error_set(&b->err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
+            return;
+        }
+        src = crop;
+    }
+    tsr_tin_options o = *j->o;
+    block_progress_user pu = {j, i};
+    if (o.progress && j->nb > 1) {
+        o.progress = block_progress;
+        o.progress_user = &pu;
+    }
+    b->st = mesh_delaunay(src, &ctx, j->target, j->btol, true, 0, 0, &o, &b->mesh, &b->rep, &b->err);
+    tsr_heightfield_destroy(crop);
+    /* block coordinates to the window's */
+    double ox = (double)(b->x - j->wx), oy = (double)(b->y - j->wy);
+    for (uint32_t k = 0; b->st == TSR_OK && k < b->mesh.vertex_count; k++) {
+        float *pp = b->mesh.positions + 3 * (size_t)k;
+        pp[0] = (float)((lround(pp[0] / hf->dx) + ox) * hf->dx);
+        pp[1] = (float)((lround(pp[1] / hf->dy) + oy) * hf->dy);
+    }
+    if (o.progress && j->nb > 1)
+        block_progress(&pu, 1);
+}
+
+static void *block_worker(void *arg)
+{
+    tin_job *j = arg;
+    for (;;) {
+        pthread_mutex_lock(&j->lock);
+        uint32_t i = j->next++;
+        bool stop = j->failed || i >= j->nb;
+        pthread_mutex_unlock(&j->lock);
+        if (stop)
+            return NULL;
+        mesh_block(j, i);
+        if (j->b[i].st != TSR_OK) {
+            pthread_mutex_lock(&j->lock);
+            j->failed = true;
+            pthread_mutex_unlock(&j->lock);
+        }
+    }
+}
+
+/* The vertex of window sample (c, r) on a seam, or a new one: seam
+ * vertices are shared by the blocks on both sides (and at a corner by
+ * four). vcol[k]: the column seam k's vertices by row, vrow[k] the row
+ * seam's by column (UINT32_MAX: none yet). */
+typedef struct seams {
+    uint32_t nx, ny;         /* blocks across and down */
+    const uint32_t *sx, *sy; /* block k spans window columns sx[k]..sx[k+1] */
+    uint32_t **vcol, **vrow;
+} seams;
+
+static uint32_t *seam_slot(const seams *s, uint32_t bi, uint32_t bj, uint32_t c, uint32_t r, uint32_t *slots[4])
+{
+    uint32_t n = 0;
+    if (bi > 0 && c == s->sx[bi])
+        slots[n++] = &s->vcol[bi][r];
+    if (bi + 1 < s->nx && c == s->sx[bi + 1])
+        slots[n++] = &s->vcol[bi + 1][r];
+    if (bj > 0 && r == s->sy[bj])
+        slots[n++] = &s->vrow[bj][c];
+    if (bj + 1 < s->ny && r == s->sy[bj + 1])
+        slots[n++] = &s->vrow[bj + 1][c];
+    for (uint32_t k = n; k < 4; k++)
+        slots[k] = NULL;
+    return n ? slots[0] : NULL;
+}
+
+static tsr_status mesh_delaunay_blocks(const tsr_heightfield *hf, const tsr_heightfield *win, uint32_t wx,
+                                       uint32_t wy, uint32_t ww, uint32_t wh, double target, double btol, bool fixed, const tsr_tin_options *o,
+                                       tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err)
+{
+    const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
+    bool cut = fixed && !o->max_triangles && !o->max_vertices;
+    uint32_t B = o->block ? o->block : 256;
+    uint32_t nx = cut ? (ww - 1 + B - 1) / B : 1, ny = cut ? (wh - 1 + B - 1) / B : 1;
+    if (nx * ny <= 1 || !cut) {
+        /* one block: the window itself (the heightfield when whole) */
+        tin_ctx ctx = {hf->data, hf->width, hf->height, wx, wy, ring_nodata(hf, wx, wy, ww, wh)};
+        tsr_status st = mesh_delaunay(win, &ctx, target, btol, fixed, o->max_triangles, o->max_vertices, o, mesh,
+                                      rep, err);
+        rep->blocks = 1;
+        return st;
+    }
+    tsr_status st = TSR_OK;
+    uint32_t *sx = tsr_alloc(a, ((size_t)nx + 1) * sizeof *sx), *sy = tsr_alloc(a, ((size_t)ny + 1) * sizeof *sy);
+    tin_block *b = tsr_alloc(a, (size_t)nx * ny * sizeof *b);
+    uint32_t **vcol = tsr_alloc(a, (size_t)nx * sizeof *vcol), **vrow = tsr_alloc(a, (size_t)ny * sizeof *vrow);
+    if (!sx || !sy || !b || !vcol || !vrow) {
+        tsr_free(a, sx), tsr_free(a, sy), tsr_free(a, b), tsr_free(a, vcol), tsr_free(a, vrow);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
+    }
+    memset(b, 0, (size_t)nx * ny * sizeof *b);
+    memset(vcol, 0, (size_t)nx * sizeof *vcol);
+    memset(vrow, 0, (size_t)ny * sizeof *vrow);
+    /* blocks of even size: cells split as evenly as the integers allow */
+    for (uint32_t k = 0; k <= nx; k++)
+        sx[k] = (uint32_t)((uint64_t)k * (ww - 1) / nx);
+    for (uint32_t k = 0; k <= ny; k++)
+        sy[k] = (uint32_t)((uint64_t)k * (wh - 1) / ny);
+    tin_job j;
+    memset(&j, 0, sizeof j);
+    j.hf = hf, j.o = o, j.target = target, j.btol = btol, j.wx = wx, j.wy = wy, j.b = b, j.nb = nx * ny;
+    j.cells = (double)(ww - 1) * (wh - 1);
+    for (uint32_t by = 0; by < ny; by++)
+        for (uint32_t bx = 0; bx < nx; bx++) {
+            tin_block *bk = &b[by * nx + bx];
+            bk->x = wx + sx[bx], bk->y = wy + sy[by];
+            bk->w = sx[bx + 1] - sx[bx] + 1, bk->h = sy[by + 1] - sy[by] + 1;
+        }
+    pthread_mutex_init(&j.lock, NULL);
+    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+    uint32_t nt = o->threads ? o->threads : ncpu > 0 ? (uint32_t)ncpu : 1;
+    nt = nt > j.nb ? j.nb : nt;
+    nt = nt > 256 ? 256 : nt;
+    pthread_t th[256];
+    uint32_t started = 0;
+    for (uint32_t k = 1; k < nt; k++)
+        if (pthread_create(&th[started], NULL, block_worker, &j) == 0)
+            started++;
+    block_worker(&j);
+    for (uint32_t k = 0; k < started; k++)
+        pthread_join(th[k], NULL);
+    pthread_mutex_destroy(&j.lock);
+    /* the first failure in block order; else the blocks welded along
+     * their seams, in block order (blocks left undone after a failure
+     * are empty) */
+    uint32_t nv = 0, ntri = 0;
+    for (uint32_t i = 0; i < j.nb && st == TSR_OK; i++) {
+        if (b[i].st != TSR_OK) {
+            st = b[i].st;
+            if (err)
+                *err = b[i].err;
+        }
+        nv += b[i].mesh.vertex_count;
+        ntri += b[i].mesh.triangle_count;
+    }
+    for (uint32_t k = 1; k < nx && st == TSR_OK; k++) {
+        if (!(vcol[k] = tsr_alloc(a, (size_t)wh * sizeof **vcol)))
+            st = TSR_ERR_NOMEM;
+        else
+            memset(vcol[k], 0xff, (size_t)wh * sizeof **vcol);
+    }
+    for (uint32_t k = 1; k < ny && st == TSR_OK; k++) {
+        if (!(vrow[k] = tsr_alloc(a, (size_t)ww * sizeof **vrow)))
+            st = TSR_ERR_NOMEM;
+        else
+            memset(vrow[k], 0xff, (size_t)ww * sizeof **vrow);
+    }
+    if (st == TSR_OK && tsr_mesh_reserve(mesh, nv, ntri) != TSR_OK)
+        st = TSR_ERR_NOMEM;
+    if (st == TSR_ERR_NOMEM && (!err || err->status == TSR_OK))
+        tsr_error_set(err, st, "delaunay mesh: out of memory");
+    seams sm = {nx, ny, sx, sy, vcol, vrow};
+    rep->blocks = j.nb;
+    for (uint32_t i = 0; i < j.nb && st == TSR_OK; i++) {
+        tin_block *bk = &b[i];
+        uint32_t bi = i % nx, bj = i / nx;
+        uint32_t *map = tsr_alloc(a, ((size_t)bk->mesh.vertex_count + 1) * sizeof *map);
+        if (!map) {
+            st = tsr_error_set(err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
+            break;
+        }
+        for (uint32_t k = 0; k < bk->mesh.vertex_count; k++) {
+            const float *p = bk->mesh.positions + 3 * (size_t)k;
+            uint32_t c = (uint32_t)lround(p[0] / hf->dx), r = (uint32_t)lround(p[1] / hf->dy);
+            uint32_t *slots[4];
+            uint32_t *first = seam_slot(&sm, bi, bj, c, r, slots);
+            uint32_t id = first ? *first : UINT32_MAX;
+            if (id == UINT32_MAX)
+                id = tsr_mesh_add_vertex(mesh, p, NULL, NULL);
+            for (int q = 0; q < 4 && slots[q]; q++)
+                *slots[q] = id;
+            map[k] = id;
+        }
+        for (uint32_t k = 0; k < bk->mesh.triangle_count; k++) {
+            const uint32_t *t = bk->mesh.indices + 3 * (size_t)k;
+            if (!tsr_mesh_add_triangle(mesh, map[t[0]], map[t[1]], map[t[2]])) {
+                st = tsr_error_set(err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
+                break;
+            }
+        }
+        tsr_free(a, map);
+        rep->border_vertices += bk->rep.border_vertices;
+        rep->insertions += bk->rep.insertions;
+        rep->flips += bk->rep.flips;
+        rep->estimated_error = fmax(rep->estimated_error, bk->rep.estimated_error);
+        tsr_mesh_free(&bk->mesh);
+    }
+    for (uint32_t i = 0; i < j.nb; i++)
+        tsr_mesh_free(&b[i].mesh);
+    for (uint32_t k = 0; k < nx; k++)
+        tsr_free(a, vcol[k]);
+    for (uint32_t k = 0; k < ny; k++)
+        tsr_free(a, vrow[k]);
+    tsr_free(a, sx), tsr_free(a, sy), tsr_free(a, b), tsr_free(a, vcol), tsr_free(a, vrow);
     return st;
 }
 
@@ -1475,8 +1792,7 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
         bool fixed = target > 0 || o.border_error > 0;
         if (!fixed)
             rep->border_error = 0;
-        st = mesh_delaunay(src, t / hf->dz, b / hf->dz, fixed, o.max_triangles, o.max_vertices, &o, mesh, rep,
-                           err);
+        st = mesh_delaunay_blocks(hf, src, wx, wy, ww, wh, t / hf->dz, b / hf->dz, fixed, &o, mesh, rep, err);
     } else if (o.method == TSR_TIN_QUADTREE)
         st = mesh_quadtree(src, target, o.max_triangles, o.max_vertices, &o, mesh, rep, err);
     else

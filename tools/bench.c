@@ -1,7 +1,11 @@
 /* bench.c: the counting allocator of the benchmarks. */
 #include "bench.h"
 
+#include <pthread.h>
 #include <stdlib.h>
+
+/* The mesher calls it from several threads (tsr_tin_options.threads). */
+static pthread_mutex_t counting_lock = PTHREAD_MUTEX_INITIALIZER;
 
 static void *counting_realloc(void *user, void *ptr, size_t size)
 {
@@ -9,7 +13,9 @@ static void *counting_realloc(void *user, void *ptr, size_t size)
     size_t old = ptr ? ((size_t *)ptr)[-2] : 0;
     if (size == 0) {
         if (ptr) {
+            pthread_mutex_lock(&counting_lock);
             c->now -= old;
+            pthread_mutex_unlock(&counting_lock);
             free((size_t *)ptr - 2);
         }
         return NULL;
@@ -18,9 +24,11 @@ static void *counting_realloc(void *user, void *ptr, size_t size)
     if (!p)
         return NULL;
     p[0] = size;
+    pthread_mutex_lock(&counting_lock);
     c->now += size - old;
     if (c->now > c->peak)
         c->peak = c->now;
+    pthread_mutex_unlock(&counting_lock);
     return p + 2;
 }
 

@@ -21,7 +21,8 @@ static void help(FILE *f)
                "max error, seconds (best of R) and peak heap memory; quadtree's triangles and time as\n"
                "ratios to delaunay's at the same bound; then delaunay without its data-dependent flips\n"
                "(--no-flip: plain greedy Delaunay insertion) and delaunay's triangles and time as ratios\n"
-               "to that.\n\n"
+               "to that; then delaunay as one block on one thread (the window not cut into blocks,\n"
+               "--block larger than the input) and delaunay's triangles and speed-up against that.\n\n"
                "inputs: the demo terrain (generated, 1025 x 1025, seed 1, 1200 m relief, dx 30) and every\n"
                "file of $TESSERA_DATA/terrain (default ../shared/data; skipped when absent).\n\n"
                "options:\n"
@@ -29,7 +30,8 @@ static void help(FILE *f)
                "  --errors LIST     bounds as fractions of the height range (default\n"
                "                    0.0005,0.001,0.002,0.01)\n"
                "  --input FILE      only this heightfield (heightfield options apply)\n"
-               "  --repeat R        best of R runs (default 1)\n" CLI_HEIGHTFIELD_HELP
+               "  --repeat R        best of R runs (default 1)\n"
+               "  --threads N       threads for delaunay's blocks (default: one per processor)\n" CLI_HEIGHTFIELD_HELP
                "  -h, --help        this help\n");
 }
 
@@ -39,7 +41,11 @@ typedef struct row {
     bool ok;
 } row;
 
-static row one(const tsr_heightfield *src, tsr_tin_method m, double e, bool no_flip, uint32_t repeat)
+static uint32_t bench_threads; /* --threads (0: one per processor) */
+
+/* block: tsr_tin_options.block (UINT32_MAX: the window as one block, on
+ * one thread) */
+static row one(const tsr_heightfield *src, tsr_tin_method m, double e, bool no_flip, uint32_t block, uint32_t repeat)
 {
     row r = {0};
     r.seconds = INFINITY;
@@ -56,6 +62,8 @@ static row one(const tsr_heightfield *src, tsr_tin_method m, double e, bool no_f
         o.method = m;
         o.max_error = m == TSR_TIN_GRID ? 0 : e;
         o.no_flip = no_flip;
+        o.block = block;
+        o.threads = block == UINT32_MAX ? 1 : bench_threads;
         tsr_error err;
         double t0 = cli_now();
         tsr_status st = tsr_terrain_mesh(hf, &o, &mesh, NULL, &err);
@@ -85,19 +93,22 @@ static void bench_input(const char *name, const tsr_heightfield *hf, const doubl
     double dx, dy, dz;
     tsr_heightfield_spacing(hf, &dx, &dy, &dz);
     double range = (st.max - st.min) * dz;
-    row g = one(hf, TSR_TIN_GRID, 0, false, repeat);
+    row g = one(hf, TSR_TIN_GRID, 0, false, 0, repeat);
     printf("%-34s %9s | %10u %9.4g %8.3f %8.1f |  (grid: every sample; the baseline of the triangle counts)\n", name,
            "grid", g.triangles, g.max_error, g.seconds, g.peak / 1048576.0);
     for (int i = 0; i < nfr; i++) {
         double e = fr[i] * range;
-        row d = one(hf, TSR_TIN_DELAUNAY, e, false, repeat), q = one(hf, TSR_TIN_QUADTREE, e, false, repeat);
-        row p = one(hf, TSR_TIN_DELAUNAY, e, true, repeat);
+        row d = one(hf, TSR_TIN_DELAUNAY, e, false, 0, repeat), q = one(hf, TSR_TIN_QUADTREE, e, false, 0, repeat);
+        row p = one(hf, TSR_TIN_DELAUNAY, e, true, 0, repeat);
+        row b = one(hf, TSR_TIN_DELAUNAY, e, false, UINT32_MAX, repeat);
         printf("%-34s %9.4g | %10u %9.4g %8.3f %8.1f | %10u %9.4g %8.3f %8.1f | %6.2fx %6.2fx | %10u %9.4g %8.3f | "
-               "%6.2fx %6.2fx\n",
+               "%6.2fx %6.2fx | %10u %8.3f %8.1f | %6.3fx %6.2fx\n",
                name, e, d.triangles, d.max_error, d.seconds, d.peak / 1048576.0, q.triangles, q.max_error, q.seconds,
                q.peak / 1048576.0, d.triangles ? (double)q.triangles / d.triangles : 0,
                q.seconds > 0 ? d.seconds / q.seconds : 0, p.triangles, p.max_error, p.seconds,
-               p.triangles ? (double)d.triangles / p.triangles : 0, p.seconds > 0 ? d.seconds / p.seconds : 0);
+               p.triangles ? (double)d.triangles / p.triangles : 0, p.seconds > 0 ? d.seconds / p.seconds : 0,
+               b.triangles, b.seconds, b.peak / 1048576.0, b.triangles ? (double)d.triangles / b.triangles : 0,
+               d.seconds > 0 ? b.seconds / d.seconds : 0);
         fflush(stdout);
     }
 }
@@ -123,13 +134,13 @@ int cli_bench_mesh(int argc, char **argv)
         bool has_value = i + 1 < argc;
         if (!strcmp(a, "--input") && has_value)
             input = argv[++i];
-        else if ((!strcmp(a, "--size") || !strcmp(a, "--repeat")) && has_value) {
+        else if ((!strcmp(a, "--size") || !strcmp(a, "--repeat") || !strcmp(a, "--threads")) && has_value) {
             uint32_t u;
             if (!cli_parse_u32(argv[++i], !strcmp(a, "--size") ? 2 : 1, 1u << 16, &u)) {
                 cli_error("bench", "%s %s: must be a positive integer", a, argv[i]);
                 return CLI_USAGE;
             }
-            *(!strcmp(a, "--size") ? &size : &repeat) = u;
+            *(!strcmp(a, "--size") ? &size : !strcmp(a, "--repeat") ? &repeat : &bench_threads) = u;
         } else if (!strcmp(a, "--errors") && has_value) {
             const char *s = argv[++i];
             nfr = 0;
@@ -151,9 +162,11 @@ int cli_bench_mesh(int argc, char **argv)
     }
     printf("tessera bench mesh: best of %u; bound = fraction x height range; max err = measured independently\n",
            repeat);
-    printf("%-34s %9s | %10s %9s %8s %8s | %10s %9s %8s %8s | %7s %7s | %10s %9s %8s | %7s %7s\n", "input", "bound",
-           "delaunay", "max err", "seconds", "peak MB", "quadtree", "max err", "seconds", "peak MB", "q/d tri",
-           "q speed", "no-flip", "max err", "seconds", "d/n tri", "d/n s");
+    printf("%-34s %9s | %10s %9s %8s %8s | %10s %9s %8s %8s | %7s %7s | %10s %9s %8s | %7s %7s | %10s %8s %8s | "
+           "%7s %7s\n",
+           "input", "bound", "delaunay", "max err", "seconds", "peak MB", "quadtree", "max err", "seconds", "peak MB",
+           "q/d tri", "q speed", "no-flip", "max err", "seconds", "d/n tri", "d/n s", "one block", "seconds",
+           "peak MB", "d/1 tri", "speedup");
     if (input) {
         tsr_heightfield *hf = cli_load_heightfield("bench", input, &o);
         if (!hf)

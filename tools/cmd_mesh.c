@@ -37,6 +37,10 @@ static void help(FILE *f)
             "                        1.3-2x faster, about a quarter more triangles for the bound\n"
             "                        (--flip, the default, flips an edge when that lowers its two\n"
             "                        triangles' error above the bound)\n"
+            "  --block N             delaunay with a bound: mesh blocks of about N x N cells on\n"
+            "                        their own, their seams fixed like window borders (default\n"
+            "                        256; the mesh depends on N, not on --threads)\n"
+            "  --threads N           delaunay: blocks meshed at once (default: one per processor)\n"
             "  --step N              grid: keep every N-th column and row (default 1)\n"
             "  --tile N              quadtree: tile size 2, 4, 8, 16, 32, 64 or 128 (default 2)\n"
             "  --border-error E      delaunay: tolerance of the border and no-data boundary\n"
@@ -151,6 +155,7 @@ static int write_stats(const char *path, const tsr_mesh *mesh, const tsr_error_r
     if (to->method == TSR_TIN_DELAUNAY) {
         cJSON_AddNumberToObject(j, "border_error", rep->border_error);
         cJSON_AddNumberToObject(j, "flips", rep->flips);
+        cJSON_AddNumberToObject(j, "blocks", rep->blocks);
     }
     cJSON_AddNumberToObject(j, "uncovered_samples", (double)er->uncovered);
     cJSON *inp = cJSON_AddObjectToObject(j, "input");
@@ -247,7 +252,7 @@ static int run(int argc, char **argv)
             }
             has_base = true;
         } else if ((!strcmp(a, "--triangles") || !strcmp(a, "--vertices") || !strcmp(a, "--step") ||
-                    !strcmp(a, "--tile")) &&
+                    !strcmp(a, "--tile") || !strcmp(a, "--block") || !strcmp(a, "--threads")) &&
                    has_value) {
             uint32_t v;
             if (!cli_parse_u32(argv[++i], 1, UINT32_MAX - 1, &v)) {
@@ -260,6 +265,10 @@ static int run(int argc, char **argv)
                 to.max_vertices = v;
             else if (!strcmp(a, "--step"))
                 to.grid_step = v;
+            else if (!strcmp(a, "--block"))
+                to.block = v;
+            else if (!strcmp(a, "--threads"))
+                to.threads = v;
             else if (v != 2 && v != 4 && v != 8 && v != 16 && v != 32 && v != 64 && v != 128) {
                 cli_error("mesh", "--tile %s: must be 2, 4, 8, 16, 32, 64 or 128", argv[i]);
                 return CLI_USAGE;
@@ -303,6 +312,10 @@ static int run(int argc, char **argv)
     }
     if (no_flip_given && to.method != TSR_TIN_DELAUNAY) {
         cli_error("mesh", "--no-flip applies to --method delaunay only");
+        return CLI_USAGE;
+    }
+    if ((to.block || to.threads) && to.method != TSR_TIN_DELAUNAY) {
+        cli_error("mesh", "--block and --threads apply to --method delaunay only");
         return CLI_USAGE;
     }
     if (to.tile_n && to.method != TSR_TIN_QUADTREE) {

@@ -85,7 +85,7 @@ static void brute(const tsr_heightfield *hf, uint32_t x0, uint32_t y0, uint32_t 
     free(hit);
 }
 
-static bool valid_mesh(const tsr_mesh *m)
+static bool valid_mesh_3d(const tsr_mesh *m, const char *what)
 {
     tsr_validation v;
     tsr_validate_options vo = {0};
@@ -95,10 +95,34 @@ static bool valid_mesh(const tsr_mesh *m)
     if (!tsr_validation_ok(&v) || v.downward_triangles) {
         char buf[256];
         tsr_validation_describe(&v, buf, sizeof buf);
-        fprintf(stderr, "validation: %s\n", buf);
+        fprintf(stderr, "validation%s: %s\n", what, buf);
         return false;
     }
     return true;
+}
+
+/* Valid, and so is its projection on the xy plane: a height-field mesh
+ * with a crack (two sides of a seam with different vertices) passes in 3D,
+ * where the vertex of one side is off the other's edge, but flat it is a
+ * T-junction. */
+static bool valid_mesh(const tsr_mesh *m)
+{
+    if (!valid_mesh_3d(m, ""))
+        return false;
+    tsr_mesh f = *m;
+    f.positions = malloc(12 * ((size_t)m->vertex_count + 1));
+    if (!f.positions)
+        return false;
+    for (uint32_t i = 0; i < m->vertex_count; i++) {
+        f.positions[3 * i] = m->positions[3 * i];
+        f.positions[3 * i + 1] = m->positions[3 * i + 1];
+        f.positions[3 * i + 2] = 0;
+    }
+    f.normals = NULL;
+    f.uvs = NULL;
+    bool ok = valid_mesh_3d(&f, " (flattened)");
+    free(f.positions);
+    return ok;
 }
 
 static tsr_heightfield *terrain(uint32_t w, uint32_t h, uint32_t seed)
@@ -409,6 +433,60 @@ static void seam_case(const tsr_heightfield *hf, tsr_tin_method method, double e
     tsr_mesh_free(&b);
 }
 
+/* Two windows' meshes welded where their vertices coincide (exactly, as
+ * seam vertices must): the union is a valid mesh, flat too (no crack). */
+static void windows_weld(const tsr_mesh *a, const tsr_mesh *b, const char *what)
+{
+    tsr_mesh u;
+    tsr_mesh_init(&u, 0, NULL);
+    for (uint32_t i = 0; i < a->vertex_count; i++)
+        tsr_mesh_add_vertex(&u, a->positions + 3 * (size_t)i, NULL, NULL);
+    uint32_t *map = malloc(sizeof(uint32_t) * (b->vertex_count + 1));
+    for (uint32_t i = 0; i < b->vertex_count; i++) {
+        const float *p = b->positions + 3 * (size_t)i;
+        map[i] = UINT32_MAX;
+        for (uint32_t k = 0; k < a->vertex_count && map[i] == UINT32_MAX; k++)
+            if (memcmp(p, a->positions + 3 * (size_t)k, 12) == 0)
+                map[i] = k;
+        if (map[i] == UINT32_MAX)
+            map[i] = tsr_mesh_add_vertex(&u, p, NULL, NULL);
+    }
+    for (uint32_t t = 0; t < a->triangle_count; t++)
+        tsr_mesh_add_triangle(&u, a->indices[3 * t], a->indices[3 * t + 1], a->indices[3 * t + 2]);
+    for (uint32_t t = 0; t < b->triangle_count; t++)
+        tsr_mesh_add_triangle(&u, map[b->indices[3 * t]], map[b->indices[3 * t + 1]], map[b->indices[3 * t + 2]]);
+    CHECK_MSG(valid_mesh(&u), "%s: the two windows do not fit", what);
+    free(map);
+    tsr_mesh_free(&u);
+}
+
+/* Adjacent windows with no-data beside their seam on one side only: the
+ * other side cuts its border where the first's cells change, so the two
+ * fit (seam_case's identical vertex lists do not hold here: where only one
+ * side has cells, only it has vertices). */
+static void seam_nodata_case(const tsr_heightfield *hf, double e, uint32_t split)
+{
+    uint32_t W = tsr_heightfield_width(hf), H = tsr_heightfield_height(hf);
+    tsr_tin_options oa = {0}, ob;
+    oa.max_error = e;
+    ob = oa;
+    oa.window_w = split + 1;
+    oa.window_h = H;
+    ob.window_x = split;
+    ob.window_w = W - split;
+    ob.window_h = H;
+    tsr_mesh a, b;
+    tsr_mesh_init(&a, 0, NULL);
+    tsr_mesh_init(&b, 0, NULL);
+    CHECK(tsr_terrain_mesh(hf, &oa, &a, NULL, NULL) == TSR_OK);
+    CHECK(tsr_terrain_mesh(hf, &ob, &b, NULL, NULL) == TSR_OK);
+    char what[64];
+    snprintf(what, sizeof what, "no-data seam E=%g", e);
+    windows_weld(&a, &b, what);
+    tsr_mesh_free(&a);
+    tsr_mesh_free(&b);
+}
+
 TEST(window_seams)
 {
     tsr_heightfield *hf = terrain(120, 97, 6);
@@ -424,6 +502,93 @@ TEST(window_seams)
         for (int v = 0; v < 2; v++)
             for (int e = 0; e < 2; e++)
                 seam_case(hf, mth == 2 ? TSR_TIN_GRID : methods[mth], mth == 2 ? 1e9 : errors[e], v);
+    /* no-data right of the seam at column 63 (rows 20..40), left of it
+     * (rows 60..70) */
+    for (uint32_t r = 0; r < 97; r++)
+        for (uint32_t c = 0; c < 120; c++)
+            if ((c >= 64 && c <= 66 && r >= 20 && r <= 40) || (c >= 60 && c <= 62 && r >= 60 && r <= 70))
+                d[r * 120 + c] = NAN;
+    for (int e = 0; e < 2; e++)
+        seam_nodata_case(hf, errors[e] * 10, 63);
+    tsr_heightfield_destroy(hf);
+}
+
+/* Blocks (tsr_tin_options.block): the window cut into blocks meshed on
+ * their own, on several threads. The welded mesh is within the bound,
+ * covers every valid cell, is conforming across the seams (no T-junction,
+ * no crack: tsr_mesh_validate) and the same whatever the thread count.
+ * With no-data crossing the seams, each side cuts its border where the
+ * other side's cells change too, so the seams still match. */
+static void blocks_case(const tsr_heightfield *hf, uint32_t block, double e, const char *what)
+{
+    tsr_mesh ref;
+    tsr_mesh_init(&ref, 0, NULL);
+    for (uint32_t threads = 1; threads <= 3; threads++) {
+        tsr_tin_options o = {0};
+        o.max_error = e;
+        o.block = block;
+        o.threads = threads;
+        char w[96];
+        snprintf(w, sizeof w, "%s block %u E=%g threads %u", what, block, e, threads);
+        bound_case(hf, o, w);
+        tsr_mesh m;
+        tsr_mesh_init(&m, 0, NULL);
+        tsr_tin_report rep;
+        CHECK(tsr_terrain_mesh(hf, &o, &m, &rep, NULL) == TSR_OK);
+        uint32_t cells_x = tsr_heightfield_width(hf) - 1, cells_y = tsr_heightfield_height(hf) - 1;
+        CHECK_MSG(rep.blocks == ((cells_x + block - 1) / block) * ((cells_y + block - 1) / block), "%s: %u blocks",
+                  w, rep.blocks);
+        if (threads == 1) {
+            ref = m;
+            continue;
+        }
+        CHECK_MSG(m.vertex_count == ref.vertex_count && m.triangle_count == ref.triangle_count &&
+                      memcmp(m.positions, ref.positions, 12 * (size_t)m.vertex_count) == 0 &&
+                      memcmp(m.indices, ref.indices, 12 * (size_t)m.triangle_count) == 0,
+                  "%s: not the mesh of one thread", w);
+        tsr_mesh_free(&m);
+    }
+    tsr_mesh_free(&ref);
+}
+
+TEST(blocks)
+{
+    tsr_heightfield *hf = terrain(150, 131, 9);
+    blocks_case(hf, 16, 2, "generated");
+    blocks_case(hf, 37, 0.5, "generated");
+    blocks_case(hf, 64, 20, "generated");
+    /* one block: the mesh without blocks */
+    tsr_tin_options o = {0};
+    o.max_error = 2;
+    o.block = 149;
+    tsr_tin_report rep;
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    CHECK(tsr_terrain_mesh(hf, &o, &m, &rep, NULL) == TSR_OK && rep.blocks == 1);
+    tsr_mesh_free(&m);
+    /* no-data across the seams. With blocks of 37 cells the 149 x 130
+     * cells split into 5 x 4 blocks: column seams at 29, 59, 89, 119 (k
+     * 149 / 5), row seams at 32, 65, 97. On one side of a seam only: cells
+     * right of column 59 (rows 10..30) and left of 89 (rows 40..60), above
+     * row 65 (columns 5..25) and below 97 (columns 100..115); the other
+     * side cuts its border there too, or the seam gets T-junctions. Plus
+     * discs and a checkerboard over seams and a seam corner. */
+    float *d = tsr_heightfield_data(hf);
+    for (uint32_t r = 0; r < 131; r++)
+        for (uint32_t c = 0; c < 150; c++) {
+            double dx = c - 32.0, dy = r - 40.0, ex = c - 119.0, ey = r - 74.0;
+            bool hole = dx * dx + dy * dy < 90 || ex * ex + ey * ey < 30;
+            hole |= c >= 60 && c <= 62 && r >= 10 && r <= 30;
+            hole |= c >= 86 && c <= 88 && r >= 40 && r <= 60;
+            hole |= r >= 66 && r <= 67 && c >= 5 && c <= 25;
+            hole |= r >= 95 && r <= 96 && c >= 100 && c <= 115;
+            hole |= c >= 86 && c < 94 && r >= 94 && r < 100 && (c + r) % 2 == 0;
+            if (hole)
+                d[r * 150 + c] = NAN;
+        }
+    blocks_case(hf, 16, 2, "no-data");
+    blocks_case(hf, 37, 0.5, "no-data");
+    blocks_case(hf, 37, 20, "no-data");
     tsr_heightfield_destroy(hf);
 }
 
@@ -540,4 +705,4 @@ TEST(data_real_terrain)
 }
 
 TEST_MAIN(T(error_bound_generated), T(flips_fewer_triangles), T(spacing_and_scale), T(flat_and_planar), T(budgets),
-          T(nodata_holes), T(window_seams), T(closed_solid), T(bad_options), T(data_real_terrain))
+          T(nodata_holes), T(window_seams), T(blocks), T(closed_solid), T(bad_options), T(data_real_terrain))

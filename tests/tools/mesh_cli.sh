@@ -4,6 +4,8 @@
 #    stats' figure is the independent measurement), the stats keys present;
 #  - --no-flip (plain Delaunay): within the bound, not fewer triangles than
 #    the default flips;
+#  - --block / --threads: blocks of 32 cells within the bound, the file the
+#    same byte for byte on 1 and 3 threads, the stats' block count;
 #  - budgets: --triangles / --vertices never exceeded;
 #  - --window: two adjacent windows of a real heightfield (or a generated
 #    one without the data) write identical vertices on their shared column
@@ -52,6 +54,18 @@ for e in 0.5 5; do
   echo "ok --max-error $e: $tf triangles with flips, $tn with --no-flip (measured $got)"
 done
 "$tessera" mesh "$dir/t.png" --method quadtree --no-flip -o "$dir/m.ply" 2>/dev/null && fail "--no-flip with quadtree"
+
+# blocks: the same mesh on any number of threads
+for t in 1 3; do
+  "$tessera" mesh "$dir/t.png" --dx 10 --max-error 2 --block 32 --threads $t -o "$dir/k$t.ply" \
+    --stats "$dir/k$t.json" --quiet || fail "mesh --block 32 --threads $t"
+  got=$(json_num "$dir/k$t.json" max_error)
+  le "$got" 2 || fail "--block 32: measured max error $got > 2"
+  [ "$(json_num "$dir/k$t.json" blocks)" = 15 ] || fail "--block 32: $(json_num "$dir/k$t.json" blocks) blocks, not 5 x 3 (129 x 96 cells)"
+done
+cmp -s "$dir/k1.ply" "$dir/k3.ply" || fail "--block 32: --threads 1 and 3 wrote different meshes"
+echo "ok --block 32: the same mesh on 1 and 3 threads, 15 blocks (measured $got)"
+"$tessera" mesh "$dir/t.png" --method quadtree --threads 2 -o "$dir/m.ply" 2>/dev/null && fail "--threads with quadtree"
 
 # budgets
 for m in delaunay quadtree grid; do
