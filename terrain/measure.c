@@ -3,13 +3,16 @@
  * (barycentric coordinates from the float positions, with a tolerance of
  * 1e-7) is compared with the triangle's height there; a sample on an edge
  * shared by two triangles is compared with both and the larger error
- * kept. Works from the output mesh and the heightfield alone:
+ * kept. Bands of rows are measured on several threads, each over every
+ * triangle but only its own rows. Works from the output mesh and the heightfield alone:
  * deliberately shares nothing with the meshers, the pyramid or the
  * quadtree. */
 #include "terrain_internal.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <string.h>
+#include <unistd.h>
 
 tsr_status tsr_terrain_measure(const tsr_heightfield *hf, const tsr_mesh *mesh, const tsr_camera *cam,
                                tsr_error_report *out)
@@ -17,29 +20,51 @@ tsr_status tsr_terrain_measure(const tsr_heightfield *hf, const tsr_mesh *mesh, 
     return tsr_terrain_measure_window(hf, 0, 0, hf->width, hf->height, mesh, cam, out);
 }
 
-tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, uint32_t y0, uint32_t ww, uint32_t wh,
-                                      const tsr_mesh *mesh, const tsr_camera *cam, tsr_error_report *out)
+/* One band of rows [rb, re) of the window: every triangle's samples in
+ * it. Bands are measured apart (on several threads), each writing only its
+ * own rows of worst[] and wpix[], and their figures combined in band
+ * order, so the result does not depend on the thread count. */
+typedef struct band {
+    const tsr_heightfield *hf;
+    uint32_t x0, y0, ww, wh, rb, re;
+    const tsr_mesh *mesh;
+    const tsr_camera *cam;
+    float *worst, *wpix;
+    const uint32_t *tris; /* the triangles whose rows meet the band, in order */
+    uint32_t ntris;
+    tsr_error_report out;
+} band;
+
+/* The window rows a triangle's footprint may cover, [*r0, *r1]; false when
+ * none (or a flat or non-finite triangle). */
+static bool tri_rows(const tsr_heightfield *hf, uint32_t y0, uint32_t wh, const tsr_mesh *mesh, uint32_t t,
+                     uint32_t *r0, uint32_t *r1)
 {
-    memset(out, 0, sizeof *out);
-    if (x0 >= hf->width || y0 >= hf->height || ww > hf->width - x0 || wh > hf->height - y0)
-        return TSR_ERR_ARGUMENT;
-    const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
-    size_t ns = (size_t)ww * wh;
-    /* per sample: its worst error so far (NaN: not reached) */
-    float *worst = tsr_alloc(a, ns * sizeof *worst);
-    float *wpix = cam ? tsr_alloc(a, ns * sizeof *wpix) : NULL;
-    if (!worst || (cam && !wpix)) {
-        tsr_free(a, worst);
-        tsr_free(a, wpix);
-        return TSR_ERR_NOMEM;
+    const uint32_t *ix = mesh->indices + 3 * (size_t)t;
+    double lo = INFINITY, hi = -INFINITY;
+    for (int k = 0; k < 3; k++) {
+        double r = mesh->positions[3 * (size_t)ix[k] + 1] / hf->dy - y0;
+        lo = fmin(lo, r);
+        hi = fmax(hi, r);
     }
-    for (size_t i = 0; i < ns; i++)
-        worst[i] = NAN;
-    if (wpix)
-        for (size_t i = 0; i < ns; i++)
-            wpix[i] = -1;
-    for (uint32_t t = 0; t < mesh->triangle_count; t++) {
-        const uint32_t *ix = mesh->indices + 3 * (size_t)t;
+    double rl = ceil(lo - 1e-6), rh = floor(hi + 1e-6);
+    if (!(rh >= 0) || !(rl <= (double)wh - 1))
+        return false;
+    *r0 = rl < 0 ? 0 : (uint32_t)rl;
+    *r1 = rh > wh - 1 ? wh - 1 : (uint32_t)rh;
+    return true;
+}
+
+static void measure_band(band *b)
+{
+    const tsr_heightfield *hf = b->hf;
+    const tsr_mesh *mesh = b->mesh;
+    const tsr_camera *cam = b->cam;
+    uint32_t x0 = b->x0, y0 = b->y0, ww = b->ww;
+    float *worst = b->worst, *wpix = b->wpix;
+    tsr_error_report *out = &b->out;
+    for (uint32_t ti = 0; ti < b->ntris; ti++) {
+        const uint32_t *ix = mesh->indices + 3 * (size_t)b->tris[ti];
         const float *p0 = mesh->positions + 3 * (size_t)ix[0], *p1 = mesh->positions + 3 * (size_t)ix[1],
                     *p2 = mesh->positions + 3 * (size_t)ix[2];
         double d = ((double)p1[0] - p0[0]) * ((double)p2[1] - p0[1]) - ((double)p1[1] - p0[1]) * ((double)p2[0] - p0[0]);
@@ -55,10 +80,10 @@ tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, ui
             hi[1] = fmax(hi[1], r);
         }
         double cl = ceil(lo[0] - 1e-6), ch = floor(hi[0] + 1e-6), rl = ceil(lo[1] - 1e-6), rh = floor(hi[1] + 1e-6);
-        if (ch < 0 || rh < 0 || cl > (double)ww - 1 || rl > (double)wh - 1)
+        if (ch < 0 || rh < (double)b->rb || cl > (double)ww - 1 || rl > (double)b->re - 1)
             continue;
         uint32_t c0 = cl < 0 ? 0 : (uint32_t)cl, c1 = ch > ww - 1 ? ww - 1 : (uint32_t)ch;
-        uint32_t r0 = rl < 0 ? 0 : (uint32_t)rl, r1 = rh > wh - 1 ? wh - 1 : (uint32_t)rh;
+        uint32_t r0 = rl < b->rb ? b->rb : (uint32_t)rl, r1 = rh > b->re - 1 ? b->re - 1 : (uint32_t)rh;
         for (uint32_t r = r0; r <= r1; r++) {
             const float *row = hf->data + (size_t)(y0 + r) * hf->width + x0;
             double y = (double)(y0 + r) * hf->dy;
@@ -107,7 +132,7 @@ tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, ui
         }
     }
     double sumsq = 0;
-    for (uint32_t r = 0; r < wh; r++) {
+    for (uint32_t r = b->rb; r < b->re; r++) {
         const float *row = hf->data + (size_t)(y0 + r) * hf->width + x0;
         for (uint32_t c = 0; c < ww; c++) {
             if (isnan(row[c]))
@@ -123,8 +148,134 @@ tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, ui
                 out->counted++;
         }
     }
+    out->rms_vertical = sumsq; /* the sum, until combined */
+}
+
+typedef struct band_job {
+    band *b;
+    uint32_t n, next;
+    pthread_mutex_t lock;
+} band_job;
+
+static void *band_worker(void *arg)
+{
+    band_job *j = arg;
+    for (;;) {
+        pthread_mutex_lock(&j->lock);
+        uint32_t i = j->next++;
+        pthread_mutex_unlock(&j->lock);
+        if (i >= j->n)
+            return NULL;
+        measure_band(&j->b[i]);
+    }
+}
+
+enum { BAND_ROWS = 128 };
+
+tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, uint32_t y0, uint32_t ww, uint32_t wh,
+                                      const tsr_mesh *mesh, const tsr_camera *cam, tsr_error_report *out)
+{
+    memset(out, 0, sizeof *out);
+    if (x0 >= hf->width || y0 >= hf->height || ww > hf->width - x0 || wh > hf->height - y0)
+        return TSR_ERR_ARGUMENT;
+    const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
+    size_t ns = (size_t)ww * wh;
+    uint32_t nb = (wh + BAND_ROWS - 1) / BAND_ROWS;
+    /* per sample: its worst error so far (NaN: not reached) */
+    float *worst = tsr_alloc(a, ns * sizeof *worst);
+    float *wpix = cam ? tsr_alloc(a, ns * sizeof *wpix) : NULL;
+    band *b = tsr_alloc(a, (size_t)nb * sizeof *b);
+    uint32_t *start = tsr_alloc(a, ((size_t)nb + 1) * sizeof *start), *list = NULL;
+    if (!worst || (cam && !wpix) || !b || !start) {
+        tsr_free(a, worst);
+        tsr_free(a, wpix);
+        tsr_free(a, b);
+        tsr_free(a, start);
+        return TSR_ERR_NOMEM;
+    }
+    /* each band's triangles, by a counting sort in triangle order */
+    memset(start, 0, ((size_t)nb + 1) * sizeof *start);
+    uint64_t entries = 0;
+    for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+        uint32_t r0, r1;
+        if (!tri_rows(hf, y0, wh, mesh, t, &r0, &r1))
+            continue;
+        for (uint32_t k = r0 / BAND_ROWS; k <= r1 / BAND_ROWS; k++)
+            start[k + 1]++;
+        entries += r1 / BAND_ROWS - r0 / BAND_ROWS + 1;
+    }
+    for (uint32_t k = 0; k < nb; k++)
+        start[k + 1] += start[k];
+    list = entries < UINT32_MAX ? tsr_alloc(a, (size_t)entries * sizeof *list + 1) : NULL;
+    if (!list) {
+        tsr_free(a, worst);
+        tsr_free(a, wpix);
+        tsr_free(a, b);
+        tsr_free(a, start);
+        return TSR_ERR_NOMEM;
+    }
+    for (uint32_t t = 0; t < mesh->triangle_count; t++) {
+        uint32_t r0, r1;
+        if (!tri_rows(hf, y0, wh, mesh, t, &r0, &r1))
+            continue;
+        for (uint32_t k = r0 / BAND_ROWS; k <= r1 / BAND_ROWS; k++)
+            list[start[k]++] = t;
+    }
+    for (uint32_t k = nb; k > 0; k--) /* back to the bands' starts */
+        start[k] = start[k - 1];
+    start[0] = 0;
+    for (size_t i = 0; i < ns; i++)
+        worst[i] = NAN;
+    if (wpix)
+        for (size_t i = 0; i < ns; i++)
+            wpix[i] = -1;
+    memset(b, 0, (size_t)nb * sizeof *b);
+    for (uint32_t i = 0; i < nb; i++) {
+        b[i].hf = hf, b[i].x0 = x0, b[i].y0 = y0, b[i].ww = ww, b[i].wh = wh, b[i].mesh = mesh, b[i].cam = cam;
+        b[i].worst = worst, b[i].wpix = wpix;
+        b[i].tris = list + start[i], b[i].ntris = start[i + 1] - start[i];
+        b[i].rb = i * BAND_ROWS;
+        b[i].re = b[i].rb + BAND_ROWS < wh ? b[i].rb + BAND_ROWS : wh;
+    }
+    band_job j = {b, nb, 0, PTHREAD_MUTEX_INITIALIZER};
+    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+    uint32_t nt = ncpu > 1 ? (uint32_t)ncpu : 1;
+    nt = nt > nb ? nb : nt > 64 ? 64 : nt;
+    pthread_t th[64];
+    uint32_t started = 0;
+    for (uint32_t k = 1; k < nt; k++)
+        if (pthread_create(&th[started], NULL, band_worker, &j) == 0)
+            started++;
+    band_worker(&j);
+    for (uint32_t k = 0; k < started; k++)
+        pthread_join(th[k], NULL);
+    pthread_mutex_destroy(&j.lock);
+    /* in band order: the first band's worst sample wins a tie */
+    double sumsq = 0;
+    for (uint32_t i = 0; i < nb; i++) {
+        const tsr_error_report *r = &b[i].out;
+        if (r->max_vertical > out->max_vertical) {
+            out->max_vertical = r->max_vertical;
+            if (!cam) {
+                out->worst_c = r->worst_c;
+                out->worst_r = r->worst_r;
+            }
+        }
+        if (cam && r->max_pixels > out->max_pixels) {
+            out->max_pixels = r->max_pixels;
+            out->worst_c = r->worst_c;
+            out->worst_r = r->worst_r;
+        }
+        out->covered += r->covered;
+        out->uncovered += r->uncovered;
+        out->counted += r->counted;
+        sumsq += r->rms_vertical;
+    }
     out->rms_vertical = out->covered ? sqrt(sumsq / (double)out->covered) : 0;
     tsr_free(a, worst);
     tsr_free(a, wpix);
+    tsr_free(a, b);
+    tsr_free(a, start);
+    tsr_free(a, list);
     return TSR_OK;
 }
