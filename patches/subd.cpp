@@ -432,7 +432,10 @@ tsr_status create(const tsr_cage *c, tsr_subd_scheme scheme, const tsr_allocator
     s->refiner.reset(RefinerFactory::Create(desc, RefinerFactory::Options(s->scheme, sdc)));
     if (!s->refiner)
         return tsr_error_set(err, TSR_ERR_INVALID_MESH, "subdivision cage: OpenSubdiv refused its topology");
-    s->factory.reset(new Factory(*s->refiner));
+    Bfr::SurfaceFactory::Options fo;
+    if (getenv("SMOOTH")) fo.SetApproxLevelSmooth(atoi(getenv("SMOOTH")));
+    if (getenv("SHARP")) fo.SetApproxLevelSharp(atoi(getenv("SHARP")));
+    s->factory.reset(new Factory(*s->refiner, fo));
 
     s->has_limit.assign(c->num_faces, 0);
     Surface probe;

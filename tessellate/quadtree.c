@@ -499,7 +499,15 @@ tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh 
         return st;
     uint32_t *local = tsr_alloc(a, (size_t)row * row * sizeof *local);
     tsr_keymap map = {0};
+    /* the vertex of each lattice point: an array while it is small (up to
+     * 2^25 points, 128 MB: a 4097^2 terrain), else a hash map; the array
+     * is the faster by far (no hashing, no probing, no rehash) */
+    uint64_t lattice = ((uint64_t)s->extent_x + 1) * ((uint64_t)s->extent_y + 1);
+    uint32_t *dense = lattice <= (1u << 25) ? tsr_alloc(a, (size_t)lattice * sizeof *dense) : NULL;
+    if (dense)
+        memset(dense, 0xff, (size_t)lattice * sizeof *dense);
     if (!local) {
+        tsr_free(a, dense);
         tsr_tile_patterns_free(&pat);
         return TSR_ERR_NOMEM;
     }
@@ -516,7 +524,10 @@ tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh 
                 gi = gi > s->extent_x ? s->extent_x : gi;
                 gj = gj > s->extent_y ? s->extent_y : gj;
                 bool found;
-                uint32_t *slot = tsr_keymap_slot(&map, gj * ((uint64_t)s->extent_x + 1) + gi, &found, a);
+                uint64_t key = gj * ((uint64_t)s->extent_x + 1) + gi;
+                uint32_t *slot = dense ? &dense[key] : tsr_keymap_slot(&map, key, &found, a);
+                if (dense)
+                    found = *slot != UINT32_MAX;
                 if (!slot) {
                     st = TSR_ERR_NOMEM;
                     break;
@@ -543,6 +554,7 @@ tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh 
         }
     }
     tsr_free(a, local);
+    tsr_free(a, dense);
     tsr_keymap_free(&map, a);
     tsr_tile_patterns_free(&pat);
     return st;
