@@ -1662,6 +1662,13 @@ static tsr_status mesh_quadtree_budget(const tsr_heightfield *hf, double tol, ui
         rep->budget_reached = true;
     }
     rep->target_error = p.tol;
+    /* room for the cut at once (growing by doubling copied the mesh about
+     * twice over): its triangles, and about half as many vertices */
+    uint64_t nt = cut_triangles(qt, &pat);
+    if (nt < UINT32_MAX / 2 && tsr_mesh_reserve(mesh, (uint32_t)(nt / 2 + 4096), (uint32_t)nt) != TSR_OK) {
+        st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+        goto done;
+    }
     if ((st = tsr_quadtree_mesh(qt, false, mesh)) != TSR_OK) {
         tsr_error_set(err, st, "quadtree mesh: %s", tsr_status_str(st));
         goto done;
