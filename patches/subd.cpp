@@ -432,10 +432,7 @@ tsr_status create(const tsr_cage *c, tsr_subd_scheme scheme, const tsr_allocator
     s->refiner.reset(RefinerFactory::Create(desc, RefinerFactory::Options(s->scheme, sdc)));
     if (!s->refiner)
         return tsr_error_set(err, TSR_ERR_INVALID_MESH, "subdivision cage: OpenSubdiv refused its topology");
-    Bfr::SurfaceFactory::Options fo;
-    if (getenv("SMOOTH")) fo.SetApproxLevelSmooth(atoi(getenv("SMOOTH")));
-    if (getenv("SHARP")) fo.SetApproxLevelSharp(atoi(getenv("SHARP")));
-    s->factory.reset(new Factory(*s->refiner, fo));
+    s->factory.reset(new Factory(*s->refiner));
 
     s->has_limit.assign(c->num_faces, 0);
     Surface probe;
@@ -712,6 +709,54 @@ extern "C" tsr_status tsr_subd_normal(const tsr_subd *s, uint32_t face, uint32_t
     } catch (...) {
         return TSR_ERR_ARGUMENT;
     }
+}
+
+// (u, v) of parameter t along edge e of a patch: 0 south (t, 0), 1 east
+// (1, t), 2 north (t, 1), 3 west (0, t).
+static void edge_uv(uint32_t e, double t, double uv[2])
+{
+    uv[0] = e == 1 ? 1 : e == 3 ? 0 : t;
+    uv[1] = e == 0 ? 0 : e == 2 ? 1 : t;
+}
+
+extern "C" tsr_status tsr_subd_link_gap(const tsr_subd *s, double *gap, tsr_subd_gap_at *at)
+{
+    if (!s || !gap)
+        return TSR_ERR_ARGUMENT;
+    *gap = 0;
+    uint32_t nf = tsr_subd_face_count(s);
+    for (uint32_t f = 0; f < nf; f++) {
+        if (!tsr_subd_face_has_limit(s, f))
+            continue;
+        for (uint32_t k = 0; k < tsr_subd_face_patches(s, f); k++)
+            for (uint32_t e = 0; e < 4; e++) {
+                tsr_subd_link l[2];
+                uint32_t n = tsr_subd_patch_neighbours(s, f, k, e, l);
+                for (uint32_t i = 0; i < n; i++)
+                    for (int q = 0; q <= 8; q++) {
+                        // the link maps t0..t1 here onto s0..s1 there
+                        // (s1 < s0 when reversed)
+                        double t = l[i].t0 + (l[i].t1 - l[i].t0) * q / 8.0;
+                        double sn = l[i].s0 + (l[i].s1 - l[i].s0) * q / 8.0;
+                        double a[2], b[2], pa[3], pb[3];
+                        edge_uv(e, t, a);
+                        edge_uv(l[i].edge, sn, b);
+                        tsr_status st = tsr_subd_eval(s, f, k, a, 1, pa, nullptr, nullptr);
+                        if (st == TSR_OK)
+                            st = tsr_subd_eval(s, l[i].face, l[i].sub, b, 1, pb, nullptr, nullptr);
+                        if (st != TSR_OK)
+                            return st;
+                        double d = std::sqrt((pa[0] - pb[0]) * (pa[0] - pb[0]) + (pa[1] - pb[1]) * (pa[1] - pb[1]) +
+                                             (pa[2] - pb[2]) * (pa[2] - pb[2]));
+                        if (d > *gap) {
+                            *gap = d;
+                            if (at)
+                                *at = {f, k, l[i].face, l[i].sub, {a[0], a[1]}, {b[0], b[1]}};
+                        }
+                    }
+            }
+    }
+    return TSR_OK;
 }
 
 // Why the box of the patch points bounds the surface: Bfr evaluates a

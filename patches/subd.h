@@ -141,6 +141,24 @@ typedef struct tsr_subd_link {
  * faces separately, so they may differ in the last bits). O(1). */
 uint32_t tsr_subd_patch_neighbours(const tsr_subd *s, uint32_t face, uint32_t sub, uint32_t edge, tsr_subd_link out[2]);
 
+/* How far apart the two sides of every link evaluate the points they
+ * share: for each link of each patch, 9 points evenly along its stretch
+ * (ends included) are evaluated by this patch and by the neighbour at the
+ * corresponding parameter; *gap gets the largest distance and *at (may be
+ * NULL) the two patches and parameters where it occurs (the first found).
+ * On a consistent limit surface this is rounding (about 1e-16 of the
+ * model); where Bfr's surfaces of two faces disagree (OpenSubdiv 3.5.0 on
+ * catmark_chaikin1: face 11's four corners against its neighbours',
+ * 1.7e-3, where uniform refinement with limit masks agrees with the
+ * neighbours to 3e-8), a welded mesh cannot follow both sides, and
+ * measuring against each side finds the difference. *gap is 0 when there
+ * is no link. TSR_ERR_ARGUMENT for a NULL s or gap; TSR_ERR_NOMEM. */
+typedef struct tsr_subd_gap_at {
+    uint32_t face, sub, other_face, other_sub;
+    double uv[2], other_uv[2];
+} tsr_subd_gap_at;
+tsr_status tsr_subd_link_gap(const tsr_subd *s, double *gap, tsr_subd_gap_at *at);
+
 /* Limit surface of patch (face, sub) at `count` parameter pairs uv (u, v
  * interleaved, clamped to [0,1]; NaN reads as 0): positions into pos (3
  * per point, not NULL) and, when du / dv are not NULL, the first

@@ -898,6 +898,23 @@ static int run_patches(int argc, char **argv)
                "box diagonal %.6g\n",
                in, p.kind, info.sources, info.pieces, info.links, info.collapsed_edges, info.mirrored,
                info.trimmed_sources, diag);
+    /* a subdivision surface as Bfr evaluates it may disagree with itself
+     * across a shared edge or corner: said, so that a failure there is
+     * understood (the mesh can follow only one side) */
+    double gap = 0;
+    tsr_subd_gap_at ga = {0};
+    if (rc == CLI_OK && p.subd && tsr_subd_link_gap(p.subd, &gap, &ga) != TSR_OK) {
+        cli_error("check", "%s: out of memory", in);
+        rc = CLI_FAIL;
+    }
+    if (rc == CLI_OK && p.subd && !json)
+        printf("linked patches evaluated apart by up to %.3g (%.3g of the tolerance): face %u sub-patch %u (u %g, v %g) "
+               "against face %u sub-patch %u (u %g, v %g)%s\n",
+               gap, gap / tol, ga.face, ga.sub, ga.uv[0], ga.uv[1], ga.other_face, ga.other_sub, ga.other_uv[0],
+               ga.other_uv[1],
+               gap > 1e-3 * tol ? ": OpenSubdiv evaluates the two sides differently there, and the welded mesh "
+                                  "follows one of them"
+                                : "");
     int failures = 0, worst = 0;
     char why[800];
     for (int k = 0; k <= n && rc == CLI_OK; k++) {
@@ -951,6 +968,16 @@ static int run_patches(int argc, char **argv)
             cJSON_AddItemToObject(mo, "lo", cJSON_CreateDoubleArray(info.lo, 3));
             cJSON_AddItemToObject(mo, "hi", cJSON_CreateDoubleArray(info.hi, 3));
             cJSON_AddNumberToObject(mo, "diagonal", diag);
+            if (p.subd) {
+                cJSON *g = cJSON_AddObjectToObject(mo, "link_gap");
+                cJSON_AddNumberToObject(g, "distance", gap);
+                cJSON_AddNumberToObject(g, "face", ga.face);
+                cJSON_AddNumberToObject(g, "sub", ga.sub);
+                cJSON_AddItemToObject(g, "uv", cJSON_CreateDoubleArray(ga.uv, 2));
+                cJSON_AddNumberToObject(g, "other_face", ga.other_face);
+                cJSON_AddNumberToObject(g, "other_sub", ga.other_sub);
+                cJSON_AddItemToObject(g, "other_uv", cJSON_CreateDoubleArray(ga.other_uv, 2));
+            }
             cJSON *vj = patch_run_json(vi);
             cJSON_AddNumberToObject(vj, "patches", info.sources);
             cJSON_AddItemToObject(j, "view_independent", vj);

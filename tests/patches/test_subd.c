@@ -557,6 +557,9 @@ TEST(shared_edges_agree)
         double w = check_links(s, true, "cube", &links);
         CHECK_MSG(w <= 1e-12, "cube: shared edges differ by %g", w);
         CHECK(links == 24);
+        double gap = -1;
+        CHECK(tsr_subd_link_gap(s, &gap, NULL) == TSR_OK);
+        CHECK_MSG(gap >= 0 && gap <= w, "cube: link gap %g, edges differ by %g", gap, w);
         tsr_subd_destroy(s);
     }
     pyramid(&b);
@@ -1007,6 +1010,9 @@ TEST(data_osd_shapes)
             with += tsr_subd_face_has_limit(s, f);
         double w = check_links(s, false, names[i], &links);
         CHECK_MSG(w <= 1e-12 * (1 + size), "%s: shared edges differ by %g", names[i], w);
+        double gap = -1; /* 9 of check_links' 17 points per link */
+        CHECK(tsr_subd_link_gap(s, &gap, NULL) == TSR_OK);
+        CHECK_MSG(gap >= 0 && gap <= w, "%s: link gap %g, edges differ by %g", names[i], gap, w);
         check_bounds(s, names[i], 12);
         tsr_mesh m;
         tsr_mesh_init(&m, TSR_MESH_NORMALS, NULL);
@@ -1056,6 +1062,66 @@ static void bezier_point(const double *b, double s, double t, double out[3])
  * at (u, v) on face TSR_SUBD_BEZIER_FACE(p) is the Bézier point at (s, t) =
  * (u, v) (a swapped or mirrored parameterisation, or a wrong inverse, is
  * off by the patch's size). */
+/* tsr_subd_link_gap where Bfr's faces disagree: catmark_chaikin1 (its
+ * face 11, between Chaikin creases of sharpness 5, evaluates its corners
+ * 1.7e-3 from its neighbours' with OpenSubdiv 3.5.0). The gap equals the
+ * largest disagreement among the face corners that share a cage vertex,
+ * found here from the cage's face lists (the link walk does not enter),
+ * and check_links' sampling of the same links. */
+TEST(data_link_gap_corners)
+{
+    const char *data = check_data_dir();
+    if (!data)
+        SKIP("no shared data folder (set TESSERA_DATA)");
+    char path[8192];
+    snprintf(path, sizeof path, "%s/patches/osd/catmark_chaikin1.obj", data);
+    /* the library's loader: the file ends with "t creasemethod ... chaikin",
+     * which read_obj above does not take */
+    tsr_cage c;
+    tsr_error err = {0};
+    CHECK_MSG(tsr_cage_load(path, NULL, &c, &err) == TSR_OK, "%s", err.message);
+    if (err.status != TSR_OK)
+        return;
+    CHECK(c.crease_method == 1);
+    tsr_subd *s = make(&c, TSR_SUBD_CATMARK);
+    if (!s) {
+        tsr_cage_free(&c);
+        return;
+    }
+    /* every face is a quad here: corner k at (0,0), (1,0), (1,1), (0,1) */
+    static const double cuv[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    double corner = 0;
+    for (uint32_t f = 0; f < c.num_faces; f++) {
+        CHECK(c.face_sizes[f] == 4);
+        for (uint32_t g = f + 1; g < c.num_faces; g++)
+            for (uint32_t a = 0; a < 4; a++)
+                for (uint32_t b = 0; b < 4; b++) {
+                    if (c.face_verts[4 * f + a] != c.face_verts[4 * g + b])
+                        continue;
+                    double pa[3], pb[3];
+                    CHECK(tsr_subd_eval(s, f, 0, cuv[a], 1, pa, NULL, NULL) == TSR_OK);
+                    CHECK(tsr_subd_eval(s, g, 0, cuv[b], 1, pb, NULL, NULL) == TSR_OK);
+                    corner = fmax(corner, dist3(pa, pb));
+                }
+    }
+    uint32_t links;
+    double w = check_links(s, true, "catmark_chaikin1", &links);
+    double gap = -1;
+    tsr_subd_gap_at at;
+    CHECK(tsr_subd_link_gap(s, &gap, &at) == TSR_OK);
+    CHECK_MSG(fabs(gap - corner) <= 1e-15 && gap <= w, "catmark_chaikin1: link gap %g, corners %g, edges %g", gap,
+              corner, w);
+    /* where it says: the two points evaluate that far apart */
+    double pa[3], pb[3];
+    CHECK(tsr_subd_eval(s, at.face, at.sub, at.uv, 1, pa, NULL, NULL) == TSR_OK);
+    CHECK(tsr_subd_eval(s, at.other_face, at.other_sub, at.other_uv, 1, pb, NULL, NULL) == TSR_OK);
+    CHECK(dist3(pa, pb) == gap);
+    fprintf(stderr, "  catmark_chaikin1: link gap %.3g (face %u against face %u), corners %.3g\n", gap, at.face,
+            at.other_face, corner);
+    tsr_subd_destroy(s);
+    tsr_cage_free(&c);
+}
+
 TEST(bezier_cage_reproduces_patches)
 {
     enum { NP = 5 };
@@ -1208,4 +1274,4 @@ TEST_MAIN(T(bilinear_quad_is_bilinear_interpolation), T(bilinear_ngon_subpatches
           T(regular_face_is_bicubic_bspline), T(cube_limit_values_and_symmetry), T(holes_and_boundaries_have_no_limit),
           T(shared_edges_agree), T(bounds_contain_samples), T(bad_cages_refused), T(degenerate_patch_corner_normal),
           T(uniform_tessellation_closed), T(bezier_cage_reproduces_patches), T(uniform_faces_subset),
-          T(data_osd_shapes))
+          T(data_osd_shapes), T(data_link_gap_corners))
