@@ -12,7 +12,6 @@
 #include <math.h>
 #include <pthread.h>
 #include <string.h>
-#include <unistd.h>
 
 tsr_status tsr_terrain_measure(const tsr_heightfield *hf, const tsr_mesh *mesh, const tsr_camera *cam,
                                tsr_error_report *out)
@@ -238,17 +237,7 @@ tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, ui
         b[i].re = b[i].rb + BAND_ROWS < wh ? b[i].rb + BAND_ROWS : wh;
     }
     band_job j = {b, nb, 0, PTHREAD_MUTEX_INITIALIZER};
-    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-    uint32_t nt = ncpu > 1 ? (uint32_t)ncpu : 1;
-    nt = nt > nb ? nb : nt > 64 ? 64 : nt;
-    pthread_t th[64];
-    uint32_t started = 0;
-    for (uint32_t k = 1; k < nt; k++)
-        if (pthread_create(&th[started], NULL, band_worker, &j) == 0)
-            started++;
-    band_worker(&j);
-    for (uint32_t k = 0; k < started; k++)
-        pthread_join(th[k], NULL);
+    tsr__run_threads(band_worker, &j, 0, nb);
     pthread_mutex_destroy(&j.lock);
     /* in band order: the first band's worst sample wins a tie */
     double sumsq = 0;

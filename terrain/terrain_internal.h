@@ -55,6 +55,13 @@ typedef struct pick_view {
 bool tsr_terrain_pick_view(const tsr_terrain *t, pick_view *v);
 
 /* Greyscale Netpbm (P2, P5) read exactly (pnm.c). */
+/* Runs work(arg) on up to `threads` threads at once (0: one per online
+ * processor), never more than `jobs`, the caller's thread among them, and
+ * returns when all have returned: work takes its jobs from arg itself
+ * (under a lock) until none is left. Where a thread cannot be started,
+ * fewer run. */
+void tsr__run_threads(void *(*work)(void *), void *arg, uint32_t threads, uint32_t jobs);
+
 bool tsr_pnm_is_grey(const char *path);
 tsr_status tsr_pnm_read(const char *path, const tsr_allocator *alloc, tsr_heightfield **out, tsr_error *err);
 

@@ -48,7 +48,6 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 /* ---- the candidate queue: an 8-ary max-heap of (key, slot) words with
  * lazy deletion. Each triangle slot keeps its own record (error and
@@ -1482,18 +1481,7 @@ static tsr_status mesh_delaunay_blocks(const tsr_heightfield *hf, const tsr_heig
             bk->w = sx[bx + 1] - sx[bx] + 1, bk->h = sy[by + 1] - sy[by] + 1;
         }
     pthread_mutex_init(&j.lock, NULL);
-    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-    uint32_t nt = o->threads ? o->threads : ncpu > 0 ? (uint32_t)ncpu : 1;
-    nt = nt > j.nb ? j.nb : nt;
-    nt = nt > 256 ? 256 : nt;
-    pthread_t th[256];
-    uint32_t started = 0;
-    for (uint32_t k = 1; k < nt; k++)
-        if (pthread_create(&th[started], NULL, block_worker, &j) == 0)
-            started++;
-    block_worker(&j);
-    for (uint32_t k = 0; k < started; k++)
-        pthread_join(th[k], NULL);
+    tsr__run_threads(block_worker, &j, o->threads, j.nb);
     pthread_mutex_destroy(&j.lock);
     /* the first failure in block order; else the blocks welded along
      * their seams, in block order (blocks left undone after a failure
