@@ -866,6 +866,22 @@ static void both_methods(const tsr_pslg *in, tsr_region r, double area[2], uint3
     }
 }
 
+/* Under EVEN_ODD and under ENCLOSED, both methods keep the same area
+ * (within tol); crossings[r] (may be NULL) gets region r's intersection
+ * counts (Delaunay, quadtree), r 0 even-odd, 1 enclosed. */
+static void methods_agree(const tsr_pslg *in, double tol, uint32_t crossings[2][2])
+{
+    for (int r = 0; r < 2; r++) {
+        double area[2];
+        uint32_t cr[2], fb = 0;
+        both_methods(in, r ? TSR_REGION_ENCLOSED : TSR_REGION_EVEN_ODD, area, cr, &fb);
+        CHECK_MSG(fabs(area[1] - area[0]) <= tol, "region %d: quadtree kept %.17g, Delaunay %.17g", r, area[1],
+                  area[0]);
+        if (crossings)
+            crossings[r][0] = cr[0], crossings[r][1] = cr[1];
+    }
+}
+
 /* The fuzz finds quadtree_evenodd_region_kept_where_delaunay_keeps_none and
  * its hole seed sibling, cut down: segment 0 runs along y = x from
  * (-16, -16) to (8, 8), segment 2 from (5, 5) back to (-16, -16) along it,
@@ -884,15 +900,11 @@ TEST(even_odd_overlapping_segments_crossed_at_one_vertex)
     tsr_pslg in = {xy, 5, seg, 4, NULL, 0};
     if (!delaunay_available())
         SKIP("the Delaunay method is not available yet");
-    for (int r = 0; r < 2; r++) {
-        double area[2];
-        uint32_t crossings[2], fb = 0;
-        both_methods(&in, r ? TSR_REGION_ENCLOSED : TSR_REGION_EVEN_ODD, area, crossings, &fb);
-        CHECK_MSG(fabs(area[1] - area[0]) <= 1e-12 * 64, "region %d: quadtree kept %.17g, Delaunay %.17g", r,
-                  area[1], area[0]);
-        CHECK_MSG(crossings[1] == 1 && crossings[0] == 1, "region %d: %u crossings (Delaunay %u), not 1", r,
-                  crossings[1], crossings[0]);
-    }
+    uint32_t crossings[2][2];
+    methods_agree(&in, 1e-12 * 64, crossings);
+    for (int r = 0; r < 2; r++)
+        CHECK_MSG(crossings[r][1] == 1 && crossings[r][0] == 1, "region %d: %u crossings (Delaunay %u), not 1", r,
+                  crossings[r][1], crossings[r][0]);
 }
 
 /* The fuzz find quadtree_evenodd_keeps_less_than_delaunay_2, cut down:
@@ -912,13 +924,7 @@ TEST(chord_through_vertex_split_there)
     tsr_pslg in = {xy, 9, seg, 7, NULL, 0};
     if (!delaunay_available())
         SKIP("the Delaunay method is not available yet");
-    for (int r = 0; r < 2; r++) {
-        double area[2];
-        uint32_t crossings[2], fb = 0;
-        both_methods(&in, r ? TSR_REGION_ENCLOSED : TSR_REGION_EVEN_ODD, area, crossings, &fb);
-        CHECK_MSG(fabs(area[1] - area[0]) <= 1e-12 * 1024, "region %d: quadtree kept %.17g, Delaunay %.17g", r,
-                  area[1], area[0]);
-    }
+    methods_agree(&in, 1e-12 * 1024, NULL);
 }
 
 /* After the fuzz find quadtree_evenodd_keeps_less_than_delaunay, closed:
