@@ -31,7 +31,8 @@ typedef struct band {
     float *worst, *wpix;
     const uint32_t *tris; /* the triangles whose rows meet the band, in order */
     uint32_t ntris;
-    tsr_error_report out;
+    tsr_error_report out; /* the band's figures (rms_vertical unused) */
+    double sumsq;         /* of the band's covered samples' errors */
 } band;
 
 /* The window rows a triangle's footprint may cover, [*r0, *r1]; false when
@@ -147,7 +148,7 @@ static void measure_band(band *b)
                 out->counted++;
         }
     }
-    out->rms_vertical = sumsq; /* the sum, until combined */
+    b->sumsq = sumsq;
 }
 
 typedef struct band_job {
@@ -258,7 +259,7 @@ tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, ui
         out->covered += r->covered;
         out->uncovered += r->uncovered;
         out->counted += r->counted;
-        sumsq += r->rms_vertical;
+        sumsq += b[i].sumsq;
     }
     out->rms_vertical = out->covered ? sqrt(sumsq / (double)out->covered) : 0;
     tsr_free(a, worst);

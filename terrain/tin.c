@@ -1323,6 +1323,7 @@ typedef struct tin_job {
     tin_block *b;
     uint32_t nb, next;
     bool failed;
+    bool clean; /* the heightfield has no no-data at all: no block's ring either */
     double cells; /* in all blocks */
     pthread_mutex_t lock;
 } tin_job;
@@ -1353,7 +1354,8 @@ static void mesh_block(tin_job *j, uint32_t i)
     const tsr_heightfield *hf = j->hf;
     const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
     tsr_mesh_init(&b->mesh, 0, a);
-    tin_ctx ctx = {hf->data, hf->width, hf->height, b->x, b->y, ring_nodata(hf, b->x, b->y, b->w, b->h)};
+    tin_ctx ctx = {hf->data, hf->width, hf->height, b->x, b->y,
+                   !j->clean && ring_nodata(hf, b->x, b->y, b->w, b->h)};
     bool any = !ctx.nodata;
     for (uint32_t r = b->y; r + 1 < b->y + b->h && !any; r++)
         for (uint32_t c = b->x; c + 1 < b->x + b->w && !any; c++) {
@@ -1438,9 +1440,12 @@ static uint32_t *seam_slot(const seams *s, uint32_t bi, uint32_t bj, uint32_t c,
     return n ? slots[0] : NULL;
 }
 
-static tsr_status mesh_delaunay_blocks(const tsr_heightfield *hf, const tsr_heightfield *win, uint32_t wx,
-                                       uint32_t wy, uint32_t ww, uint32_t wh, double target, double btol, bool fixed, const tsr_tin_options *o,
-                                       tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err)
+/* clean: hf has no no-data sample at all (its stats say so), so no ring
+ * needs scanning for it. */
+static tsr_status mesh_delaunay_blocks(const tsr_heightfield *hf, const tsr_heightfield *win, bool clean,
+                                       uint32_t wx, uint32_t wy, uint32_t ww, uint32_t wh, double target, double btol,
+                                       bool fixed, const tsr_tin_options *o, tsr_mesh *mesh, tsr_tin_report *rep,
+                                       tsr_error *err)
 {
     const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
     bool cut = fixed && !o->max_triangles && !o->max_vertices;
@@ -1448,7 +1453,7 @@ static tsr_status mesh_delaunay_blocks(const tsr_heightfield *hf, const tsr_heig
     uint32_t nx = cut ? (ww - 1 + B - 1) / B : 1, ny = cut ? (wh - 1 + B - 1) / B : 1;
     if (nx * ny <= 1 || !cut) {
         /* one block: the window itself (the heightfield when whole) */
-        tin_ctx ctx = {hf->data, hf->width, hf->height, wx, wy, ring_nodata(hf, wx, wy, ww, wh)};
+        tin_ctx ctx = {hf->data, hf->width, hf->height, wx, wy, !clean && ring_nodata(hf, wx, wy, ww, wh)};
         tsr_status st = mesh_delaunay(win, &ctx, target, btol, fixed, o->max_triangles, o->max_vertices, o, mesh,
                                       rep, err);
         rep->blocks = 1;
@@ -1474,6 +1479,7 @@ static tsr_status mesh_delaunay_blocks(const tsr_heightfield *hf, const tsr_heig
     memset(&j, 0, sizeof j);
     j.hf = hf, j.o = o, j.target = target, j.btol = btol, j.wx = wx, j.wy = wy, j.b = b, j.nb = nx * ny;
     j.cells = (double)(ww - 1) * (wh - 1);
+    j.clean = clean;
     for (uint32_t by = 0; by < ny; by++)
         for (uint32_t bx = 0; bx < nx; bx++) {
             tin_block *bk = &b[by * nx + bx];
@@ -1787,7 +1793,11 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
         bool fixed = target > 0 || o.border_error > 0;
         if (!fixed)
             rep->border_error = 0;
-        st = mesh_delaunay_blocks(hf, src, wx, wy, ww, wh, t / hf->dz, b / hf->dz, fixed, &o, mesh, rep, err);
+        /* the stats of the whole heightfield (no window) tell whether any
+         * block can meet no-data */
+        bool clean = src == hf && hs.nodata == 0;
+        st = mesh_delaunay_blocks(hf, src, clean, wx, wy, ww, wh, t / hf->dz, b / hf->dz, fixed, &o, mesh, rep,
+                                  err);
     } else if (o.method == TSR_TIN_QUADTREE)
         st = mesh_quadtree(src, target, o.max_triangles, o.max_vertices, &o, mesh, rep, err);
     else
