@@ -1366,23 +1366,20 @@ static void mesh_block(tin_job *j, uint32_t i)
         b->st = TSR_OK;
         return;
     }
-    tsr_heightfield *crop = NULL;
-    const tsr_heightfield *src = hf;
-    if (b->x || b->y || b->w != hf->width || b->h != hf->height) {
-        crop = tsr_heightfield_crop(hf, b->x, b->y, b->w, b->h, a);
-        if (!crop) {
-            b->st = tsr_error_set(&b->err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
-            return;
-        }
-        src = crop;
+    /* a copy of the block: its rows contiguous (blocks are used only when
+     * there are several, so never the whole heightfield) */
+    tsr_heightfield *crop = tsr_heightfield_crop(hf, b->x, b->y, b->w, b->h, a);
+    if (!crop) {
+        b->st = tsr_error_set(&b->err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
+        return;
     }
     tsr_tin_options o = *j->o;
     block_progress_user pu = {j, i};
-    if (o.progress && j->nb > 1) {
+    if (o.progress) {
         o.progress = block_progress;
         o.progress_user = &pu;
     }
-    b->st = mesh_delaunay(src, &ctx, j->target, j->btol, true, 0, 0, &o, &b->mesh, &b->rep, &b->err);
+    b->st = mesh_delaunay(crop, &ctx, j->target, j->btol, true, 0, 0, &o, &b->mesh, &b->rep, &b->err);
     tsr_heightfield_destroy(crop);
     /* block coordinates to the window's */
     double ox = (double)(b->x - j->wx), oy = (double)(b->y - j->wy);
@@ -1391,7 +1388,7 @@ static void mesh_block(tin_job *j, uint32_t i)
         pp[0] = (float)((lround(pp[0] / hf->dx) + ox) * hf->dx);
         pp[1] = (float)((lround(pp[1] / hf->dy) + oy) * hf->dy);
     }
-    if (o.progress && j->nb > 1)
+    if (o.progress)
         block_progress(&pu, 1);
 }
 
