@@ -168,7 +168,12 @@ typedef struct tsr_tin_options {
      * border is refined by the greedy pass like the interior. */
     double border_error;
     uint32_t grid_step;           /* grid: keep every step-th column and row (default 1) */
-    uint32_t tile_n;              /* quadtree: tile size 2..128, a power of 2 (default 2) */
+    /* quadtree: 0 (default): each leaf is two triangles on its chosen
+     * diagonal or four from its centre, plus the midpoints of sides with a
+     * finer neighbour, kept only where every sample is within the bound
+     * (rqt.c); 2..128, a power of 2: each leaf the terrain LOD's grid tile
+     * of that size, selected by the LOD pyramid's conservative error */
+    uint32_t tile_n;
     bool full_border;             /* quadtree: outer border at full resolution (for seams) */
     bool normals;                 /* per-vertex normals from the heightfield's gradients */
     /* delaunay: skip the data-dependent edge flips made after each

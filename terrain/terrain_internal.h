@@ -54,6 +54,23 @@ typedef struct pick_view {
 
 bool tsr_terrain_pick_view(const tsr_terrain *t, pick_view *v);
 
+/* The quadtree method's default mesh (rqt.c): a restricted quadtree over
+ * the cells (a node of level l covers 2^(levels-l) cells a side, clipped
+ * at the border; edge neighbours differ by at most one level), each leaf
+ * drawn as two triangles on the diagonal it chooses, plus the midpoint of
+ * each side whose neighbour is finer (2 to 6 triangles; the mesh is
+ * conforming). A leaf is kept only when every valid sample of its closed
+ * square lies within tol (file units, vertically) of its triangles,
+ * whichever sides get midpoints: the error is exact, not an estimate.
+ * Cells with a no-data corner are refined to single cells, and keep the
+ * triangle of three valid corners where there is one. full_border: the
+ * outer border at full resolution (window seams). With a budget
+ * (max_tri, max_vert not 0), the smallest tolerance whose mesh fits is
+ * found by bisection and rep->budget_reached set. rep->target_error gets
+ * the tolerance used, in world units (h dz). */
+tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, bool full_border, uint32_t max_tri,
+                         uint32_t max_vert, tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err);
+
 /* Greyscale Netpbm (P2, P5) read exactly (pnm.c). */
 /* Runs work(arg) on up to `threads` threads at once (0: one per online
  * processor), never more than `jobs`, the caller's thread among them, and

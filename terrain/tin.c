@@ -39,9 +39,10 @@
  * by them: the greedy order jumps across the heightfield). Errors are in
  * file units inside (h), world units (h dz) outside.
  *
- * quadtree: the restricted quadtree's cut (lod.c's pyramid) with
- * error(node) <= the bound, each leaf a grid tile; grid: every step-th
- * sample (grid.c). */
+ * quadtree: by default rqt.c's restricted quadtree with exact errors
+ * (leaves of two or four triangles); with a tile size, the restricted
+ * quadtree's cut of lod.c's pyramid with error(node) <= the bound, each
+ * leaf a grid tile; grid: every step-th sample (grid.c). */
 #include "terrain_internal.h"
 
 #include <math.h>
@@ -1795,6 +1796,10 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
         bool clean = src == hf && hs.nodata == 0;
         st = mesh_delaunay_blocks(hf, src, clean, wx, wy, ww, wh, t / hf->dz, b / hf->dz, fixed, &o, mesh, rep,
                                   err);
+    } else if (o.method == TSR_TIN_QUADTREE && o.tile_n == 0) {
+        double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(hs.max), fabs(hs.min)) * hf->dz;
+        double t = target > margin ? target - margin : target;
+        st = tsr__rqt_mesh(src, t / hf->dz, o.full_border, o.max_triangles, o.max_vertices, mesh, rep, err);
     } else if (o.method == TSR_TIN_QUADTREE)
         st = mesh_quadtree(src, target, o.max_triangles, o.max_vertices, &o, mesh, rep, err);
     else

@@ -361,6 +361,56 @@ TEST(nodata_holes)
     tsr_heightfield_destroy(hf);
 }
 
+/* The quadtree's two kinds of leaf: its default (exact errors, leaves of
+ * two or four triangles) and grid tiles over the LOD pyramid (tile_n).
+ * Both hold the bound by the oracle, with and without no-data, and are
+ * valid (bound_case); the exact errors need fewer triangles in all. */
+static uint32_t quadtree_case(const tsr_heightfield *hf, uint32_t tile_n, double e, const char *what)
+{
+    tsr_tin_options o = {0};
+    o.method = TSR_TIN_QUADTREE;
+    o.tile_n = tile_n;
+    o.max_error = e;
+    bound_case(hf, o, what);
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    tsr_error err = {0};
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_OK);
+    uint32_t n = m.triangle_count;
+    tsr_mesh_free(&m);
+    return n;
+}
+
+TEST(quadtree_leaves_and_tiles)
+{
+    uint32_t sizes[][2] = {{129, 129}, {100, 77}, {33, 120}, {2, 2}, {3, 40}, {257, 5}};
+    double errors[] = {0.5, 5, 50};
+    uint64_t exact = 0, tiles = 0;
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
+        for (int holes = 0; holes < 2; holes++) {
+            tsr_heightfield *hf = terrain(sizes[s][0], sizes[s][1], (uint32_t)s + 11);
+            if (holes) { /* a hole across the middle and a lone no-data sample */
+                float *d = tsr_heightfield_data(hf);
+                uint32_t w = sizes[s][0], h = sizes[s][1];
+                for (uint32_t r = h / 3; r < h / 2; r++)
+                    for (uint32_t c = w / 4; c < w / 2; c++)
+                        d[r * w + c] = NAN;
+                d[(h - 1) * w + w - 1] = NAN;
+            }
+            for (size_t e = 0; e < sizeof errors / sizeof errors[0]; e++) {
+                char what[64];
+                snprintf(what, sizeof what, "%ux%u%s E=%g", sizes[s][0], sizes[s][1], holes ? " holes" : "",
+                         errors[e]);
+                exact += quadtree_case(hf, 0, errors[e], what);
+                tiles += quadtree_case(hf, 2, errors[e], what);
+                quadtree_case(hf, 8, errors[e], what);
+            }
+            tsr_heightfield_destroy(hf);
+        }
+    CHECK_MSG(exact < tiles, "exact errors %llu triangles, grid tiles %llu", (unsigned long long)exact,
+              (unsigned long long)tiles);
+}
+
 /* The vertices of m on the line x = X (or y = Y), sorted. */
 static int cmp3(const void *a, const void *b)
 {
@@ -705,4 +755,4 @@ TEST(data_real_terrain)
 }
 
 TEST_MAIN(T(error_bound_generated), T(flips_fewer_triangles), T(spacing_and_scale), T(flat_and_planar), T(budgets),
-          T(nodata_holes), T(window_seams), T(blocks), T(closed_solid), T(bad_options), T(data_real_terrain))
+          T(nodata_holes), T(quadtree_leaves_and_tiles), T(window_seams), T(blocks), T(closed_solid), T(bad_options), T(data_real_terrain))

@@ -1,0 +1,631 @@
+/* rqt.c: the quadtree method's default mesh (tessera mesh --method
+ * quadtree): a restricted quadtree triangulation with exact errors.
+ *
+ * The tree is over the cells: a node of level l covers a square of
+ * 2^(levels-l) cells a side (clipped at the heightfield's border), the
+ * deepest nodes single cells. A leaf is drawn as two triangles split by
+ * one of its diagonals, chosen per leaf (a data-dependent choice), and a
+ * side whose neighbour is finer also gets its midpoint, which splits the
+ * triangle on that side in two: 2 to 6 triangles per leaf. Edge
+ * neighbours differ by at most one level (the restriction), so the finer
+ * side's vertices along a shared side are the coarser side's corners plus
+ * the midpoint: the mesh is conforming, with no T-junction.
+ *
+ * The error is exact. A node is kept as a leaf only when every sample of
+ * its closed square lies within the tolerance of its triangles, for every
+ * set of midpoints it could get (a side has a midpoint or not depending on
+ * neighbours decided later): the triangles of both halves with and without
+ * each midpoint are scanned, and the first sample beyond the tolerance
+ * rejects the diagonal. So no leaf of the final cut, whatever its
+ * neighbours, is farther than the tolerance from any of its samples, and
+ * the measured max error is within the bound by construction, not by a
+ * conservative estimate (lod.c's pyramid bounds a tile's error by sums
+ * over levels, which on smooth terrain is several times the true error).
+ *
+ * Selection is top-down from the root: a node failing the test is split.
+ * Splitting a node first splits the parents of its edge neighbours that
+ * are coarser (recursively), which keeps the restriction; the children of
+ * every split node are tested in turn, so a node split only to keep the
+ * restriction still gets exactly tested children. A node with a no-data
+ * sample never passes, so no-data is refined to single cells, and a cell
+ * with a no-data corner is a hole (as for the other methods).
+ *
+ * Cost: every leaf's square is scanned in full (about 3.5 times, for the
+ * sets of midpoints), a rejected node until its first sample beyond the
+ * tolerance; no per-node table is kept but two bits (split, diagonal). */
+#include "terrain_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define RQT_MAX_LEVELS 21 /* sides up to 2^20 samples */
+
+typedef struct rnode {
+    uint32_t x, y, l;
+} rnode;
+
+typedef struct vtx {
+    int64_t i, j;
+    double z;
+} vtx;
+
+typedef struct rqt {
+    const float *h;
+    size_t w; /* row stride */
+    int64_t cx, cy;
+    uint32_t levels;
+    uint32_t nx[RQT_MAX_LEVELS + 1], ny[RQT_MAX_LEVELS + 1];
+    uint64_t *split[RQT_MAX_LEVELS], *diag[RQT_MAX_LEVELS], *fan[RQT_MAX_LEVELS];
+    size_t words[RQT_MAX_LEVELS];
+    double tol;
+    bool full_border;
+    rnode *stack;
+    size_t sn, scap;
+    const tsr_allocator *a;
+    bool nomem;
+} rqt;
+
+/* ---- the tree ------------------------------------------------------------ */
+
+static size_t bit_of(const rqt *q, rnode n) { return (size_t)n.y * q->nx[n.l] + n.x; }
+
+static bool get_bit(uint64_t *const *set, const rqt *q, rnode n)
+{
+    if (n.l >= q->levels)
+        return false;
+    size_t b = bit_of(q, n);
+    return set[n.l][b >> 6] >> (b & 63) & 1;
+}
+
+static void put_bit(uint64_t **set, const rqt *q, rnode n, bool v)
+{
+    size_t b = bit_of(q, n);
+    if (v)
+        set[n.l][b >> 6] |= (uint64_t)1 << (b & 63);
+    else
+        set[n.l][b >> 6] &= ~((uint64_t)1 << (b & 63));
+}
+
+static bool is_split(const rqt *q, rnode n) { return get_bit(q->split, q, n); }
+
+static bool exists(const rqt *q, rnode n) { return n.x < q->nx[n.l] && n.y < q->ny[n.l]; }
+
+static void push(rqt *q, rnode n)
+{
+    if (q->sn == q->scap) {
+        size_t cap = q->scap ? 2 * q->scap : 256;
+        rnode *s = tsr_realloc(q->a, q->stack, cap * sizeof *s);
+        if (!s) {
+            q->nomem = true;
+            return;
+        }
+        q->stack = s;
+        q->scap = cap;
+    }
+    q->stack[q->sn++] = n;
+}
+
+/* Splits n, after the coarser parents of its edge neighbours (so that
+ * its children will differ from their neighbours by one level at most),
+ * and queues its children for the test. */
+static void split(rqt *q, rnode n)
+{
+    static const int ox[4] = {0, 1, 0, -1}, oy[4] = {-1, 0, 1, 0};
+    if (is_split(q, n))
+        return;
+    if (n.l > 0)
+        for (int k = 0; k < 4; k++) {
+            if ((ox[k] < 0 && n.x == 0) || (oy[k] < 0 && n.y == 0))
+                continue;
+            rnode nb = {n.x + (uint32_t)ox[k], n.y + (uint32_t)oy[k], n.l};
+            if (!exists(q, nb))
+                continue;
+            rnode p = {nb.x >> 1, nb.y >> 1, n.l - 1};
+            if (!is_split(q, p))
+                split(q, p);
+        }
+    put_bit(q->split, q, n, true);
+    for (uint32_t k = 0; k < 4; k++) {
+        rnode c = {2 * n.x + (k & 1), 2 * n.y + (k >> 1), n.l + 1};
+        if (exists(q, c))
+            push(q, c);
+    }
+}
+
+/* A node's square, clipped, and which sides could get a midpoint (a
+ * neighbour exists across the side, and the midpoint falls inside it). */
+typedef struct box {
+    int64_t x0, y0, x1, y1, xm, ym;
+    bool ms, me, mn, mw;
+} box;
+
+static box node_box(const rqt *q, rnode n)
+{
+    box b;
+    int64_t s = (int64_t)1 << (q->levels - n.l);
+    b.x0 = (int64_t)n.x * s;
+    b.y0 = (int64_t)n.y * s;
+    b.x1 = b.x0 + s < q->cx ? b.x0 + s : q->cx;
+    b.y1 = b.y0 + s < q->cy ? b.y0 + s : q->cy;
+    b.xm = b.x0 + s / 2;
+    b.ym = b.y0 + s / 2;
+    bool wide = s >= 2;
+    b.ms = wide && b.y0 > 0 && b.xm < b.x1;
+    b.mn = wide && b.y0 + s < q->cy && b.xm < b.x1;
+    b.mw = wide && b.x0 > 0 && b.ym < b.y1;
+    b.me = wide && b.x0 + s < q->cx && b.ym < b.y1;
+    return b;
+}
+
+static vtx at(const rqt *q, int64_t i, int64_t j) { return (vtx){i, j, q->h[(size_t)j * q->w + (size_t)i]}; }
+
+/* ---- the exact test -------------------------------------------------- */
+
+static int64_t floor_div(int64_t a, int64_t b) /* b > 0 */
+{
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+
+/* The largest distance of a sample of the closed triangle abc
+ * (counter-clockwise, lattice vertices) from its plane, or INFINITY as
+ * soon as a row has one beyond tol or a no-data sample (or vertex). Each
+ * row's span is found exactly from the edges. */
+static double tri_err(const rqt *q, vtx a, vtx b, vtx c)
+{
+    double det = (double)((b.i - a.i) * (c.j - a.j) - (c.i - a.i) * (b.j - a.j));
+    double gx = ((b.z - a.z) * (double)(c.j - a.j) - (c.z - a.z) * (double)(b.j - a.j)) / det;
+    double gy = ((double)(b.i - a.i) * (c.z - a.z) - (double)(c.i - a.i) * (b.z - a.z)) / det;
+    if (!isfinite(gx) || !isfinite(gy) || !isfinite(a.z))
+        return INFINITY;
+    const vtx *e[3][2] = {{&a, &b}, {&b, &c}, {&c, &a}};
+    int64_t j0 = a.j < b.j ? a.j : b.j, j1 = a.j > b.j ? a.j : b.j;
+    j0 = c.j < j0 ? c.j : j0;
+    j1 = c.j > j1 ? c.j : j1;
+    int64_t imin = a.i < b.i ? a.i : b.i, imax = a.i > b.i ? a.i : b.i;
+    imin = c.i < imin ? c.i : imin;
+    imax = c.i > imax ? c.i : imax;
+    double tol = q->tol, worst = 0;
+    for (int64_t j = j0; j <= j1; j++) {
+        int64_t lo = imin, hi = imax;
+        for (int k = 0; k < 3; k++) {
+            const vtx *p = e[k][0], *r = e[k][1];
+            int64_t dx = r->i - p->i, dy = r->j - p->j, num = dx * (j - p->j);
+            if (dy > 0) {
+                int64_t v = p->i + floor_div(num, dy);
+                hi = v < hi ? v : hi;
+            } else if (dy < 0) {
+                int64_t v = p->i - floor_div(num, -dy);
+                lo = v > lo ? v : lo;
+            } else if (num < 0)
+                hi = lo - 1;
+        }
+        const float *row = q->h + (size_t)j * q->w;
+        double base = a.z + gy * (double)(j - a.j) - gx * (double)a.i;
+        bool bad = false;
+        double mx = 0;
+        for (int64_t i = lo; i <= hi; i++) {
+            double d = fabs((double)row[i] - (base + gx * (double)i));
+            bad |= !(d <= tol);
+            mx = d > mx ? d : mx;
+        }
+        if (bad)
+            return INFINITY;
+        worst = mx > worst ? mx : worst;
+    }
+    return worst;
+}
+
+/* How far p's sample lies from the plane of abc. */
+static double off_plane(vtx a, vtx b, vtx c, vtx p)
+{
+    double det = (double)((b.i - a.i) * (c.j - a.j) - (c.i - a.i) * (b.j - a.j));
+    double gx = ((b.z - a.z) * (double)(c.j - a.j) - (c.z - a.z) * (double)(b.j - a.j)) / det;
+    double gy = ((double)(b.i - a.i) * (c.z - a.z) - (double)(c.i - a.i) * (b.z - a.z)) / det;
+    return fabs(p.z - (a.z + gx * (double)(p.i - a.i) + gy * (double)(p.j - a.j)));
+}
+
+/* Whether triangle abc, and the triangles it becomes with midpoints p of
+ * ab and m of bc where those may come (NULL: never), are all within the
+ * tolerance. The triangles with midpoints interpolate abc's plane plus a
+ * piecewise linear function that is 0 at a, b and c and the midpoints'
+ * own offsets from the plane at p and m, so it never exceeds the larger
+ * offset: when abc's error plus that offset is within the tolerance, so
+ * are they all, and they need no scan. */
+static bool tri_ok(const rqt *q, vtx a, vtx b, vtx c, const vtx *p, const vtx *m)
+{
+    double e0 = tri_err(q, a, b, c);
+    if (!(e0 <= q->tol))
+        return false;
+    double off = 0;
+    if (p)
+        off = off_plane(a, b, c, *p);
+    if (m) {
+        double o = off_plane(a, b, c, *m);
+        off = o > off ? o : off;
+    }
+    if (e0 + off <= q->tol)
+        return true;
+    if (p && (!(tri_err(q, a, *p, c) <= q->tol) || !(tri_err(q, *p, b, c) <= q->tol)))
+        return false;
+    if (m && (!(tri_err(q, a, b, *m) <= q->tol) || !(tri_err(q, a, *m, c) <= q->tol)))
+        return false;
+    if (p && m && (!(tri_err(q, *p, b, *m) <= q->tol) || !(tri_err(q, *p, *m, c) <= q->tol)))
+        return false;
+    return true;
+}
+
+/* The corners and midpoints of a box. */
+typedef struct corners {
+    vtx sw, se, ne, nw, s, e, n, w;
+} corners;
+
+static corners corners_of(const rqt *q, const box *b)
+{
+    corners c;
+    c.sw = at(q, b->x0, b->y0);
+    c.se = at(q, b->x1, b->y0);
+    c.ne = at(q, b->x1, b->y1);
+    c.nw = at(q, b->x0, b->y1);
+    c.s = b->ms ? at(q, b->xm, b->y0) : c.sw;
+    c.e = b->me ? at(q, b->x1, b->ym) : c.se;
+    c.n = b->mn ? at(q, b->xm, b->y1) : c.nw;
+    c.w = b->mw ? at(q, b->x0, b->ym) : c.sw;
+    return c;
+}
+
+/* Diagonal 0 runs from south-west to north-east, 1 from south-east to
+ * north-west. */
+static bool diag_ok(const rqt *q, const box *b, const corners *c, int d)
+{
+    const vtx *s = b->ms ? &c->s : NULL, *e = b->me ? &c->e : NULL, *n = b->mn ? &c->n : NULL,
+              *w = b->mw ? &c->w : NULL;
+    if (d == 0)
+        return tri_ok(q, c->sw, c->se, c->ne, s, e) && tri_ok(q, c->ne, c->nw, c->sw, n, w);
+    return tri_ok(q, c->se, c->ne, c->nw, e, n) && tri_ok(q, c->nw, c->sw, c->se, w, s);
+}
+
+/* The fan from the centre c: a triangle per side, split at the side's
+ * midpoint where one may come. */
+static bool fan_ok(const rqt *q, const box *b, const corners *k, vtx c)
+{
+    const vtx *ring[4][3] = {{&k->sw, &k->se, b->ms ? &k->s : NULL},
+                             {&k->se, &k->ne, b->me ? &k->e : NULL},
+                             {&k->ne, &k->nw, b->mn ? &k->n : NULL},
+                             {&k->nw, &k->sw, b->mw ? &k->w : NULL}};
+    for (int i = 0; i < 4; i++) /* a side's midpoint m splits (c, a, b) in (c, a, m), (c, m, b) */
+        if (!tri_ok(q, *ring[i][0], *ring[i][1], c, ring[i][2], NULL))
+            return false;
+    return true;
+}
+
+/* Whether n may be a leaf; sets its diagonal. */
+static bool test(rqt *q, rnode n)
+{
+    if (n.l == q->levels)
+        return true;
+    box b = node_box(q, n);
+    if (q->full_border && (b.x0 == 0 || b.y0 == 0 || b.x1 == q->cx || b.y1 == q->cy))
+        return false;
+    corners c = corners_of(q, &b);
+    /* try first the diagonal nearer the sample at the centre */
+    int first = 0;
+    if (b.xm < b.x1 && b.ym < b.y1) {
+        double hc = at(q, b.xm, b.ym).z;
+        first = fabs(hc - 0.5 * (c.sw.z + c.ne.z)) <= fabs(hc - 0.5 * (c.se.z + c.nw.z)) ? 0 : 1;
+    }
+    for (int t = 0; t < 2; t++) {
+        int d = first ^ t;
+        if (diag_ok(q, &b, &c, d)) {
+            put_bit(q->diag, q, n, d != 0);
+            return true;
+        }
+    }
+    /* four triangles from the centre: half a level between the two
+     * triangles and the four children */
+    if (b.xm < b.x1 && b.ym < b.y1 && fan_ok(q, &b, &c, at(q, b.xm, b.ym))) {
+        put_bit(q->fan, q, n, true);
+        return true;
+    }
+    return false;
+}
+
+static bool select_cut(rqt *q, double tol)
+{
+    q->tol = tol;
+    for (uint32_t l = 0; l < q->levels; l++) {
+        memset(q->split[l], 0, q->words[l] * sizeof(uint64_t));
+        memset(q->diag[l], 0, q->words[l] * sizeof(uint64_t));
+        memset(q->fan[l], 0, q->words[l] * sizeof(uint64_t));
+    }
+    q->sn = 0;
+    push(q, (rnode){0, 0, 0});
+    while (q->sn && !q->nomem) {
+        rnode n = q->stack[--q->sn];
+        if (!is_split(q, n) && !test(q, n))
+            split(q, n);
+    }
+    return !q->nomem;
+}
+
+/* ---- the mesh of the cut ------------------------------------------------ */
+
+typedef struct emit {
+    rqt *q;
+    tsr_mesh *m; /* NULL: count only */
+    double dx, dy, dz;
+    uint32_t *dense; /* vertex of each sample, or */
+    tsr_keymap map;  /* when the lattice is too big for an array */
+    uint64_t triangles;
+    tsr_status st;
+} emit;
+
+/* The vertex of sample (i, j), made on first use. */
+static uint32_t vertex(emit *e, int64_t i, int64_t j)
+{
+    rqt *q = e->q;
+    uint64_t key = (uint64_t)j * (uint64_t)(q->cx + 1) + (uint64_t)i;
+    uint32_t *slot;
+    if (e->dense) {
+        slot = &e->dense[key];
+        if (*slot != UINT32_MAX)
+            return *slot;
+    } else {
+        bool found;
+        slot = tsr_keymap_slot(&e->map, key, &found, q->a);
+        if (!slot) {
+            e->st = TSR_ERR_NOMEM;
+            return 0;
+        }
+        if (found)
+            return *slot;
+    }
+    tsr_mesh *m = e->m;
+    float p[3] = {(float)((double)i * e->dx), (float)((double)j * e->dy),
+                  (float)((double)q->h[(size_t)j * q->w + (size_t)i] * e->dz)};
+    if (!m->normals && !m->uvs && m->vertex_count < m->vertex_capacity) { /* the common case, inline */
+        memcpy(m->positions + 3 * (size_t)m->vertex_count, p, sizeof p);
+        *slot = m->vertex_count++;
+    } else if ((*slot = tsr_mesh_add_vertex(m, p, NULL, NULL)) == UINT32_MAX) {
+        e->st = TSR_ERR_NOMEM;
+        *slot = 0;
+    }
+    return *slot;
+}
+
+static void tri(emit *e, uint32_t a, uint32_t b, uint32_t c)
+{
+    e->triangles++;
+    tsr_mesh *m = e->m;
+    if (!m)
+        return;
+    if (m->triangle_count < m->triangle_capacity) {
+        uint32_t *t = m->indices + 3 * (size_t)m->triangle_count++;
+        t[0] = a;
+        t[1] = b;
+        t[2] = c;
+    } else if (!tsr_mesh_add_triangle(m, a, b, c))
+        e->st = TSR_ERR_NOMEM;
+}
+
+/* The half abc (right angle at b), with the midpoint p of ab and r of
+ * bc where they are (UINT32_MAX: none). */
+static void emit_half(emit *e, uint32_t a, uint32_t b, uint32_t c, uint32_t p, uint32_t r)
+{
+    if (p == UINT32_MAX && r == UINT32_MAX)
+        tri(e, a, b, c);
+    else if (r == UINT32_MAX) {
+        tri(e, a, p, c);
+        tri(e, p, b, c);
+    } else if (p == UINT32_MAX) {
+        tri(e, a, b, r);
+        tri(e, a, r, c);
+    } else {
+        tri(e, a, p, c);
+        tri(e, p, b, r);
+        tri(e, p, r, c);
+    }
+}
+
+static bool split_at(const rqt *q, rnode n, int ox, int oy)
+{
+    if ((ox < 0 && n.x == 0) || (oy < 0 && n.y == 0))
+        return false;
+    rnode nb = {n.x + (uint32_t)ox, n.y + (uint32_t)oy, n.l};
+    return exists(q, nb) && is_split(q, nb);
+}
+
+static void emit_leaf(emit *e, rnode n)
+{
+    rqt *q = e->q;
+    box b = node_box(q, n);
+    bool counting = !e->m;
+    if (n.l == q->levels) { /* a single cell: a hole if a corner is no-data */
+        const float *r0 = q->h + (size_t)b.y0 * q->w, *r1 = r0 + q->w;
+        if (isnan(r0[b.x0]) || isnan(r0[b.x1]) || isnan(r1[b.x0]) || isnan(r1[b.x1]))
+            return;
+        if (counting) {
+            e->triangles += 2;
+            return;
+        }
+        uint32_t sw = vertex(e, b.x0, b.y0), se = vertex(e, b.x1, b.y0), ne = vertex(e, b.x1, b.y1),
+                 nw = vertex(e, b.x0, b.y1);
+        tri(e, sw, se, ne);
+        tri(e, ne, nw, sw);
+        return;
+    }
+    /* midpoints where the neighbour is finer */
+    bool ms = b.ms && split_at(q, n, 0, -1), me = b.me && split_at(q, n, 1, 0), mn = b.mn && split_at(q, n, 0, 1),
+         mw = b.mw && split_at(q, n, -1, 0);
+    bool fan = get_bit(q->fan, q, n);
+    if (counting) {
+        e->triangles += (fan ? 4 : 2) + ms + me + mn + mw;
+        return;
+    }
+    const uint32_t none = UINT32_MAX;
+    uint32_t sw = vertex(e, b.x0, b.y0), se = vertex(e, b.x1, b.y0), ne = vertex(e, b.x1, b.y1),
+             nw = vertex(e, b.x0, b.y1);
+    uint32_t s = ms ? vertex(e, b.xm, b.y0) : none, ea = me ? vertex(e, b.x1, b.ym) : none,
+             nn = mn ? vertex(e, b.xm, b.y1) : none, w = mw ? vertex(e, b.x0, b.ym) : none;
+    if (fan) {
+        uint32_t c = vertex(e, b.xm, b.ym);
+        uint32_t ring[4][3] = {{sw, se, s}, {se, ne, ea}, {ne, nw, nn}, {nw, sw, w}};
+        for (int i = 0; i < 4; i++)
+            if (ring[i][2] != none) {
+                tri(e, c, ring[i][0], ring[i][2]);
+                tri(e, c, ring[i][2], ring[i][1]);
+            } else
+                tri(e, c, ring[i][0], ring[i][1]);
+    } else if (!get_bit(q->diag, q, n)) {
+        emit_half(e, sw, se, ne, s, ea);
+        emit_half(e, ne, nw, sw, nn, w);
+    } else {
+        emit_half(e, se, ne, nw, ea, nn);
+        emit_half(e, nw, sw, se, w, s);
+    }
+}
+
+static void walk(emit *e, rnode n)
+{
+    if (e->st != TSR_OK)
+        return;
+    if (!is_split(e->q, n)) {
+        emit_leaf(e, n);
+        return;
+    }
+    for (uint32_t k = 0; k < 4; k++) {
+        rnode c = {2 * n.x + (k & 1), 2 * n.y + (k >> 1), n.l + 1};
+        if (exists(e->q, c))
+            walk(e, c);
+    }
+}
+
+/* Triangles of the cut (an upper bound: no-data cells drop out). */
+static uint64_t count_cut(rqt *q)
+{
+    emit e = {.q = q, .st = TSR_OK};
+    walk(&e, (rnode){0, 0, 0});
+    return e.triangles;
+}
+
+static tsr_status emit_cut(rqt *q, const tsr_heightfield *hf, tsr_mesh *mesh)
+{
+    emit e = {.q = q, .m = mesh, .dx = hf->dx, .dy = hf->dy, .dz = hf->dz, .st = TSR_OK};
+    uint64_t lattice = (uint64_t)(q->cx + 1) * (uint64_t)(q->cy + 1);
+    if (lattice <= (1u << 25)) {
+        e.dense = tsr_alloc(q->a, (size_t)lattice * sizeof *e.dense);
+        if (!e.dense)
+            return TSR_ERR_NOMEM;
+        memset(e.dense, 0xff, (size_t)lattice * sizeof *e.dense);
+    }
+    walk(&e, (rnode){0, 0, 0});
+    tsr_free(q->a, e.dense);
+    tsr_keymap_free(&e.map, q->a);
+    return e.st;
+}
+
+/* ---- the entry point ------------------------------------------------- */
+
+static void rqt_free(rqt *q)
+{
+    for (uint32_t l = 0; l < q->levels; l++) {
+        tsr_free(q->a, q->split[l]);
+        tsr_free(q->a, q->diag[l]);
+        tsr_free(q->a, q->fan[l]);
+    }
+    tsr_free(q->a, q->stack);
+}
+
+tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, bool full_border, uint32_t max_tri,
+                         uint32_t max_vert, tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err)
+{
+    rqt q = {.h = hf->data, .w = hf->width, .cx = (int64_t)hf->width - 1, .cy = (int64_t)hf->height - 1,
+             .full_border = full_border, .a = hf->alloc.realloc ? &hf->alloc : NULL};
+    while (((int64_t)1 << q.levels) < (q.cx > q.cy ? q.cx : q.cy))
+        q.levels++;
+    for (uint32_t l = 0; l <= q.levels; l++) {
+        int64_t s = (int64_t)1 << (q.levels - l);
+        q.nx[l] = (uint32_t)((q.cx + s - 1) / s);
+        q.ny[l] = (uint32_t)((q.cy + s - 1) / s);
+    }
+    tsr_status st = TSR_OK;
+    for (uint32_t l = 0; l < q.levels; l++) {
+        q.words[l] = ((size_t)q.nx[l] * q.ny[l] + 63) / 64;
+        q.split[l] = tsr_alloc(q.a, q.words[l] * sizeof(uint64_t));
+        q.diag[l] = tsr_alloc(q.a, q.words[l] * sizeof(uint64_t));
+        q.fan[l] = tsr_alloc(q.a, q.words[l] * sizeof(uint64_t));
+        if (!q.split[l] || !q.diag[l] || !q.fan[l]) {
+            q.levels = l + 1; /* what to free */
+            rqt_free(&q);
+            return tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+        }
+    }
+    if (!select_cut(&q, tol)) {
+        st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+        goto done;
+    }
+    uint64_t budget = max_tri ? max_tri : UINT64_MAX;
+    if (max_vert) /* about 2 V triangles; V is checked exactly below */
+        budget = budget < 2ull * max_vert ? budget : 2ull * max_vert;
+    for (int attempt = 0;; attempt++) {
+        if (budget != UINT64_MAX && count_cut(&q) > budget) {
+            /* the finest cut within the budget: bisect the tolerance (in
+             * log scale) */
+            tsr_heightfield_stats hs;
+            tsr_heightfield_stats_compute(hf, &hs);
+            double lo = tol > 0 ? tol : 1e-9, hi = fmax((hs.max - hs.min) * 2, lo * 2) + 1;
+            if (!select_cut(&q, hi)) {
+                st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+                goto done;
+            }
+            if (count_cut(&q) > budget) {
+                st = tsr_error_set(err, TSR_ERR_ARGUMENT,
+                                   "the budget is below the coarsest quadtree mesh (%llu triangles)",
+                                   (unsigned long long)count_cut(&q));
+                goto done;
+            }
+            for (int it = 0; it < 40; it++) {
+                double mid = sqrt(lo * hi);
+                if (!select_cut(&q, mid)) {
+                    st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+                    goto done;
+                }
+                if (count_cut(&q) > budget)
+                    lo = mid;
+                else
+                    hi = mid;
+            }
+            if (!select_cut(&q, hi)) {
+                st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+                goto done;
+            }
+            rep->budget_reached = true;
+        }
+        rep->target_error = q.tol * hf->dz;
+        uint64_t nt = count_cut(&q);
+        if (nt < UINT32_MAX / 2 && tsr_mesh_reserve(mesh, (uint32_t)(nt / 2 + 4096), (uint32_t)nt) != TSR_OK) {
+            st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+            goto done;
+        }
+        if ((st = emit_cut(&q, hf, mesh)) != TSR_OK) {
+            tsr_error_set(err, st, "quadtree mesh: %s", tsr_status_str(st));
+            goto done;
+        }
+        if (!max_vert || mesh->vertex_count <= max_vert)
+            break;
+        /* the vertices of a triangle budget vary with the boundary and
+         * the no-data: tighten the triangle budget and bisect again */
+        uint32_t nv = mesh->vertex_count;
+        mesh->vertex_count = mesh->triangle_count = 0;
+        uint64_t t = (uint64_t)((double)(budget != UINT64_MAX ? budget : nt) * 0.97 * max_vert / nv);
+        if (t < 2 || attempt >= 8) {
+            st = tsr_error_set(err, TSR_ERR_ARGUMENT, "the budget is below the coarsest quadtree mesh (%u vertices)",
+                               nv);
+            goto done;
+        }
+        budget = t;
+    }
+done:
+    rqt_free(&q);
+    return st;
+}
