@@ -62,6 +62,7 @@ typedef struct rqt {
     bool full_border;
     rnode *stack;
     size_t sn, scap;
+    uint64_t leaves; /* in the cut */
     const tsr_allocator *a;
     bool nomem;
 } rqt;
@@ -126,10 +127,13 @@ static void split(rqt *q, rnode n)
                 split(q, p);
         }
     put_bit(q->split, q, n, true);
+    q->leaves--;
     for (uint32_t k = 0; k < 4; k++) {
         rnode c = {2 * n.x + (k & 1), 2 * n.y + (k >> 1), n.l + 1};
-        if (exists(q, c))
+        if (exists(q, c)) {
             push(q, c);
+            q->leaves++;
+        }
     }
 }
 
@@ -307,6 +311,26 @@ static bool test(rqt *q, rnode n)
     box b = node_box(q, n);
     if (q->full_border && (b.x0 == 0 || b.y0 == 0 || b.x1 == q->cx || b.y1 == q->cy))
         return false;
+    if (b.x1 - b.x0 == 2 && b.y1 - b.y0 == 2) {
+        /* the most common test, in closed form: every sample of the node
+         * is a vertex or the middle of a side or of the diagonal, where a
+         * midpoint's triangles interpolate as the halves do */
+        const float *r0 = q->h + (size_t)b.y0 * q->w + b.x0, *r1 = r0 + q->w, *r2 = r1 + q->w;
+        double sw = r0[0], se = r0[2], nw = r2[0], ne = r2[2], cc = r1[1], tol = q->tol;
+        double sides = fmax(fmax(fabs(r0[1] - 0.5 * (sw + se)), fabs(r2[1] - 0.5 * (nw + ne))),
+                            fmax(fabs(r1[0] - 0.5 * (sw + nw)), fabs(r1[2] - 0.5 * (se + ne))));
+        double d0 = fabs(cc - 0.5 * (sw + ne)), d1 = fabs(cc - 0.5 * (se + nw));
+        bool nan = isnan(sw + se + nw + ne + cc + r0[1] + r2[1] + r1[0] + r1[2]);
+        if (nan || !(sides <= tol))
+            return false;
+        int d = d0 <= d1 ? 0 : 1;
+        if ((d ? d1 : d0) <= tol) {
+            put_bit(q->diag, q, n, d != 0);
+            return true;
+        }
+        put_bit(q->fan, q, n, true);
+        return true;
+    }
     corners c = corners_of(q, &b);
     /* try first the diagonal nearer the sample at the centre */
     int first = 0;
@@ -339,6 +363,7 @@ static bool select_cut(rqt *q, double tol)
         memset(q->fan[l], 0, q->words[l] * sizeof(uint64_t));
     }
     q->sn = 0;
+    q->leaves = 1;
     push(q, (rnode){0, 0, 0});
     while (q->sn && !q->nomem) {
         rnode n = q->stack[--q->sn];
@@ -602,8 +627,12 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, bool full_border
             rep->budget_reached = true;
         }
         rep->target_error = q.tol * hf->dz;
-        uint64_t nt = count_cut(&q);
-        if (nt < UINT32_MAX / 2 && tsr_mesh_reserve(mesh, (uint32_t)(nt / 2 + 4096), (uint32_t)nt) != TSR_OK) {
+        /* room at once (growing by doubling would copy the mesh about
+         * twice over): at most 6 triangles a leaf, and by Euler about
+         * half as many vertices plus the border; pages untouched cost
+         * nothing */
+        uint64_t nt = 6 * q.leaves, nv = 3 * q.leaves + 2 * (uint64_t)(q.cx + q.cy) + 4096;
+        if (nt < UINT32_MAX / 2 && tsr_mesh_reserve(mesh, (uint32_t)nv, (uint32_t)nt) != TSR_OK) {
             st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
             goto done;
         }
@@ -615,12 +644,13 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, bool full_border
             break;
         /* the vertices of a triangle budget vary with the boundary and
          * the no-data: tighten the triangle budget and bisect again */
-        uint32_t nv = mesh->vertex_count;
+        uint32_t got = mesh->vertex_count;
+        uint64_t t = (uint64_t)((double)(budget < mesh->triangle_count ? budget : mesh->triangle_count) * 0.97 *
+                                max_vert / got);
         mesh->vertex_count = mesh->triangle_count = 0;
-        uint64_t t = (uint64_t)((double)(budget != UINT64_MAX ? budget : nt) * 0.97 * max_vert / nv);
         if (t < 2 || attempt >= 8) {
             st = tsr_error_set(err, TSR_ERR_ARGUMENT, "the budget is below the coarsest quadtree mesh (%u vertices)",
-                               nv);
+                               got);
             goto done;
         }
         budget = t;
