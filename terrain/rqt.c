@@ -62,7 +62,7 @@ typedef struct rqt {
     bool full_border;
     rnode *stack;
     size_t sn, scap;
-    uint64_t leaves; /* in the cut */
+    uint64_t leaves, fans, mids; /* in the cut: leaves, fans among them, midpoints on their sides */
     const tsr_allocator *a;
     bool nomem;
 } rqt;
@@ -126,6 +126,23 @@ static void split(rqt *q, rnode n)
             if (!is_split(q, p))
                 split(q, p);
         }
+    /* the counts: n is a leaf no more; each neighbour of its level that
+     * is a leaf gets a midpoint toward it, and n's own midpoints toward
+     * split neighbours go */
+    if (n.l > 0)
+        for (int k = 0; k < 4; k++) {
+            if ((ox[k] < 0 && n.x == 0) || (oy[k] < 0 && n.y == 0))
+                continue;
+            rnode nb = {n.x + (uint32_t)ox[k], n.y + (uint32_t)oy[k], n.l};
+            if (exists(q, nb)) {
+                if (is_split(q, nb))
+                    q->mids--;
+                else
+                    q->mids++;
+            }
+        }
+    if (get_bit(q->fan, q, n))
+        q->fans--;
     put_bit(q->split, q, n, true);
     q->leaves--;
     for (uint32_t k = 0; k < 4; k++) {
@@ -329,6 +346,7 @@ static bool test(rqt *q, rnode n)
             return true;
         }
         put_bit(q->fan, q, n, true);
+        q->fans++;
         return true;
     }
     corners c = corners_of(q, &b);
@@ -349,6 +367,7 @@ static bool test(rqt *q, rnode n)
      * triangles and the four children */
     if (b.xm < b.x1 && b.ym < b.y1 && fan_ok(q, &b, &c, at(q, b.xm, b.ym))) {
         put_bit(q->fan, q, n, true);
+        q->fans++;
         return true;
     }
     return false;
@@ -364,6 +383,7 @@ static bool select_cut(rqt *q, double tol)
     }
     q->sn = 0;
     q->leaves = 1;
+    q->fans = q->mids = 0;
     push(q, (rnode){0, 0, 0});
     while (q->sn && !q->nomem) {
         rnode n = q->stack[--q->sn];
@@ -533,11 +553,15 @@ static uint64_t count_cut(rqt *q)
     return e.triangles;
 }
 
-static tsr_status emit_cut(rqt *q, const tsr_heightfield *hf, tsr_mesh *mesh)
+/* vertices: about how many there will be */
+static tsr_status emit_cut(rqt *q, const tsr_heightfield *hf, tsr_mesh *mesh, uint64_t vertices)
 {
     emit e = {.q = q, .m = mesh, .dx = hf->dx, .dy = hf->dy, .dz = hf->dz, .st = TSR_OK};
+    /* the vertex of each sample in an array while it is small and not
+     * mostly empty (up to 2^25 samples: a 4097^2 terrain; filling it costs
+     * more than hashing a sparse mesh), else hashed */
     uint64_t lattice = (uint64_t)(q->cx + 1) * (uint64_t)(q->cy + 1);
-    if (lattice <= (1u << 25)) {
+    if (lattice <= (1u << 25) && lattice <= 16 * vertices) {
         e.dense = tsr_alloc(q->a, (size_t)lattice * sizeof *e.dense);
         if (!e.dense)
             return TSR_ERR_NOMEM;
@@ -628,15 +652,14 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, bool full_border
         }
         rep->target_error = q.tol * hf->dz;
         /* room at once (growing by doubling would copy the mesh about
-         * twice over): at most 6 triangles a leaf, and by Euler about
-         * half as many vertices plus the border; pages untouched cost
-         * nothing */
-        uint64_t nt = 6 * q.leaves, nv = 3 * q.leaves + 2 * (uint64_t)(q.cx + q.cy) + 4096;
+         * twice over): the triangles the counts give (no-data cells drop
+         * out), and by Euler about half as many vertices plus the border */
+        uint64_t nt = 2 * q.leaves + 2 * q.fans + q.mids, nv = nt / 2 + 2 * (uint64_t)(q.cx + q.cy) + 4096;
         if (nt < UINT32_MAX / 2 && tsr_mesh_reserve(mesh, (uint32_t)nv, (uint32_t)nt) != TSR_OK) {
             st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
             goto done;
         }
-        if ((st = emit_cut(&q, hf, mesh)) != TSR_OK) {
+        if ((st = emit_cut(&q, hf, mesh, nv)) != TSR_OK) {
             tsr_error_set(err, st, "quadtree mesh: %s", tsr_status_str(st));
             goto done;
         }
