@@ -57,12 +57,13 @@ typedef struct rqt {
     uint32_t levels;
     uint32_t nx[RQT_MAX_LEVELS + 1], ny[RQT_MAX_LEVELS + 1];
     uint64_t *split[RQT_MAX_LEVELS], *diag[RQT_MAX_LEVELS], *fan[RQT_MAX_LEVELS];
+    uint64_t *vol[4][RQT_MAX_LEVELS]; /* a midpoint the leaf asks for on side k (S, E, N, W) */
     size_t words[RQT_MAX_LEVELS];
     double tol;
     bool full_border;
     rnode *stack;
     size_t sn, scap;
-    uint64_t leaves, fans, mids; /* in the cut: leaves, fans among them, midpoints on their sides */
+    uint64_t leaves, fans, mids, vols; /* in the cut: leaves, fans among them, midpoints on their sides */
     const tsr_allocator *a;
     bool nomem;
 } rqt;
@@ -276,6 +277,28 @@ static bool tri_ok(const rqt *q, vtx a, vtx b, vtx c, const vtx *p, const vtx *m
     return true;
 }
 
+/* tri_ok with the midpoint p (np) or m (nm) always there. */
+static bool tri_ok_v(const rqt *q, vtx a, vtx b, vtx c, const vtx *p, const vtx *m, bool np, bool nm)
+{
+    double t = q->tol;
+    if (!np && !nm)
+        return tri_ok(q, a, b, c, p, m);
+    if (np && nm)
+        return tri_err(q, a, *p, c) <= t && tri_err(q, *p, b, *m) <= t && tri_err(q, *p, *m, c) <= t;
+    if (np) {
+        double e1 = fmax(tri_err(q, a, *p, c), tri_err(q, *p, b, c));
+        if (!(e1 <= t))
+            return false;
+        if (!m || e1 + off_plane(a, b, c, *m) <= t)
+            return true;
+        return tri_err(q, *p, b, *m) <= t && tri_err(q, *p, *m, c) <= t;
+    }
+    /* (with p, the triangles are no refinement of those without: scanned) */
+    if (!(tri_err(q, a, b, *m) <= t) || !(tri_err(q, a, *m, c) <= t))
+        return false;
+    return !p || (tri_err(q, a, *p, c) <= t && tri_err(q, *p, b, *m) <= t && tri_err(q, *p, *m, c) <= t);
+}
+
 /* The corners and midpoints of a box. */
 typedef struct corners {
     vtx sw, se, ne, nw, s, e, n, w;
@@ -306,6 +329,18 @@ static bool diag_ok(const rqt *q, const box *b, const corners *c, int d)
     return tri_ok(q, c->se, c->ne, c->nw, e, n) && tri_ok(q, c->nw, c->sw, c->se, w, s);
 }
 
+/* diag_ok with the midpoints of the sides in need (bit k: S, E, N, W)
+ * always there. */
+static bool diag_ok_v(const rqt *q, const box *b, const corners *c, int d, unsigned need)
+{
+    const vtx *s = b->ms ? &c->s : NULL, *e = b->me ? &c->e : NULL, *n = b->mn ? &c->n : NULL,
+              *w = b->mw ? &c->w : NULL;
+    bool ns = need & 1, ne = need & 2, nn = need & 4, nw = need & 8;
+    if (d == 0)
+        return tri_ok_v(q, c->sw, c->se, c->ne, s, e, ns, ne) && tri_ok_v(q, c->ne, c->nw, c->sw, n, w, nn, nw);
+    return tri_ok_v(q, c->se, c->ne, c->nw, e, n, ne, nn) && tri_ok_v(q, c->nw, c->sw, c->se, w, s, nw, ns);
+}
+
 /* The fan from the centre c: a triangle per side, split at the side's
  * midpoint where one may come. */
 static bool fan_ok(const rqt *q, const box *b, const corners *k, vtx c)
@@ -318,6 +353,22 @@ static bool fan_ok(const rqt *q, const box *b, const corners *k, vtx c)
         if (!tri_ok(q, *ring[i][0], *ring[i][1], c, ring[i][2], NULL))
             return false;
     return true;
+}
+
+/* n asks for the midpoints of the sides in need: the node of its level
+ * across each must be in the cut (split its coarser parent if not). */
+static void accept_vol(rqt *q, rnode n, unsigned need)
+{
+    static const int ox[4] = {0, 1, 0, -1}, oy[4] = {-1, 0, 1, 0};
+    for (int k = 0; k < 4; k++)
+        if (need >> k & 1) {
+            put_bit(q->vol[k], q, n, true);
+            q->vols += 2;
+            rnode nb = {n.x + (uint32_t)ox[k], n.y + (uint32_t)oy[k], n.l};
+            rnode p = {nb.x >> 1, nb.y >> 1, n.l - 1};
+            if (!is_split(q, p))
+                split(q, p);
+        }
 }
 
 /* Whether n may be a leaf; sets its diagonal. */
@@ -370,6 +421,22 @@ static bool test(rqt *q, rnode n)
         q->fans++;
         return true;
     }
+    /* two triangles with the midpoints of one or two sides, which the
+     * neighbours there (of this level: they allow any midpoint) share */
+    unsigned avail = (b.ms ? 1u : 0) | (b.me ? 2u : 0) | (b.mn ? 4u : 0) | (b.mw ? 8u : 0);
+    static const unsigned sets[] = {1, 2, 4, 8, 3, 6, 12, 9, 5, 10};
+    for (size_t k = 0; k < sizeof sets / sizeof sets[0]; k++) {
+        if ((sets[k] & avail) != sets[k])
+            continue;
+        for (int t = 0; t < 2; t++) {
+            int d = first ^ t;
+            if (diag_ok_v(q, &b, &c, d, sets[k])) {
+                put_bit(q->diag, q, n, d != 0);
+                accept_vol(q, n, sets[k]);
+                return true;
+            }
+        }
+    }
     return false;
 }
 
@@ -380,10 +447,12 @@ static bool select_cut(rqt *q, double tol)
         memset(q->split[l], 0, q->words[l] * sizeof(uint64_t));
         memset(q->diag[l], 0, q->words[l] * sizeof(uint64_t));
         memset(q->fan[l], 0, q->words[l] * sizeof(uint64_t));
+        for (int k = 0; k < 4; k++)
+            memset(q->vol[k][l], 0, q->words[l] * sizeof(uint64_t));
     }
     q->sn = 0;
     q->leaves = 1;
-    q->fans = q->mids = 0;
+    q->fans = q->mids = q->vols = 0;
     push(q, (rnode){0, 0, 0});
     while (q->sn && !q->nomem) {
         rnode n = q->stack[--q->sn];
@@ -472,12 +541,18 @@ static void emit_half(emit *e, uint32_t a, uint32_t b, uint32_t c, uint32_t p, u
     }
 }
 
-static bool split_at(const rqt *q, rnode n, int ox, int oy)
+
+/* Whether leaf n has the midpoint of side k (S, E, N, W): the neighbour
+ * of its level there is split, or either asked for it. */
+static bool mid_at(const rqt *q, rnode n, int k)
 {
-    if ((ox < 0 && n.x == 0) || (oy < 0 && n.y == 0))
+    static const int ox[4] = {0, 1, 0, -1}, oy[4] = {-1, 0, 1, 0};
+    if (get_bit(q->vol[k], q, n))
+        return true;
+    if ((ox[k] < 0 && n.x == 0) || (oy[k] < 0 && n.y == 0))
         return false;
-    rnode nb = {n.x + (uint32_t)ox, n.y + (uint32_t)oy, n.l};
-    return exists(q, nb) && is_split(q, nb);
+    rnode nb = {n.x + (uint32_t)ox[k], n.y + (uint32_t)oy[k], n.l};
+    return exists(q, nb) && (is_split(q, nb) || get_bit(q->vol[(k + 2) & 3], q, nb));
 }
 
 static void emit_leaf(emit *e, rnode n)
@@ -500,8 +575,8 @@ static void emit_leaf(emit *e, rnode n)
         return;
     }
     /* midpoints where the neighbour is finer */
-    bool ms = b.ms && split_at(q, n, 0, -1), me = b.me && split_at(q, n, 1, 0), mn = b.mn && split_at(q, n, 0, 1),
-         mw = b.mw && split_at(q, n, -1, 0);
+    bool ms = b.ms && mid_at(q, n, 0), me = b.me && mid_at(q, n, 1), mn = b.mn && mid_at(q, n, 2),
+         mw = b.mw && mid_at(q, n, 3);
     bool fan = get_bit(q->fan, q, n);
     if (counting) {
         e->triangles += (fan ? 4 : 2) + ms + me + mn + mw;
@@ -581,6 +656,8 @@ static void rqt_free(rqt *q)
         tsr_free(q->a, q->split[l]);
         tsr_free(q->a, q->diag[l]);
         tsr_free(q->a, q->fan[l]);
+        for (int k = 0; k < 4; k++)
+            tsr_free(q->a, q->vol[k][l]);
     }
     tsr_free(q->a, q->stack);
 }
@@ -603,7 +680,10 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, bool full_border
         q.split[l] = tsr_alloc(q.a, q.words[l] * sizeof(uint64_t));
         q.diag[l] = tsr_alloc(q.a, q.words[l] * sizeof(uint64_t));
         q.fan[l] = tsr_alloc(q.a, q.words[l] * sizeof(uint64_t));
-        if (!q.split[l] || !q.diag[l] || !q.fan[l]) {
+        bool vok = true;
+        for (int k = 0; k < 4; k++)
+            vok = (q.vol[k][l] = tsr_alloc(q.a, q.words[l] * sizeof(uint64_t))) != NULL && vok;
+        if (!q.split[l] || !q.diag[l] || !q.fan[l] || !vok) {
             q.levels = l + 1; /* what to free */
             rqt_free(&q);
             return tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
@@ -654,7 +734,7 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, bool full_border
         /* room at once (growing by doubling would copy the mesh about
          * twice over): the triangles the counts give (no-data cells drop
          * out), and by Euler about half as many vertices plus the border */
-        uint64_t nt = 2 * q.leaves + 2 * q.fans + q.mids, nv = nt / 2 + 2 * (uint64_t)(q.cx + q.cy) + 4096;
+        uint64_t nt = 2 * q.leaves + 2 * q.fans + q.mids + q.vols, nv = nt / 2 + 2 * (uint64_t)(q.cx + q.cy) + 4096;
         if (nt < UINT32_MAX / 2 && tsr_mesh_reserve(mesh, (uint32_t)nv, (uint32_t)nt) != TSR_OK) {
             st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
             goto done;

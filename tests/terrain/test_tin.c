@@ -407,6 +407,24 @@ TEST(quadtree_leaves_and_tiles)
             }
             tsr_heightfield_destroy(hf);
         }
+    /* bigger and smoother, where leaves are large and ask for midpoints */
+    for (int k = 0; k < 2; k++) {
+        uint32_t w = 300, h = 257;
+        tsr_heightfield *hf = k ? terrain(w, h, 7) : tsr_heightfield_create(w, h, NULL);
+        float *d = tsr_heightfield_data(hf);
+        if (!k)
+            for (uint32_t r = 0; r < h; r++)
+                for (uint32_t c = 0; c < w; c++)
+                    d[r * w + c] = (float)(40 * sin(c / 23.0) * cos(r / 31.0) + 0.05 * c + 10 * sin((c + 2.0 * r) / 57.0));
+        double errs[] = {0.05, 0.2, 1, 4};
+        for (size_t e = 0; e < 4; e++) {
+            char what[64];
+            snprintf(what, sizeof what, "%s %ux%u E=%g", k ? "terrain" : "waves", w, h, errs[e]);
+            exact += quadtree_case(hf, 0, errs[e], what);
+            tiles += quadtree_case(hf, 2, errs[e], what);
+        }
+        tsr_heightfield_destroy(hf);
+    }
     CHECK_MSG(exact < tiles, "exact errors %llu triangles, grid tiles %llu", (unsigned long long)exact,
               (unsigned long long)tiles);
 }
