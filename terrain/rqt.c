@@ -4,12 +4,17 @@
  * The tree is over the cells: a node of level l covers a square of
  * 2^(levels-l) cells a side (clipped at the heightfield's border), the
  * deepest nodes single cells. A leaf is drawn as two triangles split by
- * one of its diagonals, chosen per leaf (a data-dependent choice), and a
- * side whose neighbour is finer also gets its midpoint, which splits the
- * triangle on that side in two: 2 to 6 triangles per leaf. Edge
- * neighbours differ by at most one level (the restriction), so the finer
- * side's vertices along a shared side are the coarser side's corners plus
- * the midpoint: the mesh is conforming, with no T-junction.
+ * one of its diagonals, chosen per leaf (a data-dependent choice), or as
+ * four from its centre (half a level between two triangles and four
+ * children). A side gets its midpoint, which splits the triangle on that
+ * side in two, where the neighbour across is finer, or where either leaf
+ * asked for it (a leaf that fails as two triangles may ask for the
+ * midpoints of one or two sides before it is split: 3 or 4 triangles and
+ * one more in each neighbour, against 8 or more). Edge neighbours differ
+ * by at most one level (the restriction), and a leaf asking for a
+ * midpoint brings the neighbour of its level into the cut, so the two
+ * sides of a shared side always have the same vertices: the mesh is
+ * conforming, with no T-junction.
  *
  * The error is exact. A node is kept as a leaf only when every sample of
  * its closed square lies within the tolerance of its triangles, for every
@@ -31,8 +36,11 @@
  * with a no-data corner is a hole (as for the other methods).
  *
  * Cost: every leaf's square is scanned in full (about 3.5 times, for the
- * sets of midpoints), a rejected node until its first sample beyond the
- * tolerance; no per-node table is kept but two bits (split, diagonal). */
+ * sets of midpoints; a midpoint's offset from the plane bounds how much
+ * it can change the error, which spares most of those scans), a rejected
+ * node until its first sample beyond the tolerance; 2x2-cell nodes, the
+ * most numerous, in closed form. Per node only bits are kept (split,
+ * diagonal, fan, midpoints asked for). */
 #include "terrain_internal.h"
 
 #include <math.h>
@@ -318,27 +326,39 @@ static corners corners_of(const rqt *q, const box *b)
     return c;
 }
 
-/* Diagonal 0 runs from south-west to north-east, 1 from south-east to
- * north-west. */
-static bool diag_ok(const rqt *q, const box *b, const corners *c, int d)
-{
-    const vtx *s = b->ms ? &c->s : NULL, *e = b->me ? &c->e : NULL, *n = b->mn ? &c->n : NULL,
-              *w = b->mw ? &c->w : NULL;
-    if (d == 0)
-        return tri_ok(q, c->sw, c->se, c->ne, s, e) && tri_ok(q, c->ne, c->nw, c->sw, n, w);
-    return tri_ok(q, c->se, c->ne, c->nw, e, n) && tri_ok(q, c->nw, c->sw, c->se, w, s);
-}
-
-/* diag_ok with the midpoints of the sides in need (bit k: S, E, N, W)
- * always there. */
-static bool diag_ok_v(const rqt *q, const box *b, const corners *c, int d, unsigned need)
+/* Whether the two triangles on diagonal d (0: from south-west to
+ * north-east, 1: from south-east to north-west) are within the tolerance
+ * with any midpoints, those of the sides in need (bit k: S, E, N, W)
+ * always there. The answer for each half and its two sides' needs is
+ * kept in memo (-1: not known yet), as sets share halves. */
+static bool diag_ok_v(const rqt *q, const box *b, const corners *c, int d, unsigned need, signed char memo[2][2][4])
 {
     const vtx *s = b->ms ? &c->s : NULL, *e = b->me ? &c->e : NULL, *n = b->mn ? &c->n : NULL,
               *w = b->mw ? &c->w : NULL;
     bool ns = need & 1, ne = need & 2, nn = need & 4, nw = need & 8;
-    if (d == 0)
-        return tri_ok_v(q, c->sw, c->se, c->ne, s, e, ns, ne) && tri_ok_v(q, c->ne, c->nw, c->sw, n, w, nn, nw);
-    return tri_ok_v(q, c->se, c->ne, c->nw, e, n, ne, nn) && tri_ok_v(q, c->nw, c->sw, c->se, w, s, nw, ns);
+    /* the halves: (a, b, c) with the sides ab and bc, and their needs */
+    bool np[2], nm[2];
+    if (d == 0) {
+        np[0] = ns, nm[0] = ne, np[1] = nn, nm[1] = nw;
+    } else {
+        np[0] = ne, nm[0] = nn, np[1] = nw, nm[1] = ns;
+    }
+    for (int h = 0; h < 2; h++) {
+        signed char *r = &memo[d][h][np[h] | nm[h] << 1];
+        if (*r < 0) {
+            bool ok;
+            if (d == 0)
+                ok = h == 0 ? tri_ok_v(q, c->sw, c->se, c->ne, s, e, np[0], nm[0])
+                            : tri_ok_v(q, c->ne, c->nw, c->sw, n, w, np[1], nm[1]);
+            else
+                ok = h == 0 ? tri_ok_v(q, c->se, c->ne, c->nw, e, n, np[0], nm[0])
+                            : tri_ok_v(q, c->nw, c->sw, c->se, w, s, np[1], nm[1]);
+            *r = ok;
+        }
+        if (!*r)
+            return false;
+    }
+    return true;
 }
 
 /* The fan from the centre c: a triangle per side, split at the side's
@@ -407,9 +427,11 @@ static bool test(rqt *q, rnode n)
         double hc = at(q, b.xm, b.ym).z;
         first = fabs(hc - 0.5 * (c.sw.z + c.ne.z)) <= fabs(hc - 0.5 * (c.se.z + c.nw.z)) ? 0 : 1;
     }
+    signed char memo[2][2][4]; /* halves' answers, shared with the sets of midpoints below */
+    memset(memo, -1, sizeof memo);
     for (int t = 0; t < 2; t++) {
         int d = first ^ t;
-        if (diag_ok(q, &b, &c, d)) {
+        if (diag_ok_v(q, &b, &c, d, 0, memo)) {
             put_bit(q->diag, q, n, d != 0);
             return true;
         }
@@ -430,7 +452,7 @@ static bool test(rqt *q, rnode n)
             continue;
         for (int t = 0; t < 2; t++) {
             int d = first ^ t;
-            if (diag_ok_v(q, &b, &c, d, sets[k])) {
+            if (diag_ok_v(q, &b, &c, d, sets[k], memo)) {
                 put_bit(q->diag, q, n, d != 0);
                 accept_vol(q, n, sets[k]);
                 return true;

@@ -57,8 +57,9 @@ bool tsr_terrain_pick_view(const tsr_terrain *t, pick_view *v);
 /* The quadtree method's default mesh (rqt.c): a restricted quadtree over
  * the cells (a node of level l covers 2^(levels-l) cells a side, clipped
  * at the border; edge neighbours differ by at most one level), each leaf
- * drawn as two triangles on the diagonal it chooses, plus the midpoint of
- * each side whose neighbour is finer (2 to 6 triangles; the mesh is
+ * drawn as two triangles on the diagonal it chooses or four from its
+ * centre, plus the midpoint of each side whose neighbour is finer or
+ * where either side asked for one (2 to 8 triangles; the mesh is
  * conforming). A leaf is kept only when every valid sample of its closed
  * square lies within tol (file units, vertically) of its triangles,
  * whichever sides get midpoints: the error is exact, not an estimate.
