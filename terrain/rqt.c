@@ -101,6 +101,17 @@ static bool is_split(const rqt *q, rnode n) { return get_bit(q->split, q, n); }
 
 static bool exists(const rqt *q, rnode n) { return n.x < q->nx[n.l] && n.y < q->ny[n.l]; }
 
+/* The node of n's level across side k (S, E, N, W), and whether it
+ * exists. */
+static bool neighbour(const rqt *q, rnode n, int k, rnode *nb)
+{
+    static const int ox[4] = {0, 1, 0, -1}, oy[4] = {-1, 0, 1, 0};
+    if ((ox[k] < 0 && n.x == 0) || (oy[k] < 0 && n.y == 0))
+        return false;
+    *nb = (rnode){n.x + (uint32_t)ox[k], n.y + (uint32_t)oy[k], n.l};
+    return exists(q, *nb);
+}
+
 static void push(rqt *q, rnode n)
 {
     if (q->sn == q->scap) {
@@ -121,15 +132,12 @@ static void push(rqt *q, rnode n)
  * and queues its children for the test. */
 static void split(rqt *q, rnode n)
 {
-    static const int ox[4] = {0, 1, 0, -1}, oy[4] = {-1, 0, 1, 0};
     if (is_split(q, n))
         return;
+    rnode nb;
     if (n.l > 0)
         for (int k = 0; k < 4; k++) {
-            if ((ox[k] < 0 && n.x == 0) || (oy[k] < 0 && n.y == 0))
-                continue;
-            rnode nb = {n.x + (uint32_t)ox[k], n.y + (uint32_t)oy[k], n.l};
-            if (!exists(q, nb))
+            if (!neighbour(q, n, k, &nb))
                 continue;
             rnode p = {nb.x >> 1, nb.y >> 1, n.l - 1};
             if (!is_split(q, p))
@@ -139,17 +147,9 @@ static void split(rqt *q, rnode n)
      * is a leaf gets a midpoint toward it, and n's own midpoints toward
      * split neighbours go */
     if (n.l > 0)
-        for (int k = 0; k < 4; k++) {
-            if ((ox[k] < 0 && n.x == 0) || (oy[k] < 0 && n.y == 0))
-                continue;
-            rnode nb = {n.x + (uint32_t)ox[k], n.y + (uint32_t)oy[k], n.l};
-            if (exists(q, nb)) {
-                if (is_split(q, nb))
-                    q->mids--;
-                else
-                    q->mids++;
-            }
-        }
+        for (int k = 0; k < 4; k++)
+            if (neighbour(q, n, k, &nb))
+                q->mids += is_split(q, nb) ? -1 : 1;
     if (get_bit(q->fan, q, n))
         q->fans--;
     put_bit(q->split, q, n, true);
@@ -197,15 +197,22 @@ static int64_t floor_div(int64_t a, int64_t b) /* b > 0 */
     return a >= 0 ? a / b : -((-a + b - 1) / b);
 }
 
+/* The gradient (dz/di, dz/dj) of the plane through a, b and c. */
+static void gradient(vtx a, vtx b, vtx c, double *gx, double *gy)
+{
+    double det = (double)((b.i - a.i) * (c.j - a.j) - (c.i - a.i) * (b.j - a.j));
+    *gx = ((b.z - a.z) * (double)(c.j - a.j) - (c.z - a.z) * (double)(b.j - a.j)) / det;
+    *gy = ((double)(b.i - a.i) * (c.z - a.z) - (double)(c.i - a.i) * (b.z - a.z)) / det;
+}
+
 /* The largest distance of a sample of the closed triangle abc
  * (counter-clockwise, lattice vertices) from its plane, or INFINITY as
  * soon as a row has one beyond tol or a no-data sample (or vertex). Each
  * row's span is found exactly from the edges. */
 static double tri_err(const rqt *q, vtx a, vtx b, vtx c)
 {
-    double det = (double)((b.i - a.i) * (c.j - a.j) - (c.i - a.i) * (b.j - a.j));
-    double gx = ((b.z - a.z) * (double)(c.j - a.j) - (c.z - a.z) * (double)(b.j - a.j)) / det;
-    double gy = ((double)(b.i - a.i) * (c.z - a.z) - (double)(c.i - a.i) * (b.z - a.z)) / det;
+    double gx, gy;
+    gradient(a, b, c, &gx, &gy);
     if (!isfinite(gx) || !isfinite(gy) || !isfinite(a.z))
         return INFINITY;
     const vtx *e[3][2] = {{&a, &b}, {&b, &c}, {&c, &a}};
@@ -249,9 +256,8 @@ static double tri_err(const rqt *q, vtx a, vtx b, vtx c)
 /* How far p's sample lies from the plane of abc. */
 static double off_plane(vtx a, vtx b, vtx c, vtx p)
 {
-    double det = (double)((b.i - a.i) * (c.j - a.j) - (c.i - a.i) * (b.j - a.j));
-    double gx = ((b.z - a.z) * (double)(c.j - a.j) - (c.z - a.z) * (double)(b.j - a.j)) / det;
-    double gy = ((double)(b.i - a.i) * (c.z - a.z) - (double)(c.i - a.i) * (b.z - a.z)) / det;
+    double gx, gy;
+    gradient(a, b, c, &gx, &gy);
     return fabs(p.z - (a.z + gx * (double)(p.i - a.i) + gy * (double)(p.j - a.j)));
 }
 
@@ -379,19 +385,19 @@ static bool fan_ok(const rqt *q, const box *b, const corners *k, vtx c)
  * across each must be in the cut (split its coarser parent if not). */
 static void accept_vol(rqt *q, rnode n, unsigned need)
 {
-    static const int ox[4] = {0, 1, 0, -1}, oy[4] = {-1, 0, 1, 0};
+    rnode nb;
     for (int k = 0; k < 4; k++)
-        if (need >> k & 1) {
+        if (need >> k & 1 && neighbour(q, n, k, &nb)) { /* (a side in need always has one) */
             put_bit(q->vol[k], q, n, true);
             q->vols += 2;
-            rnode nb = {n.x + (uint32_t)ox[k], n.y + (uint32_t)oy[k], n.l};
             rnode p = {nb.x >> 1, nb.y >> 1, n.l - 1};
             if (!is_split(q, p))
                 split(q, p);
         }
 }
 
-/* Whether n may be a leaf; sets its diagonal. */
+/* Whether n may be a leaf; sets how it is drawn (diagonal, fan,
+ * midpoints asked for). */
 static bool test(rqt *q, rnode n)
 {
     if (n.l == q->levels)
@@ -563,18 +569,14 @@ static void emit_half(emit *e, uint32_t a, uint32_t b, uint32_t c, uint32_t p, u
     }
 }
 
-
 /* Whether leaf n has the midpoint of side k (S, E, N, W): the neighbour
  * of its level there is split, or either asked for it. */
 static bool mid_at(const rqt *q, rnode n, int k)
 {
-    static const int ox[4] = {0, 1, 0, -1}, oy[4] = {-1, 0, 1, 0};
     if (get_bit(q->vol[k], q, n))
         return true;
-    if ((ox[k] < 0 && n.x == 0) || (oy[k] < 0 && n.y == 0))
-        return false;
-    rnode nb = {n.x + (uint32_t)ox[k], n.y + (uint32_t)oy[k], n.l};
-    return exists(q, nb) && (is_split(q, nb) || get_bit(q->vol[(k + 2) & 3], q, nb));
+    rnode nb;
+    return neighbour(q, n, k, &nb) && (is_split(q, nb) || get_bit(q->vol[(k + 2) & 3], q, nb));
 }
 
 static void emit_leaf(emit *e, rnode n)
@@ -596,7 +598,7 @@ static void emit_leaf(emit *e, rnode n)
         tri(e, ne, nw, sw);
         return;
     }
-    /* midpoints where the neighbour is finer */
+    /* midpoints where the neighbour is finer or either side asked */
     bool ms = b.ms && mid_at(q, n, 0), me = b.me && mid_at(q, n, 1), mn = b.mn && mid_at(q, n, 2),
          mw = b.mw && mid_at(q, n, 3);
     bool fan = get_bit(q->fan, q, n);
@@ -650,6 +652,16 @@ static uint64_t count_cut(rqt *q)
     return e.triangles;
 }
 
+/* The budget search's count: the cut at tol and its triangles. */
+static bool count_at(void *user, double tol, uint64_t *n)
+{
+    rqt *q = user;
+    if (!select_cut(q, tol))
+        return false;
+    *n = count_cut(q);
+    return true;
+}
+
 /* vertices: about how many there will be */
 static tsr_status emit_cut(rqt *q, const tsr_heightfield *hf, tsr_mesh *mesh, uint64_t vertices)
 {
@@ -684,7 +696,7 @@ static void rqt_free(rqt *q)
     tsr_free(q->a, q->stack);
 }
 
-tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, bool full_border, uint32_t max_tri,
+tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, double range, bool full_border, uint32_t max_tri,
                          uint32_t max_vert, tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err)
 {
     rqt q = {.h = hf->data, .w = hf->width, .cx = (int64_t)hf->width - 1, .cy = (int64_t)hf->height - 1,
@@ -720,36 +732,11 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, bool full_border
         budget = budget < 2ull * max_vert ? budget : 2ull * max_vert;
     for (int attempt = 0;; attempt++) {
         if (budget != UINT64_MAX && count_cut(&q) > budget) {
-            /* the finest cut within the budget: bisect the tolerance (in
-             * log scale) */
-            tsr_heightfield_stats hs;
-            tsr_heightfield_stats_compute(hf, &hs);
-            double lo = tol > 0 ? tol : 1e-9, hi = fmax((hs.max - hs.min) * 2, lo * 2) + 1;
-            if (!select_cut(&q, hi)) {
-                st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+            /* the finest cut within the budget */
+            double lo = tol > 0 ? tol : 1e-9;
+            if ((st = tsr__budget_tolerance(lo, fmax(range * 2, lo * 2) + 1, budget, count_at, &q, &q.tol, err)) !=
+                TSR_OK)
                 goto done;
-            }
-            if (count_cut(&q) > budget) {
-                st = tsr_error_set(err, TSR_ERR_ARGUMENT,
-                                   "the budget is below the coarsest quadtree mesh (%llu triangles)",
-                                   (unsigned long long)count_cut(&q));
-                goto done;
-            }
-            for (int it = 0; it < 40; it++) {
-                double mid = sqrt(lo * hi);
-                if (!select_cut(&q, mid)) {
-                    st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
-                    goto done;
-                }
-                if (count_cut(&q) > budget)
-                    lo = mid;
-                else
-                    hi = mid;
-            }
-            if (!select_cut(&q, hi)) {
-                st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
-                goto done;
-            }
             rep->budget_reached = true;
         }
         rep->target_error = q.tol * hf->dz;

@@ -67,10 +67,21 @@ bool tsr_terrain_pick_view(const tsr_terrain *t, pick_view *v);
  * triangle of three valid corners where there is one. full_border: the
  * outer border at full resolution (window seams). With a budget
  * (max_tri, max_vert not 0), the smallest tolerance whose mesh fits is
- * found by bisection and rep->budget_reached set. rep->target_error gets
- * the tolerance used, in world units (h dz). */
-tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, bool full_border, uint32_t max_tri,
+ * found by bisection up to the height range `range` (file units) and
+ * rep->budget_reached set. rep->target_error gets the tolerance used, in
+ * world units (h dz). */
+tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, double range, bool full_border, uint32_t max_tri,
                          uint32_t max_vert, tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err);
+
+/* The budget search of both quadtree methods: the smallest tolerance in
+ * [lo, hi], bisected in log scale (40 steps), at which the cut has at
+ * most `budget` triangles. count(user, tol, &n) selects the cut at tol
+ * and gives its triangles (false: out of memory). On success *tol is that
+ * tolerance and the cut is left selected at it; TSR_ERR_ARGUMENT (err
+ * says the count) when even hi's cut is over the budget; TSR_ERR_NOMEM. */
+tsr_status tsr__budget_tolerance(double lo, double hi, uint64_t budget,
+                                 bool (*count)(void *user, double tol, uint64_t *n), void *user, double *tol,
+                                 tsr_error *err);
 
 /* Greyscale Netpbm (P2, P5) read exactly (pnm.c). */
 /* Runs work(arg) on up to `threads` threads at once (0: one per online

@@ -1594,9 +1594,51 @@ static uint64_t cut_triangles(const tsr_quadtree *qt, const tsr_tile_patterns *p
     return sum;
 }
 
-static tsr_status mesh_quadtree_budget(const tsr_heightfield *hf, double tol, uint32_t max_tri, uint32_t max_vert,
-                                       const tsr_tin_options *o, tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err,
-                                       int attempt)
+tsr_status tsr__budget_tolerance(double lo, double hi, uint64_t budget,
+                                 bool (*count)(void *user, double tol, uint64_t *n), void *user, double *tol,
+                                 tsr_error *err)
+{
+    uint64_t n;
+    if (!count(user, hi, &n))
+        return tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+    if (n > budget)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "the budget is below the coarsest quadtree mesh (%llu triangles)",
+                             (unsigned long long)n);
+    for (int it = 0; it < 40; it++) {
+        double mid = sqrt(lo * hi);
+        if (!count(user, mid, &n))
+            return tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+        if (n > budget)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    if (!count(user, hi, &n))
+        return tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
+    *tol = hi;
+    return TSR_OK;
+}
+
+typedef struct tile_count {
+    tsr_quadtree *qt;
+    qt_pred *p;
+    const tsr_tile_patterns *pat;
+} tile_count;
+
+static bool count_tiles(void *user, double tol, uint64_t *n)
+{
+    tile_count *c = user;
+    c->p->tol = tol;
+    if (tsr_quadtree_select(c->qt, qt_refine, c->p) != TSR_OK)
+        return false;
+    *n = cut_triangles(c->qt, c->pat);
+    return true;
+}
+
+/* range: the height range in world units (the budget search's top) */
+static tsr_status mesh_quadtree_budget(const tsr_heightfield *hf, double tol, double range, uint32_t max_tri,
+                                       uint32_t max_vert, const tsr_tin_options *o, tsr_mesh *mesh,
+                                       tsr_tin_report *rep, tsr_error *err, int attempt)
 {
     const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
     tsr_terrain_options to = {o->tile_n ? o->tile_n : 2};
@@ -1624,32 +1666,11 @@ static tsr_status mesh_quadtree_budget(const tsr_heightfield *hf, double tol, ui
     if ((st = tsr_quadtree_select(qt, qt_refine, &p)) != TSR_OK)
         goto done;
     if (budget != UINT64_MAX && cut_triangles(qt, &pat) > budget) {
-        /* bisect the tolerance (in log scale) for the finest cut within
-         * the budget */
-        double lo = tol > 0 ? tol : 1e-9, hi = lo;
-        tsr_heightfield_stats hs;
-        tsr_heightfield_stats_compute(hf, &hs);
-        hi = fmax((hs.max - hs.min) * hf->dz * 2, lo * 2) + 1;
-        p.tol = hi;
-        if ((st = tsr_quadtree_select(qt, qt_refine, &p)) != TSR_OK)
-            goto done;
-        if (cut_triangles(qt, &pat) > budget) {
-            st = tsr_error_set(err, TSR_ERR_ARGUMENT, "the budget is below the coarsest quadtree mesh (%llu triangles)",
-                               (unsigned long long)cut_triangles(qt, &pat));
-            goto done;
-        }
-        for (int it = 0; it < 40; it++) {
-            double mid = sqrt(lo * hi);
-            p.tol = mid;
-            if ((st = tsr_quadtree_select(qt, qt_refine, &p)) != TSR_OK)
-                goto done;
-            if (cut_triangles(qt, &pat) > budget)
-                lo = mid;
-            else
-                hi = mid;
-        }
-        p.tol = hi;
-        if ((st = tsr_quadtree_select(qt, qt_refine, &p)) != TSR_OK)
+        /* the finest cut within the budget */
+        double lo = tol > 0 ? tol : 1e-9;
+        tile_count tc = {qt, &p, &pat};
+        if ((st = tsr__budget_tolerance(lo, fmax(range * 2, lo * 2) + 1, budget, count_tiles, &tc, &p.tol, err)) !=
+            TSR_OK)
             goto done;
         rep->budget_reached = true;
     }
@@ -1680,8 +1701,8 @@ static tsr_status mesh_quadtree_budget(const tsr_heightfield *hf, double tol, ui
         tsr_tile_patterns_free(&pat);
         have_pat = false;
         tsr_terrain_destroy(ter);
-        return mesh_quadtree_budget(hf, tol, max_tri && max_tri < tri ? max_tri : (uint32_t)tri, max_vert, o, mesh,
-                                    rep, err, attempt + 1);
+        return mesh_quadtree_budget(hf, tol, range, max_tri && max_tri < tri ? max_tri : (uint32_t)tri, max_vert, o,
+                                    mesh, rep, err, attempt + 1);
     }
 done:
     if (have_pat)
@@ -1691,11 +1712,7 @@ done:
     return st;
 }
 
-static tsr_status mesh_quadtree(const tsr_heightfield *hf, double tol, uint32_t max_tri, uint32_t max_vert,
-                                const tsr_tin_options *o, tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err)
-{
-    return mesh_quadtree_budget(hf, tol, max_tri, max_vert, o, mesh, rep, err, 0);
-}
+
 
 static tsr_status mesh_grid(const tsr_heightfield *hf, uint32_t step, uint32_t max_tri, uint32_t max_vert,
                             tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err)
@@ -1799,9 +1816,10 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
     } else if (o.method == TSR_TIN_QUADTREE && o.tile_n == 0) {
         double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(hs.max), fabs(hs.min)) * hf->dz;
         double t = target > margin ? target - margin : target;
-        st = tsr__rqt_mesh(src, t / hf->dz, o.full_border, o.max_triangles, o.max_vertices, mesh, rep, err);
+        st = tsr__rqt_mesh(src, t / hf->dz, hs.max - hs.min, o.full_border, o.max_triangles, o.max_vertices, mesh,
+                           rep, err);
     } else if (o.method == TSR_TIN_QUADTREE)
-        st = mesh_quadtree(src, target, o.max_triangles, o.max_vertices, &o, mesh, rep, err);
+        st = mesh_quadtree_budget(src, target, range, o.max_triangles, o.max_vertices, &o, mesh, rep, err, 0);
     else
         st = mesh_grid(src, o.grid_step ? o.grid_step : 1, o.max_triangles, o.max_vertices, mesh, rep, err);
     /* into the whole heightfield's coordinates, with normals from its
