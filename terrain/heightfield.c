@@ -87,19 +87,45 @@ tsr_raw_type tsr_raw_type_parse(const char *s)
 void tsr_heightfield_stats_compute(const tsr_heightfield *hf, tsr_heightfield_stats *st)
 {
     memset(st, 0, sizeof *st);
-    double mn = INFINITY, mx = -INFINITY, sum = 0;
-    size_t n = (size_t)hf->width * hf->height;
-    for (size_t i = 0; i < n; i++) {
-        float v = hf->data[i];
-        if (isnan(v)) {
-            st->nodata++;
-            continue;
-        }
-        st->valid++;
-        mn = v < mn ? v : mn;
-        mx = v > mx ? v : mx;
-        sum += v;
+    /* eight lanes, without branches, so the loop has no chain of
+     * dependent additions and the compiler may vectorise it: a NaN fails
+     * both comparisons and adds 0 */
+    float mn8[8], mx8[8];
+    double sum8[8];
+    uint64_t nan8[8];
+    for (int k = 0; k < 8; k++) {
+        mn8[k] = INFINITY;
+        mx8[k] = -INFINITY;
+        sum8[k] = 0;
+        nan8[k] = 0;
     }
+    size_t n = (size_t)hf->width * hf->height, i = 0;
+    const float *d = hf->data;
+    for (; i + 8 <= n; i += 8)
+        for (int k = 0; k < 8; k++) {
+            float v = d[i + k];
+            bool ok = v == v;
+            mn8[k] = v < mn8[k] ? v : mn8[k];
+            mx8[k] = v > mx8[k] ? v : mx8[k];
+            sum8[k] += ok ? (double)v : 0.0;
+            nan8[k] += !ok;
+        }
+    for (int k = 0; i < n; i++, k++) {
+        float v = d[i];
+        bool ok = v == v;
+        mn8[k] = v < mn8[k] ? v : mn8[k];
+        mx8[k] = v > mx8[k] ? v : mx8[k];
+        sum8[k] += ok ? (double)v : 0.0;
+        nan8[k] += !ok;
+    }
+    double mn = INFINITY, mx = -INFINITY, sum = 0;
+    for (int k = 0; k < 8; k++) {
+        mn = mn8[k] < mn ? mn8[k] : mn;
+        mx = mx8[k] > mx ? mx8[k] : mx;
+        sum += sum8[k];
+        st->nodata += nan8[k];
+    }
+    st->valid = n - st->nodata;
     st->min = st->valid ? mn : NAN;
     st->max = st->valid ? mx : NAN;
     st->mean = st->valid ? sum / (double)st->valid : NAN;

@@ -6,10 +6,15 @@
 
 enum { MAX_THREADS = 256 };
 
-void tsr__run_threads(void *(*work)(void *), void *arg, uint32_t threads, uint32_t jobs)
+uint32_t tsr__thread_count(uint32_t threads)
 {
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-    uint32_t nt = threads ? threads : ncpu > 0 ? (uint32_t)ncpu : 1;
+    return threads ? threads : ncpu > 0 ? (uint32_t)ncpu : 1;
+}
+
+void tsr__run_threads(void *(*work)(void *), void *arg, uint32_t threads, uint32_t jobs)
+{
+    uint32_t nt = tsr__thread_count(threads);
     nt = nt > jobs ? jobs : nt;
     nt = nt > MAX_THREADS ? MAX_THREADS : nt;
     pthread_t th[MAX_THREADS];

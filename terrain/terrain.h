@@ -190,7 +190,9 @@ typedef struct tsr_tin_options {
      * block >= the window's size: one block (the whole window). threads
      * 0: one per online processor. With a budget (or no bound) the window
      * is one block on one thread: a budget is global. The heightfield's
-     * allocator is then called from several threads at once. */
+     * allocator is then called from several threads at once. quadtree
+     * (tile_n 0): nodes are tested on up to `threads` threads; the mesh
+     * is the same whatever the count. */
     uint32_t block, threads;
     /* A window: mesh only columns x .. x+w-1, rows y .. y+h-1 (w = h = 0:
      * everything). Vertices keep the whole heightfield's coordinates, so

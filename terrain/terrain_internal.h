@@ -69,9 +69,10 @@ bool tsr_terrain_pick_view(const tsr_terrain *t, pick_view *v);
  * (max_tri, max_vert not 0), the smallest tolerance whose mesh fits is
  * found by bisection up to the height range `range` (file units) and
  * rep->budget_reached set. rep->target_error gets the tolerance used, in
- * world units (h dz). */
+ * world units (h dz). The nodes are tested on up to `threads` threads (0:
+ * one per online processor); the mesh is the same whatever the count. */
 tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, double range, bool full_border, uint32_t max_tri,
-                         uint32_t max_vert, tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err);
+                         uint32_t max_vert, uint32_t threads, tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err);
 
 /* The budget search of both quadtree methods: the smallest tolerance in
  * [lo, hi], bisected in log scale (40 steps), at which the cut has at
@@ -83,14 +84,16 @@ tsr_status tsr__budget_tolerance(double lo, double hi, uint64_t budget,
                                  bool (*count)(void *user, double tol, uint64_t *n), void *user, double *tol,
                                  tsr_error *err);
 
-/* Greyscale Netpbm (P2, P5) read exactly (pnm.c). */
 /* Runs work(arg) on up to `threads` threads at once (0: one per online
  * processor), never more than `jobs`, the caller's thread among them, and
  * returns when all have returned: work takes its jobs from arg itself
  * (under a lock) until none is left. Where a thread cannot be started,
  * fewer run. */
 void tsr__run_threads(void *(*work)(void *), void *arg, uint32_t threads, uint32_t jobs);
+/* The threads that `threads` asks for (0: one per online processor). */
+uint32_t tsr__thread_count(uint32_t threads);
 
+/* Greyscale Netpbm (P2, P5) read exactly (pnm.c). */
 bool tsr_pnm_is_grey(const char *path);
 tsr_status tsr_pnm_read(const char *path, const tsr_allocator *alloc, tsr_heightfield **out, tsr_error *err);
 

@@ -1816,8 +1816,8 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
     } else if (o.method == TSR_TIN_QUADTREE && o.tile_n == 0) {
         double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(hs.max), fabs(hs.min)) * hf->dz;
         double t = target > margin ? target - margin : target;
-        st = tsr__rqt_mesh(src, t / hf->dz, hs.max - hs.min, o.full_border, o.max_triangles, o.max_vertices, mesh,
-                           rep, err);
+        st = tsr__rqt_mesh(src, t / hf->dz, hs.max - hs.min, o.full_border, o.max_triangles, o.max_vertices,
+                           o.threads, mesh, rep, err);
     } else if (o.method == TSR_TIN_QUADTREE)
         st = mesh_quadtree_budget(src, target, range, o.max_triangles, o.max_vertices, &o, mesh, rep, err, 0);
     else

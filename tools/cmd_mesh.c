@@ -43,7 +43,8 @@ static void help(FILE *f)
             "  --block N             delaunay with a bound: mesh blocks of about N x N cells on\n"
             "                        their own, their seams fixed like window borders (default\n"
             "                        256; the mesh depends on N, not on --threads)\n"
-            "  --threads N           delaunay: blocks meshed at once (default: one per processor)\n"
+            "  --threads N           delaunay: blocks meshed at once; quadtree: nodes tested at\n"
+            "                        once (default: one per processor; the mesh is the same)\n"
             "  --step N              grid: keep every N-th column and row (default 1)\n"
             "  --tile N              quadtree: draw each leaf as an N x N grid tile instead (2, 4,\n"
             "                        8, ..., 128; the terrain LOD's tiles and error pyramid: more\n"
@@ -319,8 +320,12 @@ static int run(int argc, char **argv)
         cli_error("mesh", "--no-flip applies to --method delaunay only");
         return CLI_USAGE;
     }
-    if ((to.block || to.threads) && to.method != TSR_TIN_DELAUNAY) {
-        cli_error("mesh", "--block and --threads apply to --method delaunay only");
+    if (to.block && to.method != TSR_TIN_DELAUNAY) {
+        cli_error("mesh", "--block applies to --method delaunay only");
+        return CLI_USAGE;
+    }
+    if (to.threads && to.method != TSR_TIN_DELAUNAY && !(to.method == TSR_TIN_QUADTREE && !to.tile_n)) {
+        cli_error("mesh", "--threads applies to --method delaunay and quadtree (without --tile) only");
         return CLI_USAGE;
     }
     if (to.tile_n && to.method != TSR_TIN_QUADTREE) {

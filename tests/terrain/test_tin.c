@@ -364,7 +364,8 @@ TEST(nodata_holes)
 /* The quadtree's two kinds of leaf: its default (exact errors, leaves of
  * two or four triangles) and grid tiles over the LOD pyramid (tile_n).
  * Both hold the bound by the oracle, with and without no-data, and are
- * valid (bound_case); the exact errors need fewer triangles in all. */
+ * valid (bound_case); the exact errors need fewer triangles in all, and
+ * their mesh is the same whatever the thread count. */
 static uint32_t quadtree_case(const tsr_heightfield *hf, uint32_t tile_n, double e, const char *what)
 {
     tsr_tin_options o = {0};
@@ -375,8 +376,20 @@ static uint32_t quadtree_case(const tsr_heightfield *hf, uint32_t tile_n, double
     tsr_mesh m;
     tsr_mesh_init(&m, 0, NULL);
     tsr_error err = {0};
+    o.threads = 1;
     CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_OK);
     uint32_t n = m.triangle_count;
+    if (tile_n == 0) { /* nodes tested on several threads: the same mesh */
+        tsr_mesh m3;
+        tsr_mesh_init(&m3, 0, NULL);
+        o.threads = 3;
+        CHECK(tsr_terrain_mesh(hf, &o, &m3, NULL, &err) == TSR_OK);
+        CHECK_MSG(m3.vertex_count == m.vertex_count && m3.triangle_count == m.triangle_count &&
+                      memcmp(m3.positions, m.positions, 12 * (size_t)m.vertex_count) == 0 &&
+                      memcmp(m3.indices, m.indices, 12 * (size_t)m.triangle_count) == 0,
+                  "%s: 3 threads, not the mesh of one", what);
+        tsr_mesh_free(&m3);
+    }
     tsr_mesh_free(&m);
     return n;
 }

@@ -5,7 +5,8 @@
 #  - --no-flip (plain Delaunay): within the bound, not fewer triangles than
 #    the default flips;
 #  - --block / --threads: blocks of 32 cells within the bound, the file the
-#    same byte for byte on 1 and 3 threads, the stats' block count;
+#    same byte for byte on 1 and 3 threads, the stats' block count; the
+#    quadtree's file the same on 1 and 3 threads;
 #  - budgets: --triangles / --vertices never exceeded;
 #  - --window: two adjacent windows of a real heightfield (or a generated
 #    one without the data) write identical vertices on their shared column
@@ -65,7 +66,18 @@ for t in 1 3; do
 done
 cmp -s "$dir/k1.ply" "$dir/k3.ply" || fail "--block 32: --threads 1 and 3 wrote different meshes"
 echo "ok --block 32: the same mesh on 1 and 3 threads, 15 blocks (measured $got)"
-"$tessera" mesh "$dir/t.png" --method quadtree --threads 2 -o "$dir/m.ply" 2>/dev/null && fail "--threads with quadtree"
+"$tessera" mesh "$dir/t.png" --method grid --threads 2 -o "$dir/m.ply" 2>/dev/null && fail "--threads with grid"
+"$tessera" mesh "$dir/t.png" --method quadtree --tile 4 --threads 2 -o "$dir/m.ply" 2>/dev/null &&
+  fail "--threads with quadtree --tile"
+"$tessera" mesh "$dir/t.png" --method delaunay --block 16 --method quadtree -o "$dir/m.ply" 2>/dev/null &&
+  fail "--block with quadtree"
+# the quadtree's nodes tested on several threads: the same mesh
+for t in 1 3; do
+  "$tessera" mesh "$dir/t.png" --dx 10 --method quadtree --max-error 0.5 --threads $t -o "$dir/q$t.ply" --quiet ||
+    fail "mesh --method quadtree --threads $t"
+done
+cmp -s "$dir/q1.ply" "$dir/q3.ply" || fail "quadtree: --threads 1 and 3 wrote different meshes"
+echo "ok quadtree: the same mesh on 1 and 3 threads"
 
 # budgets
 for m in delaunay quadtree grid; do
