@@ -60,15 +60,17 @@ typedef struct fly_args {
     fly_options o;
 } fly_args;
 
-static cJSON *stats_json(const fly_args *a, const char *device, const frame_rec *r, uint32_t n)
+/* used: the options as fly_init completed them (defaults filled in) */
+static cJSON *stats_json(const fly_args *a, const fly_options *used, const char *device, const frame_rec *r,
+                         uint32_t n)
 {
     cJSON *root = cJSON_CreateObject();
     cJSON_AddStringToObject(root, "input", a->in);
     cJSON_AddStringToObject(root, "device", device);
     cJSON_AddNumberToObject(root, "width", a->width);
     cJSON_AddNumberToObject(root, "height", a->height);
-    cJSON_AddNumberToObject(root, "tile", a->o.tile_n);
-    cJSON_AddNumberToObject(root, "pixel_error", a->o.pixel_error);
+    cJSON_AddNumberToObject(root, "tile", used->tile_n);
+    cJSON_AddNumberToObject(root, "pixel_error", used->pixel_error);
     cJSON *frames = cJSON_AddArrayToObject(root, "frames");
     double sum[6] = {0};
     for (uint32_t i = 0; i < n; i++) {
@@ -97,11 +99,11 @@ static cJSON *stats_json(const fly_args *a, const char *device, const frame_rec 
     return root;
 }
 
-static int write_stats(const fly_args *a, const char *device, const frame_rec *r, uint32_t n)
+static int write_stats(const fly_args *a, const fly_options *used, const char *device, const frame_rec *r, uint32_t n)
 {
     if (!a->stats)
         return CLI_OK;
-    cJSON *root = stats_json(a, device, r, n);
+    cJSON *root = stats_json(a, used, device, r, n);
     char *text = root ? cJSON_Print(root) : NULL;
     cJSON_Delete(root);
     if (!text) {
@@ -281,7 +283,7 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
                 be->name, cli_now() - t_start, a->frames ? ms / a->frames : 0, a->out_dir);
     }
     if (rc == CLI_OK)
-        rc = write_stats(a, be->name, recs, a->frames);
+        rc = write_stats(a, &f.o, be->name, recs, a->frames);
     if (rc == CLI_OK && a->video)
         rc = assemble_video(a);
 done:
@@ -443,7 +445,7 @@ static int run_window(fly_args *a, const tsr_heightfield *hf)
         rc = CLI_FAIL;
     }
     if (rc == CLI_OK)
-        rc = write_stats(a, be->name, recs, nrec);
+        rc = write_stats(a, &f.o, be->name, recs, nrec);
     if (!a->quiet)
         fprintf(stderr, "tessera fly: %u frames on %s\n", nrec, be->name);
     free(recs);

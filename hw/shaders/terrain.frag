@@ -24,12 +24,16 @@ void main()
     float snow = smoothstep(0.72, 0.85, t) * (1.0 - smoothstep(0.15, 0.3, slope));
     c = mix(c, vec3(0.95, 0.96, 0.98), snow);
 
-    vec3 sun = pc.frame.sun_fog.xyz;
+    // One load of the whole vec4: Mesa's lavapipe (22.3) returned 0 for
+    // .w when .xyz and .w were read separately through the buffer
+    // reference, so it drew no fog where a real GPU did.
+    vec4 sun_fog = pc.frame.sun_fog;
+    vec3 sun = sun_fog.xyz;
     float diffuse = max(dot(nrm, sun), 0.0);
     float sky_light = 0.5 + 0.5 * nrm.z;
     c *= 0.25 * sky_light + 0.85 * diffuse;
 
-    float fog = pc.frame.sun_fog.w;
+    float fog = sun_fog.w;
     if (fog > 0.0) {
         float f = 1.0 - exp(-length(v_pos) / fog);
         c = mix(c, pc.frame.sky_horizon.rgb, f);

@@ -219,12 +219,22 @@ TEST(image_moves_and_matches_reference)
     if (!b)
         SKIP("no Vulkan device");
     tsr_heightfield *hf = make_terrain();
-    fly_options o = {.tile_n = 16, .pixel_error = 2, .geomorph = true};
+    /* fog at 4 km: light over the 2.6 km terrain, so the colours stay */
+    fly_options o = {.tile_n = 16, .pixel_error = 2, .geomorph = true, .fog_distance = 4000};
     fly_ctx f;
     tsr_error err = {0};
     CHECK(fly_init(&f, hf, b, &o, &err) == TSR_OK);
     fly_frame_stats fs;
     uint8_t *a = render(&f, &views[0], &fs, NULL);
+    /* the fog is drawn: without it, the far terrain is darker and less
+     * blue (lavapipe once dropped the fog: the shader read its distance
+     * as 0) */
+    f.o.fog_distance = -1;
+    uint8_t *clear = render(&f, &views[0], &fs, NULL);
+    f.o.fog_distance = 4000;
+    double fogged = differing(a, clear, 8);
+    CHECK_MSG(fogged > 0.2, "fog on and off: only %.3f of the pixels differ", fogged);
+    free(clear);
     /* not blank: many distinct colours */
     uint32_t distinct = 0;
     uint8_t *seen = calloc(1 << 15, 1);

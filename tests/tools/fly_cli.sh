@@ -40,6 +40,8 @@ for f in fr:
     assert f["tiles"] > 0 and f["triangles"] > 0
     assert f["gpu_triangles"] == f["triangles"], (f["gpu_triangles"], f["triangles"])
 assert fr[0]["uploaded_bytes"] > 0
+# the options used, defaults filled in (not 0 for "the default")
+assert d["tile"] == 16 and d["pixel_error"] == 2, (d["tile"], d["pixel_error"])
 print("ok stats: %d frames, %d tiles, %d triangles in frame 0" % (len(fr), fr[0]["tiles"], fr[0]["triangles"]))
 PY
 echo "ok headless: 6 frames"
