@@ -45,12 +45,16 @@ tsr_status tsr_error_set(tsr_error *err, tsr_status status, const char *fmt, ...
     return status;
 }
 
-/* The default allocator. Blocks of 8 MiB and more (pyramids, heightfields)
- * are mapped with MAP_POPULATE: on virtual machines a first-touch page
- * fault can cost ~10 us per 4 KiB page, which made faults, not work,
- * dominate the pyramid build; populating the mapping at once is several
- * times faster. Every block carries a small header saying how it was made,
- * so realloc and free take the matching path. */
+/* The default allocator. Blocks of 8 MiB and more (pyramids, heightfields,
+ * meshes) are mapped and populated at once: on virtual machines a
+ * first-touch page fault can cost ~10 us per 4 KiB page, which made
+ * faults, not work, dominate the pyramid build. Where the kernel allows,
+ * the mapping asks for transparent huge pages first and is then populated
+ * for writing (MADV_POPULATE_WRITE, Linux 5.14): 512 times fewer faults,
+ * and measured here 3-8x faster than MAP_POPULATE alone, whose pages were
+ * still slow on first write. Elsewhere, MAP_POPULATE. Every block carries
+ * a small header saying how it was made, so realloc and free take the
+ * matching path. */
 typedef struct block_header {
     size_t size;   /* usable bytes */
     size_t mapped; /* mapping length when mmap'd, else 0 */
@@ -59,6 +63,21 @@ typedef struct block_header {
 
 #define BIG_BLOCK ((size_t)8 << 20)
 
+static void *map_populated(size_t len)
+{
+#if defined(MADV_HUGEPAGE) && defined(MADV_POPULATE_WRITE)
+    void *m = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (m == MAP_FAILED)
+        return NULL;
+    (void)madvise(m, len, MADV_HUGEPAGE); /* (a hint: refused where THP is off) */
+    if (madvise(m, len, MADV_POPULATE_WRITE) == 0)
+        return m;
+    munmap(m, len); /* an older kernel, or no memory: the plain way */
+#endif
+    void *p = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_POPULATE, -1, 0);
+    return p == MAP_FAILED ? NULL : p;
+}
+
 static void *block_new(size_t size)
 {
     if (size > SIZE_MAX - sizeof(block_header) - 4096)
@@ -66,8 +85,8 @@ static void *block_new(size_t size)
     block_header *h;
     if (size >= BIG_BLOCK) {
         size_t len = (size + sizeof *h + 4095) & ~(size_t)4095;
-        void *m = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_POPULATE, -1, 0);
-        if (m == MAP_FAILED)
+        void *m = map_populated(len);
+        if (!m)
             return NULL;
         h = m;
         h->mapped = len;
