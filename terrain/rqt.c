@@ -10,7 +10,7 @@
  * side in two, where the neighbour across is finer, or where either leaf
  * asked for it (a leaf that fails as two triangles may ask for the
  * midpoints of one or two sides before it is split: 3 or 4 triangles and
- * one more in each neighbour, against 8 or more). Edge neighbours differ
+ * one more in each neighbour, against 8 or more; a fan may too, 5 or 6). Edge neighbours differ
  * by at most one level (the restriction), and a leaf asking for a
  * midpoint brings the neighbour of its level into the cut, so the two
  * sides of a shared side always have the same vertices: the mesh is
@@ -424,6 +424,28 @@ static bool fan_ok(const rqt *q, const box *b, const corners *k, vtx c)
     return true;
 }
 
+/* The fan from c with the midpoints of one or two sides always there (the
+ * leaf asks for them): the sides whose triangle fails without its
+ * midpoint, when they can have one, are no more than two, and pass split
+ * at it; 0 when there is no such set. Called after fan_ok failed. */
+static unsigned fan_need(const rqt *q, const box *b, const corners *k, vtx c)
+{
+    const vtx *ring[4][3] = {{&k->sw, &k->se, b->ms ? &k->s : NULL},
+                             {&k->se, &k->ne, b->me ? &k->e : NULL},
+                             {&k->ne, &k->nw, b->mn ? &k->n : NULL},
+                             {&k->nw, &k->sw, b->mw ? &k->w : NULL}};
+    unsigned need = 0;
+    for (int i = 0; i < 4; i++)
+        if (!tri_ok(q, *ring[i][0], *ring[i][1], c, ring[i][2], NULL)) {
+            const vtx *m = ring[i][2];
+            if (!m || __builtin_popcount(need) == 2 || !(tri_err(q, *ring[i][0], *m, c) <= q->tol) ||
+                !(tri_err(q, *m, *ring[i][1], c) <= q->tol))
+                return 0;
+            need |= 1u << i;
+        }
+    return need;
+}
+
 /* n asks for the midpoints of the sides in need: the node of its level
  * across each must be in the cut (split its coarser parent if not). */
 static void accept_vol(rqt *q, rnode n, unsigned need)
@@ -503,6 +525,11 @@ static verdict judge(const rqt *q, rnode n)
                 return (verdict){1, (unsigned char)d, 0, (unsigned char)sets[k]};
         }
     }
+    /* the fan with one or two midpoints asked for (6 or 8 triangles with
+     * the neighbours' share, against 8 or more for a split) */
+    unsigned need;
+    if (b.xm < b.x1 && b.ym < b.y1 && (need = fan_need(q, &b, &c, at(q, b.xm, b.ym))) != 0)
+        return (verdict){1, 0, 1, (unsigned char)need};
     return no;
 }
 
