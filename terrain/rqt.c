@@ -10,9 +10,9 @@
  * side in two, where the neighbour across is finer, or where either leaf
  * asked for it (a leaf that fails as two triangles may ask for the
  * midpoints of one or two sides before it is split: 3 or 4 triangles and
- * one more in each neighbour, against 8 or more; a fan may too, 5 or 6). Edge neighbours differ
- * by at most one level (the restriction), and a leaf asking for a
- * midpoint brings the neighbour of its level into the cut, so the two
+ * one more in each neighbour, against 8 or more; a fan may too, 5 or
+ * 6). Edge neighbours differ by at most one level (the restriction), and
+ * a leaf asking for a midpoint brings the neighbour of its level into the cut, so the two
  * sides of a shared side always have the same vertices: the mesh is
  * conforming, with no T-junction.
  *
