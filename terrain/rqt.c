@@ -12,9 +12,9 @@
  * midpoints of one or two sides before it is split: 3 or 4 triangles and
  * one more in each neighbour, against 8 or more; a fan may too, 5 or
  * 6). Edge neighbours differ by at most one level (the restriction), and
- * a leaf asking for a midpoint brings the neighbour of its level into the cut, so the two
- * sides of a shared side always have the same vertices: the mesh is
- * conforming, with no T-junction.
+ * a leaf asking for a midpoint brings the neighbour of its level into the
+ * cut, so the two sides of a shared side always have the same vertices:
+ * the mesh is conforming, with no T-junction.
  *
  * The error is exact. A node is kept as a leaf only when every sample of
  * its closed square lies within the tolerance of its triangles, for every
