@@ -483,16 +483,21 @@ static verdict judge(const rqt *q, rnode n)
          * midpoint's triangles interpolate as the halves do */
         const float *r0 = q->h + (size_t)b.y0 * q->w + b.x0, *r1 = r0 + q->w, *r2 = r1 + q->w;
         double sw = r0[0], se = r0[2], nw = r2[0], ne = r2[2], cc = r1[1], tol = q->tol;
-        double sides = fmax(fmax(fabs(r0[1] - 0.5 * (sw + se)), fabs(r2[1] - 0.5 * (nw + ne))),
-                            fmax(fabs(r1[0] - 0.5 * (sw + nw)), fabs(r1[2] - 0.5 * (se + ne))));
         double d0 = fabs(cc - 0.5 * (sw + ne)), d1 = fabs(cc - 0.5 * (se + nw));
-        bool nan = isnan(sw + se + nw + ne + cc + r0[1] + r2[1] + r1[0] + r1[2]);
-        if (nan || !(sides <= tol))
+        if (isnan(sw + se + nw + ne + cc + r0[1] + r2[1] + r1[0] + r1[2]))
+            return no;
+        /* a side's middle sample beyond the tolerance: the leaf asks for
+         * that midpoint (one or two sides, where a neighbour can share
+         * it), which makes the sample a vertex */
+        unsigned need = (fabs(r0[1] - 0.5 * (sw + se)) > tol ? 1u : 0) | (fabs(r1[2] - 0.5 * (se + ne)) > tol ? 2u : 0) |
+                        (fabs(r2[1] - 0.5 * (nw + ne)) > tol ? 4u : 0) | (fabs(r1[0] - 0.5 * (sw + nw)) > tol ? 8u : 0);
+        unsigned avail = (b.ms ? 1u : 0) | (b.me ? 2u : 0) | (b.mn ? 4u : 0) | (b.mw ? 8u : 0);
+        if ((need & ~avail) || __builtin_popcount(need) > 2)
             return no;
         int d = d0 <= d1 ? 0 : 1;
         if ((d ? d1 : d0) <= tol)
-            return (verdict){1, (unsigned char)d, 0, 0};
-        return (verdict){1, 0, 1, 0};
+            return (verdict){1, (unsigned char)d, 0, (unsigned char)need};
+        return (verdict){1, 0, 1, (unsigned char)need};
     }
     corners c = corners_of(q, &b);
     /* try first the diagonal nearer the sample at the centre */
