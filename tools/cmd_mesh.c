@@ -34,7 +34,7 @@ static void help(FILE *f)
             "                        quadtree: a restricted quadtree, each leaf two triangles\n"
             "                        on its better diagonal or four from its centre, plus side\n"
             "                        midpoints, kept only where every sample is within the\n"
-            "                        bound: mostly 3-10x faster, 1.4-3.5x the triangles;\n"
+            "                        bound: 2-10x faster, 1.2-3x the triangles;\n"
             "                        grid: every --step-th sample\n"
             "  --no-flip             delaunay: no data-dependent flips: a Delaunay triangulation,\n"
             "                        1.3-2x faster, about a quarter more triangles for the bound\n"
