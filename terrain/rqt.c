@@ -477,7 +477,9 @@ static verdict judge(const rqt *q, rnode n)
     box b = node_box(q, n);
     if (q->full_border && (b.x0 == 0 || b.y0 == 0 || b.x1 == q->cx || b.y1 == q->cy))
         return no;
-    if (b.x1 - b.x0 == 2 && b.y1 - b.y0 == 2) {
+    if (n.l + 1 == q->levels && b.x1 - b.x0 == 2 && b.y1 - b.y0 == 2) {
+        /* (2 x 2 cells unclipped: a bigger node clipped to 2 x 2 has its
+         * centre elsewhere and takes the general test) */
         /* the most common test, in closed form: every sample of the node
          * is a vertex or the middle of a side or of the diagonal, where a
          * midpoint's triangles interpolate as the halves do */

@@ -396,7 +396,7 @@ static uint32_t quadtree_case(const tsr_heightfield *hf, uint32_t tile_n, double
 
 TEST(quadtree_leaves_and_tiles)
 {
-    uint32_t sizes[][2] = {{129, 129}, {100, 77}, {33, 120}, {2, 2}, {3, 40}, {257, 5}};
+    uint32_t sizes[][2] = {{129, 129}, {100, 77}, {33, 120}, {2, 2}, {3, 40}, {257, 5}, {11, 19}};
     double errors[] = {0.5, 5, 50};
     uint64_t exact = 0, tiles = 0;
     for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
@@ -440,6 +440,23 @@ TEST(quadtree_leaves_and_tiles)
     }
     CHECK_MSG(exact < tiles, "exact errors %llu triangles, grid tiles %llu", (unsigned long long)exact,
               (unsigned long long)tiles);
+    /* sides of 2^k + 3 samples: the border clips nodes of 4 and more
+     * cells to 2 x 2, whose centre is not the middle sample (once drawn as
+     * a fan about the wrong point: the bound broken, or a vertex read past
+     * the heightfield). A lone spike near the far corner, flat elsewhere. */
+    uint32_t clipped[] = {7, 11, 19, 35};
+    for (size_t k = 0; k < sizeof clipped / sizeof clipped[0]; k++) {
+        uint32_t n = clipped[k];
+        tsr_heightfield *hf = tsr_heightfield_create(n, n, NULL);
+        float *d = tsr_heightfield_data(hf);
+        for (uint32_t i = 0; i < n * n; i++)
+            d[i] = 0;
+        d[(n - 2) * n + n - 2] = 1;
+        char what[64];
+        snprintf(what, sizeof what, "spike %ux%u", n, n);
+        quadtree_case(hf, 0, 0.5, what);
+        tsr_heightfield_destroy(hf);
+    }
 }
 
 /* The vertices of m on the line x = X (or y = Y), sorted. */
