@@ -247,7 +247,8 @@ static double row_err(const float *row, int64_t lo, int64_t hi, double base, dou
     }
 #endif
     for (; i <= hi; i++) {
-        double d = fabs((double)row[i] - (base + gx * (double)i));
+        double p = gx * (double)i; /* (two statements: never fused into an FMA, as the SSE2 path is not) */
+        double d = fabs((double)row[i] - (base + p));
         *bad |= !(d <= tol);
         mx = d > mx ? d : mx;
     }

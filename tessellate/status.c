@@ -2,6 +2,7 @@
 #define _GNU_SOURCE /* madvise, MADV_HUGEPAGE */
 #include "tessellate/tessellate.h"
 
+#include <errno.h>
 #include <stdint.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -72,8 +73,11 @@ static void *map_populated(size_t len)
     (void)madvise(m, len, MADV_HUGEPAGE); /* (a hint: refused where THP is off) */
     if (madvise(m, len, MADV_POPULATE_WRITE) == 0)
         return m;
-    munmap(m, len); /* an older kernel, or no memory: the plain way */
-#endif
+    int e = errno;
+    munmap(m, len);
+    if (e == ENOMEM) /* out of memory (MAP_POPULATE would not say so) */
+        return NULL;
+#endif /* (a kernel before 5.14, or a sandbox refusing the advice: the plain way) */
     void *p = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_POPULATE, -1, 0);
     return p == MAP_FAILED ? NULL : p;
 }
