@@ -411,36 +411,56 @@ static bool diag_ok_v(const rqt *q, const box *b, const corners *c, int d, unsig
     return true;
 }
 
-/* The fan from the centre c: a triangle per side, split at the side's
- * midpoint where one may come. */
-static bool fan_ok(const rqt *q, const box *b, const corners *k, vtx c)
+/* The fan from the centre c: a triangle (c, a, b) per side, split at the
+ * side's midpoint m in (c, a, m), (c, m, b) where one may come; each
+ * side's answer is kept (-1: not known yet), as fan_ok and fan_need ask
+ * the same. */
+typedef struct fan {
+    const vtx *ring[4][3]; /* a, b, m (NULL: no midpoint can come) */
+    vtx c;
+    signed char ok[4];
+} fan;
+
+static fan fan_of(const box *b, const corners *k, vtx c)
 {
-    const vtx *ring[4][3] = {{&k->sw, &k->se, b->ms ? &k->s : NULL},
-                             {&k->se, &k->ne, b->me ? &k->e : NULL},
-                             {&k->ne, &k->nw, b->mn ? &k->n : NULL},
-                             {&k->nw, &k->sw, b->mw ? &k->w : NULL}};
-    for (int i = 0; i < 4; i++) /* a side's midpoint m splits (c, a, b) in (c, a, m), (c, m, b) */
-        if (!tri_ok(q, *ring[i][0], *ring[i][1], c, ring[i][2], NULL))
+    fan f = {{{&k->sw, &k->se, b->ms ? &k->s : NULL},
+              {&k->se, &k->ne, b->me ? &k->e : NULL},
+              {&k->ne, &k->nw, b->mn ? &k->n : NULL},
+              {&k->nw, &k->sw, b->mw ? &k->w : NULL}},
+             c,
+             {-1, -1, -1, -1}};
+    return f;
+}
+
+/* Whether side i's triangle is within the tolerance with or without its
+ * midpoint. */
+static bool fan_side(const rqt *q, fan *f, int i)
+{
+    if (f->ok[i] < 0)
+        f->ok[i] = tri_ok(q, *f->ring[i][0], *f->ring[i][1], f->c, f->ring[i][2], NULL);
+    return f->ok[i];
+}
+
+static bool fan_ok(const rqt *q, fan *f)
+{
+    for (int i = 0; i < 4; i++)
+        if (!fan_side(q, f, i))
             return false;
     return true;
 }
 
-/* The fan from c with the midpoints of one or two sides always there (the
- * leaf asks for them): the sides whose triangle fails without its
- * midpoint, when they can have one, are no more than two, and pass split
- * at it; 0 when there is no such set. Called after fan_ok failed. */
-static unsigned fan_need(const rqt *q, const box *b, const corners *k, vtx c)
+/* The fan with the midpoints of one or two sides always there (the leaf
+ * asks for them): the sides whose triangle fails without its midpoint,
+ * when they can have one, are no more than two, and pass split at it; 0
+ * when there is no such set. Called after fan_ok failed. */
+static unsigned fan_need(const rqt *q, fan *f)
 {
-    const vtx *ring[4][3] = {{&k->sw, &k->se, b->ms ? &k->s : NULL},
-                             {&k->se, &k->ne, b->me ? &k->e : NULL},
-                             {&k->ne, &k->nw, b->mn ? &k->n : NULL},
-                             {&k->nw, &k->sw, b->mw ? &k->w : NULL}};
     unsigned need = 0;
     for (int i = 0; i < 4; i++)
-        if (!tri_ok(q, *ring[i][0], *ring[i][1], c, ring[i][2], NULL)) {
-            const vtx *m = ring[i][2];
-            if (!m || __builtin_popcount(need) == 2 || !(tri_err(q, *ring[i][0], *m, c) <= q->tol) ||
-                !(tri_err(q, *m, *ring[i][1], c) <= q->tol))
+        if (!fan_side(q, f, i)) {
+            const vtx *a = f->ring[i][0], *b = f->ring[i][1], *m = f->ring[i][2];
+            if (!m || __builtin_popcount(need) == 2 || !(tri_err(q, *a, *m, f->c) <= q->tol) ||
+                !(tri_err(q, *m, *b, f->c) <= q->tol))
                 return 0;
             need |= 1u << i;
         }
@@ -503,12 +523,13 @@ static verdict judge(const rqt *q, rnode n)
         return (verdict){1, 0, 1, (unsigned char)need};
     }
     corners c = corners_of(q, &b);
-    /* try first the diagonal nearer the sample at the centre */
+    /* try first the diagonal nearer the sample at the centre (where the
+     * node has one: clipped nodes may not) */
+    bool centred = b.xm < b.x1 && b.ym < b.y1;
+    vtx centre = centred ? at(q, b.xm, b.ym) : c.sw;
     int first = 0;
-    if (b.xm < b.x1 && b.ym < b.y1) {
-        double hc = at(q, b.xm, b.ym).z;
-        first = fabs(hc - 0.5 * (c.sw.z + c.ne.z)) <= fabs(hc - 0.5 * (c.se.z + c.nw.z)) ? 0 : 1;
-    }
+    if (centred)
+        first = fabs(centre.z - 0.5 * (c.sw.z + c.ne.z)) <= fabs(centre.z - 0.5 * (c.se.z + c.nw.z)) ? 0 : 1;
     signed char memo[2][2][4]; /* halves' answers, shared with the sets of midpoints below */
     memset(memo, -1, sizeof memo);
     for (int t = 0; t < 2; t++) {
@@ -518,7 +539,8 @@ static verdict judge(const rqt *q, rnode n)
     }
     /* four triangles from the centre: half a level between the two
      * triangles and the four children */
-    if (b.xm < b.x1 && b.ym < b.y1 && fan_ok(q, &b, &c, at(q, b.xm, b.ym)))
+    fan f = fan_of(&b, &c, centre);
+    if (centred && fan_ok(q, &f))
         return (verdict){1, 0, 1, 0};
     /* two triangles with the midpoints of one or two sides, which the
      * neighbours there (of this level: they allow any midpoint) share */
@@ -536,7 +558,7 @@ static verdict judge(const rqt *q, rnode n)
     /* the fan with one or two midpoints asked for (6 or 8 triangles with
      * the neighbours' share, against 8 or more for a split) */
     unsigned need;
-    if (b.xm < b.x1 && b.ym < b.y1 && (need = fan_need(q, &b, &c, at(q, b.xm, b.ym))) != 0)
+    if (centred && (need = fan_need(q, &f)) != 0)
         return (verdict){1, 0, 1, (unsigned char)need};
     return no;
 }

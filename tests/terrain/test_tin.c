@@ -361,6 +361,14 @@ TEST(nodata_holes)
     tsr_heightfield_destroy(hf);
 }
 
+/* Whether a and b are the same mesh, byte for byte (vertices, triangles). */
+static bool same_mesh(const tsr_mesh *a, const tsr_mesh *b)
+{
+    return a->vertex_count == b->vertex_count && a->triangle_count == b->triangle_count &&
+           memcmp(a->positions, b->positions, 12 * (size_t)a->vertex_count) == 0 &&
+           memcmp(a->indices, b->indices, 12 * (size_t)a->triangle_count) == 0;
+}
+
 /* The quadtree's two kinds of leaf: its default (exact errors, leaves of
  * two or four triangles) and grid tiles over the LOD pyramid (tile_n).
  * Both hold the bound by the oracle, with and without no-data, and are
@@ -384,10 +392,7 @@ static uint32_t quadtree_case(const tsr_heightfield *hf, uint32_t tile_n, double
         tsr_mesh_init(&m3, 0, NULL);
         o.threads = 3;
         CHECK(tsr_terrain_mesh(hf, &o, &m3, NULL, &err) == TSR_OK);
-        CHECK_MSG(m3.vertex_count == m.vertex_count && m3.triangle_count == m.triangle_count &&
-                      memcmp(m3.positions, m.positions, 12 * (size_t)m.vertex_count) == 0 &&
-                      memcmp(m3.indices, m.indices, 12 * (size_t)m.triangle_count) == 0,
-                  "%s: 3 threads, not the mesh of one", what);
+        CHECK_MSG(same_mesh(&m3, &m), "%s: 3 threads, not the mesh of one", what);
         tsr_mesh_free(&m3);
     }
     tsr_mesh_free(&m);
@@ -640,10 +645,7 @@ static void blocks_case(const tsr_heightfield *hf, uint32_t block, double e, con
             ref = m;
             continue;
         }
-        CHECK_MSG(m.vertex_count == ref.vertex_count && m.triangle_count == ref.triangle_count &&
-                      memcmp(m.positions, ref.positions, 12 * (size_t)m.vertex_count) == 0 &&
-                      memcmp(m.indices, ref.indices, 12 * (size_t)m.triangle_count) == 0,
-                  "%s: not the mesh of one thread", w);
+        CHECK_MSG(same_mesh(&m, &ref), "%s: not the mesh of one thread", w);
         tsr_mesh_free(&m);
     }
     tsr_mesh_free(&ref);
