@@ -960,7 +960,15 @@ typedef struct pctx {
     uint64_t *evaluations;
     double *scratch; /* subd tile positions */
     double *uv;
+    uint32_t *idx;   /* subd: a tile's points in pts */
+    uint32_t *ij;    /* subd: a tile's lattice pairs */
     kidnets *kids;   /* per level, shared by all pieces (selected in turn) */
+    /* subd piece: every lattice point evaluated so far (a node's tile
+     * shares its points with its parent's, its siblings' and, for a leaf,
+     * with the mesh), so each is evaluated once per run */
+    tsr_keymap pmemo; /* lattice key (lkey's j, i) -> index in pts */
+    double *pts;      /* 3 per point */
+    uint32_t npts, cappts;
 } pctx;
 
 static void node_rect(const pctx *c, tsr_qnode n, double r[4])
@@ -1018,6 +1026,73 @@ static const double *node_net(pctx *c, tsr_qnode n)
     return k->h[n.level ? (n.x & 1) + 2 * (n.y & 1) : 0];
 }
 
+/* Lattice key of a subd piece's point (i, j) of its lattice (lkey's
+ * layout without the piece). */
+static inline uint64_t pkey(uint32_t i, uint32_t j) { return (uint64_t)j << 20 | i; }
+
+/* Points of a subd piece's lattice into P (3 each): from the piece's memo,
+ * the missing ones evaluated in one batch at (i / Z, j / Z) and kept.
+ * ij holds count lattice pairs. false when out of memory (nomem set) or
+ * when the evaluation fails. */
+static bool subd_points(pctx *c, const uint32_t *ij, uint32_t count, double *P)
+{
+    const piece *p = &c->m->pieces[c->piece];
+    double Z = (double)(c->N << c->surf.levels);
+    uint32_t miss = 0;
+    for (uint32_t k = 0; k < count; k++) {
+        bool found;
+        uint32_t *slot = tsr_keymap_slot(&c->pmemo, pkey(ij[2 * k], ij[2 * k + 1]), &found, c->alloc);
+        if (!slot) {
+            c->nomem = true;
+            return false;
+        }
+        if (!found) {
+            *slot = c->npts + miss;
+            c->uv[2 * miss] = ij[2 * k] / Z;
+            c->uv[2 * miss + 1] = ij[2 * k + 1] / Z;
+            miss++;
+        }
+        c->idx[k] = *slot;
+    }
+    if (miss) {
+        if (c->npts + miss > c->cappts) {
+            uint32_t cap = c->cappts ? 2 * c->cappts : 1024;
+            while (cap < c->npts + miss)
+                cap *= 2;
+            double *np = tsr_realloc(c->alloc, c->pts, (size_t)cap * 3 * sizeof *np);
+            if (!np) {
+                c->nomem = true;
+                return false;
+            }
+            c->pts = np;
+            c->cappts = cap;
+        }
+        if (tsr_subd_eval(c->m->subd, p->face, p->sub, c->uv, miss, c->pts + 3 * (size_t)c->npts, NULL, NULL) !=
+            TSR_OK) {
+            c->nomem = true; /* (only NOMEM can fail here: the piece's patch exists) */
+            return false;
+        }
+        c->npts += miss;
+        *c->evaluations += miss;
+    }
+    for (uint32_t k = 0; k < count; k++)
+        memcpy(P + 3 * k, c->pts + 3 * (size_t)c->idx[k], 3 * sizeof *P);
+    return true;
+}
+
+/* The (N + 1)^2 points of node n's tile of a subd piece into P. */
+static bool subd_tile(pctx *c, tsr_qnode n, double *P)
+{
+    uint32_t N = c->N, row = N + 1, sh = c->surf.levels - n.level;
+    uint32_t *ij = c->ij;
+    for (uint32_t j = 0; j <= N; j++)
+        for (uint32_t i = 0; i <= N; i++) {
+            ij[2 * (j * row + i)] = (n.x * N + i) << sh;
+            ij[2 * (j * row + i) + 1] = (n.y * N + j) << sh;
+        }
+    return subd_points(c, ij, row * row, P);
+}
+
 static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
 {
     const piece *p = &c->m->pieces[c->piece];
@@ -1067,13 +1142,8 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
     }
     /* subd: the tile's vertices, second differences, an estimate */
     uint32_t N = c->N, row = N + 1;
-    for (uint32_t j = 0; j <= N; j++)
-        for (uint32_t i = 0; i <= N; i++) {
-            c->uv[2 * (j * row + i)] = r[0] + (r[1] - r[0]) * i / N;
-            c->uv[2 * (j * row + i) + 1] = r[2] + (r[3] - r[2]) * j / N;
-        }
     double *P = c->scratch;
-    if (tsr_subd_eval(c->m->subd, p->face, p->sub, c->uv, row * row, P, NULL, NULL) != TSR_OK) {
+    if (!subd_tile(c, n, P)) {
         for (int k = 0; k < 3; k++) {
             out->d[k] = INFINITY;
             out->lo[k] = (float)p->lo[k];
@@ -1081,7 +1151,6 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
         }
         return;
     }
-    *c->evaluations += row * row;
     double a[3] = {0}, b[3] = {0}, cc[3] = {0}, lo[3] = {INFINITY, INFINITY, INFINITY},
            hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t j = 0; j <= N; j++)
@@ -1560,9 +1629,14 @@ static uint32_t vertex_of(builder *b, lpoint q, const double *pre)
             bez_point(&p->bez, s, t, pos);
         else if (p->kind == KIND_BEZIER)
             tsr_patch_eval(&p->bez, s, t, pos, NULL, NULL, want_n ? nr : NULL);
-        else
-            subd_point(b->m->subd, p->face, p->sub, s, t, pos, want_n ? nr : NULL);
-        b->out->evaluations++;
+        else if (!want_n) { /* from the piece's memo, or evaluated and kept there */
+            uint32_t ij[2] = {c.i, c.j};
+            if (!subd_points(&b->ctx[c.piece], ij, 1, pos))
+                return UINT32_MAX;
+        } else
+            subd_point(b->m->subd, p->face, p->sub, s, t, pos, nr);
+        if (p->kind == KIND_BEZIER || want_n)
+            b->out->evaluations++;
     }
     *slot = new_vertex(b, p, pos, want_n ? nr : NULL);
     return *slot;
@@ -1624,27 +1698,28 @@ static inline void bez_tile(const double *C, const double *W, int du, int dv, co
  * (3 per vertex, (N+1)^2): a tensor-product evaluation for a Bézier piece
  * (the Bernstein values of the tile's columns and rows, then per vertex
  * one (du+1)(dv+1) sum), one batched call for a subdivision face. */
-static bool tile_positions(builder *b, const piece *p, double r[4], uint32_t N, const uint8_t *used, double *P)
+static bool tile_positions(builder *b, uint32_t pi, tsr_qnode n, double r[4], uint32_t N, const uint8_t *used,
+                           double *P)
 {
+    const piece *p = &b->m->pieces[pi];
     uint32_t row = N + 1;
     if (p->kind == KIND_SUBD) {
-        uint32_t n = 0;
-        double *uv = b->tile_uv;
+        pctx *c = &b->ctx[pi];
+        uint32_t cnt = 0, sh = c->surf.levels - n.level, *ij = c->ij;
         for (uint32_t j = 0; j <= N; j++)
             for (uint32_t i = 0; i <= N; i++)
                 if (used[j * row + i]) {
-                    uv[2 * n] = r[0] + (r[1] - r[0]) * i / N;
-                    uv[2 * n + 1] = r[2] + (r[3] - r[2]) * j / N;
-                    n++;
+                    ij[2 * cnt] = (n.x * N + i) << sh;
+                    ij[2 * cnt + 1] = (n.y * N + j) << sh;
+                    cnt++;
                 }
-        if (tsr_subd_eval(b->m->subd, p->face, p->sub, uv, n, b->tile_tmp, NULL, NULL) != TSR_OK)
+        if (!subd_points(c, ij, cnt, b->tile_tmp))
             return false;
-        b->out->evaluations += n;
-        n = 0;
+        cnt = 0;
         for (uint32_t k = 0; k < row * row; k++)
             if (used[k]) {
-                memcpy(P + 3 * k, b->tile_tmp + 3 * n, 3 * sizeof *P);
-                n++;
+                memcpy(P + 3 * k, b->tile_tmp + 3 * cnt, 3 * sizeof *P);
+                cnt++;
             }
         return true;
     }
@@ -1839,7 +1914,7 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const patcache *pc, uint32
         const uint8_t *used = b->used + (size_t)mask * row * row;
         double r[4];
         node_rect(c, n, r);
-        bool pre = !b->opt->normals && tile_positions(b, p, r, N, used, b->tile_pos);
+        bool pre = !b->opt->normals && tile_positions(b, pi, n, r, N, used, b->tile_pos);
         double *vuv = b->vert_uv;
         for (uint32_t j = 0; j <= N; j++)
             for (uint32_t i = 0; i <= N; i++) {
@@ -2305,9 +2380,10 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
     uint32_t row = opt.tile_n + 1, maxN = 4 * opt.tile_n - 2;
     maxN = maxN < opt.tile_n ? opt.tile_n : maxN > TSR_TILE_MAX ? TSR_TILE_MAX : maxN;
     double *scratch = tsr_alloc(a, (size_t)row * row * 5 * sizeof *scratch);
+    uint32_t *iscratch = tsr_alloc(a, (size_t)row * row * 3 * sizeof *iscratch);
     kidnets *kids = tsr_alloc(a, ((size_t)opt.max_level + 1) * sizeof *kids);
     uint64_t evals = 0;
-    tsr_status st = ctx && scratch && kids ? TSR_OK : TSR_ERR_NOMEM;
+    tsr_status st = ctx && scratch && iscratch && kids ? TSR_OK : TSR_ERR_NOMEM;
     for (uint32_t l = 0; kids && l <= opt.max_level; l++)
         kids[l].key = 0, kids[l].piece = UINT32_MAX;
     if (ctx)
@@ -2324,6 +2400,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         c->tol = (opt.camera ? opt.camera->pixel_error : opt.max_error) * scale;
         c->scratch = scratch;
         c->uv = scratch + 3 * (size_t)row * row;
+        c->idx = iscratch;
+        c->ij = iscratch + (size_t)row * row;
         c->kids = kids;
         c->evaluations = &evals;
         c->alloc = a;
@@ -2513,6 +2591,8 @@ done:
     for (uint32_t p = 0; ctx && p < m->npieces; p++) {
         tsr_quadtree_destroy(ctx[p].qt);
         tsr_keymap_free(&ctx[p].memo, a);
+        tsr_keymap_free(&ctx[p].pmemo, a);
+        tsr_free(a, ctx[p].pts);
         tsr_free(a, ctx[p].nv);
         for (int e = 0; e < 4; e++) {
             tsr_free(a, ctx[p].act[e]);
@@ -2520,6 +2600,7 @@ done:
     }
     tsr_free(a, ctx);
     tsr_free(a, scratch);
+    tsr_free(a, iscratch);
     tsr_free(a, kids);
     out->seconds = now_s() - t_start;
     return st;

@@ -59,9 +59,10 @@
  *    sub-patch's control points (convex hull);
  *  - for a subd piece, an estimate: the same figures (interior, and
  *    stitched, checked the same way) with the second differences of the
- *    tile's vertices (evaluated by Bfr) per coordinate for h^2 M; bounds
- *    are the box of those vertices
- *    padded by twice the estimate, within the face's box
+ *    tile's vertices (evaluated by Bfr, each lattice point once per run:
+ *    parents, children, siblings and the mesh share them) per coordinate
+ *    for h^2 M; bounds are the box of those vertices padded by twice
+ *    the estimate, within the face's box
  *    (tsr_subd_face_bounds). Not a proof (on OpenSubdiv's 81 Catmull-
  *    Clark shapes it measures up to 1.7x beyond the tolerance on 8): the
  *    measurement (tsr_ptess_measure) is the arbiter, and `tessera patch`
@@ -186,7 +187,9 @@ typedef struct tsr_ptess_result {
     uint32_t leaves;        /* tiles over all pieces */
     uint32_t passes;        /* selection rounds: 1, and one more each time stitched tiles
                                beyond the bound split their coarse neighbours */
-    uint32_t evaluations;   /* surface points evaluated (vertices of the mesh and error estimates) */
+    uint32_t evaluations;   /* surface points evaluated (vertices of the mesh and error estimates;
+                               a subd piece's lattice point once per run, as the selection's
+                               tiles and the mesh share it) */
     uint32_t fan_triangles; /* triangles added by splitting border triangles at a linked
                                neighbour's samples (linked edges of different rates) */
     double bound;           /* a bound of delta over the leaves of Bézier pieces, model units:

@@ -2350,6 +2350,26 @@ static void run_cage(const char *dir, const cage_case *cc, double E)
         }
         free(scale);
         free(serr);
+        /* positions only: the vertices come from the points the selection
+         * evaluated (ptess.c keeps them per lattice point), so they must
+         * still be the surface's points at the corners' (u, v), and each
+         * lattice point is evaluated once: a vertex is one evaluation, and
+         * the selection's tiles add the points of the leaves the mesh
+         * stitches away (the uniform grid of the finest leaves bounds them:
+         * well under one more per vertex) */
+        tsr_ptess_options opt = {0};
+        opt.max_error = E;
+        tsr_ptess_result r;
+        if (run_ptess(m, &opt, &r)) {
+            sampling s = {subd_truth, &ctx, NULL, NULL, NULL, 4, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
+            sample_result(&r, &s);
+            double sl = fslack(mesh_maxabs(&r.mesh));
+            CHECK_MSG(s.corner_error <= sl + 1e-8 * size, "%s positions only: corner error %g", cc->file,
+                      s.corner_error);
+            CHECK_MSG(r.evaluations <= 1.5 * r.mesh.vertex_count, "%s positions only: %u evaluations for %u vertices",
+                      cc->file, r.evaluations, r.mesh.vertex_count);
+        }
+        tsr_ptess_result_free(&r);
     }
     tsr_pmodel_destroy(m);
     tsr_subd_destroy(subd);
