@@ -34,6 +34,7 @@
 #include "patches/subd.h"
 
 #include <cjson/cJSON.h>
+#include <malloc.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -78,6 +79,10 @@ static void help(FILE *f)
             "                    rates stop at 256)\n"
             "  --cameras N       cameras on the teapot's orbit (default 8)\n"
             "  --quick           the teapot and one cage, bounds 1e-2 and 1e-3, R = 1, 2 cameras\n"
+            "  --cold            leave the C library's memory settings alone, so that every run touches\n"
+            "                    fresh pages (default: freed memory is kept in the process, so the best of\n"
+            "                    R times the work, not the first touch of pages, which costs about 13 us a\n"
+            "                    page on the 2-core development VM)\n"
             "  --json FILE       also write the results as JSON\n"
             "  -h, --help        this help\n",
             PER_SIDE, PER_SIDE);
@@ -102,6 +107,9 @@ typedef struct model {
     tsr_cage bez_cage;
     tsr_subd *bez_subd; /* NULL when not built */
     uint32_t *bez_faces, bez_count;
+    bool bez_tried, bez_ok; /* bez_ready's answer, kept */
+    double bez_dev;
+    char bez_note[600];
 } model;
 
 static const char *base_name(const char *path)
@@ -604,9 +612,10 @@ typedef struct eval_rate {
 
 /* Points per second of the model's own evaluator on a G x G grid per
  * patch: tsr_subd_eval (one call per patch: Bfr prepares the face once)
- * for a cage, tsr_patch_eval for a patch set. Enough sweeps per run for
- * about a million points; best of repeat. */
-static eval_rate eval_rate_of(const model *m, uint32_t repeat)
+ * for a cage, tsr_patch_eval for a patch set; with bez_cage, Bfr on a
+ * patch set's Catmull-Clark cage (bez_prepare; not ok when it has none).
+ * Enough sweeps per run for about a million points; best of repeat. */
+static eval_rate eval_rate_of(const model *m, uint32_t repeat, bool bez_cage)
 {
     enum { G = 64 };
     eval_rate r = {0};
@@ -617,7 +626,12 @@ static eval_rate eval_rate_of(const model *m, uint32_t repeat)
     for (uint32_t j = 0, k = 0; j < G; j++)
         for (uint32_t i = 0; i < G; i++, k++)
             uv[2 * k] = (i + 0.5) / G, uv[2 * k + 1] = (j + 0.5) / G;
-    uint32_t units = m->is_set ? m->set.num_patches : m->patches;
+    /* bez_cage: Bfr on the patch set's Catmull-Clark cage, its middle faces */
+    bool set = m->is_set && !bez_cage;
+    const tsr_subd *subd = bez_cage ? m->bez_subd : m->subd;
+    uint32_t units = bez_cage ? m->bez_count : m->is_set ? m->set.num_patches : m->patches;
+    if (bez_cage && !subd)
+        goto done;
     if (!units)
         goto done;
     r.points = (uint64_t)units * G * G;
@@ -628,7 +642,7 @@ static eval_rate eval_rate_of(const model *m, uint32_t repeat)
         for (uint32_t rep = 0; rep < repeat; rep++) {
             double t0 = cli_now();
             for (uint32_t sw = 0; sw < sweeps; sw++) {
-                if (m->is_set) {
+                if (set) {
                     for (uint32_t p = 0; p < m->set.num_patches; p++) {
                         const tsr_patch *pa = &m->set.patches[p];
                         double dom[4];
@@ -640,11 +654,13 @@ static eval_rate eval_rate_of(const model *m, uint32_t repeat)
                         sink += pos[0];
                     }
                 } else {
-                    for (uint32_t f = 0; f < tsr_subd_face_count(m->subd); f++) {
-                        if (!tsr_subd_face_has_limit(m->subd, f))
+                    uint32_t nf = bez_cage ? m->bez_count : tsr_subd_face_count(subd);
+                    for (uint32_t k = 0; k < nf; k++) {
+                        uint32_t f = bez_cage ? m->bez_faces[k] : k;
+                        if (!tsr_subd_face_has_limit(subd, f))
                             continue;
-                        for (uint32_t s = 0; s < tsr_subd_face_patches(m->subd, f); s++) {
-                            if (tsr_subd_eval(m->subd, f, s, uv, G * G, pos, withd ? du : NULL, withd ? dv : NULL) !=
+                        for (uint32_t s = 0; s < tsr_subd_face_patches(subd, f); s++) {
+                            if (tsr_subd_eval(subd, f, s, uv, G * G, pos, withd ? du : NULL, withd ? dv : NULL) !=
                                 TSR_OK)
                                 goto done;
                             sink += pos[0];
@@ -892,6 +908,16 @@ static bool bez_prepare(model *m, double *deviation, char *note, size_t cap)
     return true;
 }
 
+/* bez_prepare once per model, its answer kept. */
+static bool bez_ready(model *m)
+{
+    if (!m->bez_tried) {
+        m->bez_tried = true;
+        m->bez_ok = bez_prepare(m, &m->bez_dev, m->bez_note, sizeof m->bez_note);
+    }
+    return m->bez_ok;
+}
+
 /* The search of Bfr's rate per camera: rates 1..n, each measured (its
  * equivalent mesh, bfr_equivalent) from every camera at once. */
 typedef struct bview_ctx {
@@ -966,6 +992,7 @@ typedef struct model_result {
     double bfr_err_of[MAX_ERRORS];
     bfr_rate bfr_at[MAX_ERRORS];
     eval_rate eval;
+    eval_rate bez_eval; /* a patch set: Bfr on its Catmull-Clark cage */
     bfr_rate fallback[5];  /* Bfr at rates 4..64 when there is no adaptive model */
     uint64_t bfr_max_tris; /* Bfr's triangles at the largest rate searched */
 } model_result;
@@ -991,7 +1018,7 @@ static cJSON *json_arow(const arow *r)
 int cli_bench_patch(int argc, char **argv)
 {
     uint32_t repeat = 3, tile = 0, max_rate = 256, ncam = 8;
-    bool quick = false, repeat_given = false, errors_given = false, cams_given = false;
+    bool quick = false, cold = false, repeat_given = false, errors_given = false, cams_given = false;
     const char *input = NULL, *json_path = NULL;
     double fr[MAX_ERRORS] = {1e-2, 3e-3, 1e-3, 3e-4, 1e-4};
     int nfr = 5;
@@ -1003,6 +1030,8 @@ int cli_bench_patch(int argc, char **argv)
             return CLI_OK;
         } else if (!strcmp(a, "--quick"))
             quick = true;
+        else if (!strcmp(a, "--cold"))
+            cold = true;
         else if (!strcmp(a, "--input") && more)
             input = argv[++i];
         else if (!strcmp(a, "--json") && more)
@@ -1071,10 +1100,17 @@ int cli_bench_patch(int argc, char **argv)
     for (int i = 0; i < argc; i++)
         if (strlen(cmdline) + strlen(argv[i]) + 2 < sizeof cmdline)
             strcat(strcat(cmdline, " "), argv[i]);
+    /* warm: blocks up to 32 MiB come from the heap and freed memory stays
+     * there (glibc frees big blocks to the kernel otherwise, and the next
+     * run faults every page in again) */
+    if (!cold)
+        cold = !mallopt(M_MMAP_THRESHOLD, 32 << 20) || !mallopt(M_TRIM_THRESHOLD, 1 << 30);
     printf("%s\n\nbest of %u; tile %u; bounds relative to each model's box diagonal; errors measured by "
            "tsr_ptess_measure (%u x %u samples per piece + every triangle edge midpoint; not timed); positions only "
-           "(no normals) on both sides\n",
-           cmdline, repeat, tile ? tile : 4, PER_SIDE, PER_SIDE);
+           "(no normals) on both sides; %s\n",
+           cmdline, repeat, tile ? tile : 4, PER_SIDE, PER_SIDE,
+           cold ? "cold memory (every run touches fresh pages)"
+                : "warm memory (freed memory kept in the process: repeats reuse touched pages)");
     fflush(stdout);
 
     int rc = CLI_OK;
@@ -1122,7 +1158,9 @@ int cli_bench_patch(int argc, char **argv)
             R->diag = mp->diag;
         }
         /* 3. the evaluation rate (needs only subd.h / patches.h) */
-        R->eval = eval_rate_of(mp, repeat);
+        R->eval = eval_rate_of(mp, repeat, false);
+        if (mp->is_set && mp->pm && bez_ready(mp))
+            R->bez_eval = eval_rate_of(mp, repeat, true);
         /* 1. the ladder */
         for (int k = 0; R->adaptive_ok && k < nfr; k++) {
             arow *r = &R->rows[k];
@@ -1203,6 +1241,7 @@ int cli_bench_patch(int argc, char **argv)
     cJSON *json = cJSON_CreateObject();
     cJSON_AddStringToObject(json, "command", cmdline);
     cJSON_AddNumberToObject(json, "repeat", repeat);
+    cJSON_AddBoolToObject(json, "warm_memory", !cold);
     cJSON_AddNumberToObject(json, "tile", tile ? tile : 4);
     cJSON_AddNumberToObject(json, "per_side", PER_SIDE);
     cJSON *jmodels = cJSON_AddArrayToObject(json, "models");
@@ -1320,6 +1359,17 @@ int cli_bench_patch(int argc, char **argv)
         cJSON_AddNumberToObject(je, "points_per_sweep", (double)R->eval.points);
         cJSON_AddNumberToObject(je, "positions_per_second", R->eval.positions);
         cJSON_AddNumberToObject(je, "with_derivatives_per_second", R->eval.derivatives);
+        if (R->bez_eval.ok) {
+            printf("| %s | Bfr (tsr_subd_eval) on its Catmull-Clark cage (table 4) | %u | %llu | %.2f | %.2f | %.2f | "
+                   "%.2f |\n",
+                   R->name, R->patches, (unsigned long long)R->bez_eval.points, R->bez_eval.positions / 1e6,
+                   R->bez_eval.derivatives / 1e6, best / 1e6, best / R->bez_eval.positions);
+            cJSON *jb = cJSON_AddObjectToObject(jm, "bfr_evaluation");
+            cJSON_AddStringToObject(jb, "evaluator", "tsr_subd_eval on tsr_subd_cage_from_bezier");
+            cJSON_AddNumberToObject(jb, "points_per_sweep", (double)R->bez_eval.points);
+            cJSON_AddNumberToObject(jb, "positions_per_second", R->bez_eval.positions);
+            cJSON_AddNumberToObject(jb, "with_derivatives_per_second", R->bez_eval.derivatives);
+        }
     }
 
     /* 4. the view-dependent teapot */
@@ -1341,8 +1391,9 @@ int cli_bench_patch(int argc, char **argv)
         rate_search s = {n, uni_idx_rate, uni_error, uni_known, &uc};
         /* Bfr: rates 1..max_rate on the Bézier cage */
         char bnote[600] = "";
-        double bdev = NAN;
-        bool bfr_ok = bez_prepare(m, &bdev, bnote, sizeof bnote);
+        bool bfr_ok = bez_ready(m);
+        double bdev = m->bez_dev;
+        snprintf(bnote, sizeof bnote, "%s", m->bez_note);
         double **berr = calloc(max_rate + 2, sizeof *berr);
         bool *bknown = calloc(max_rate + 2, 1);
         bfr_rate *btimed = calloc(max_rate + 2, sizeof *btimed);

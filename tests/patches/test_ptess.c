@@ -2354,9 +2354,9 @@ static void run_cage(const char *dir, const cage_case *cc, double E)
          * evaluated (ptess.c keeps them per lattice point), so they must
          * still be the surface's points at the corners' (u, v), and each
          * lattice point is evaluated once: a vertex is one evaluation, and
-         * the selection's tiles add the points of the leaves the mesh
-         * stitches away (the uniform grid of the finest leaves bounds them:
-         * well under one more per vertex) */
+         * the selection adds the points of the leaves the mesh stitches
+         * away and four cell centres per node (1.1 to 1.6 per vertex on
+         * these cages; evaluating each node's tile afresh made 3.5-3.7) */
         tsr_ptess_options opt = {0};
         opt.max_error = E;
         tsr_ptess_result r;
@@ -2366,7 +2366,7 @@ static void run_cage(const char *dir, const cage_case *cc, double E)
             double sl = fslack(mesh_maxabs(&r.mesh));
             CHECK_MSG(s.corner_error <= sl + 1e-8 * size, "%s positions only: corner error %g", cc->file,
                       s.corner_error);
-            CHECK_MSG(r.evaluations <= 1.5 * r.mesh.vertex_count, "%s positions only: %u evaluations for %u vertices",
+            CHECK_MSG(r.evaluations <= 2 * r.mesh.vertex_count, "%s positions only: %u evaluations for %u vertices",
                       cc->file, r.evaluations, r.mesh.vertex_count);
         }
         tsr_ptess_result_free(&r);
@@ -2400,9 +2400,60 @@ TEST(data_osd_cages)
             run_cage(dir, &cases[k], E);
 }
 
+/* The subd estimate at face corners: on these cages, at these tolerances
+ * (fractions of the box diagonal), the second differences alone left the
+ * first round's measured error at 1.8 and 3.2 times the tolerance, near an
+ * extraordinary, creased cube corner; with the corner cells' centres
+ * (ptess.h) the first round holds. A regression check of an estimate on
+ * real data, measured by tsr_ptess_measure. */
+TEST(data_osd_corner_estimate)
+{
+    const char *data = check_data_dir();
+    if (!data)
+        SKIP("no data folder");
+    static const struct {
+        const char *file;
+        double frac;
+    } cases[] = {{"catmark_cube_creases1.obj", 3e-3}, {"catmark_cubes_semisharp.obj", 1e-3}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        char path[5200];
+        snprintf(path, sizeof path, "%.4096s/patches/osd/%s", data, cases[k].file);
+        tsr_cage cage;
+        tsr_error e = {0};
+        if (tsr_cage_load(path, NULL, &cage, &e) != TSR_OK)
+            SKIP("%s", e.message);
+        tsr_subd *subd = NULL;
+        tsr_pmodel *m = NULL;
+        CHECK(tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, &subd, &e) == TSR_OK);
+        tsr_cage_free(&cage);
+        if (subd)
+            CHECK(tsr_pmodel_from_subd(subd, NULL, &m, &e) == TSR_OK);
+        if (m) {
+            tsr_pmodel_info info;
+            tsr_pmodel_get_info(m, &info);
+            tsr_ptess_options opt = {0};
+            opt.max_error = cases[k].frac * dist3(info.lo, info.hi);
+            tsr_ptess_result r;
+            if (run_ptess(m, &opt, &r)) {
+                tsr_ptess_measure_result mr;
+                memset(&mr, 0, sizeof mr);
+                CHECK(tsr_ptess_measure(m, &r, 32, NULL, false, NULL, &mr) == TSR_OK);
+                fprintf(stderr, "  %s at %g of the diagonal: %u triangles, measured %.3g of the tolerance\n",
+                        cases[k].file, cases[k].frac, r.mesh.triangle_count, mr.max_error / opt.max_error);
+                CHECK_MSG(mr.max_error <= opt.max_error, "%s: measured %g > tolerance %g at source %u (%g, %g)",
+                          cases[k].file, mr.max_error, opt.max_error, mr.worst_source, mr.worst_uv[0], mr.worst_uv[1]);
+                CHECK(mr.uncovered == 0);
+            }
+            tsr_ptess_result_free(&r);
+        }
+        tsr_pmodel_destroy(m);
+        tsr_subd_destroy(subd);
+    }
+}
+
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
           T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform),
-          T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area),
+          T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(data_osd_corner_estimate),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
