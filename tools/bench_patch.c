@@ -13,7 +13,8 @@
  *     triangles (Bfr's ring pattern of diagonals, bfr_diagonal), checked
  *     against Bfr's own mesh triangle by triangle (centroids must match).
  *  3. Bfr's limit evaluation rate (tsr_subd_eval on a dense grid per patch,
- *     positions alone and with derivatives): the throughput baseline.
+ *     positions alone and with derivatives): the throughput baseline; for
+ *     a patch set, its own evaluator's and Bfr's on the cage of 4.
  *  4. View-dependent tessellation of the teapot from cameras on an orbit,
  *     against two uniform tessellations, each at the smallest rate whose
  *     measured pixel error is at most the adaptive one's:
@@ -58,7 +59,8 @@ static void help(FILE *f)
             "  2. for subdivision cages, Bfr's uniform tessellation at the smallest rate whose measured error\n"
             "     is at most the adaptive one (measured on an equivalent mesh with Bfr's points and triangles,\n"
             "     checked against Bfr's mesh): triangles and time, and the ratios adaptive / Bfr;\n"
-            "  3. Bfr's limit evaluation rate (tsr_subd_eval on a dense grid per patch): points per second;\n"
+            "  3. Bfr's limit evaluation rate (tsr_subd_eval on a dense grid per patch; for the teapot also\n"
+            "     on its Catmull-Clark cage of 4): points per second;\n"
             "  4. the teapot seen from cameras on an orbit (1920 x 1080, 60 deg, 1 px): view-dependent\n"
             "     tessellation against uniform ones reaching the same measured pixel error: our own\n"
             "     (tsr_ptess_run, one tile per piece; a stand-in) and Bfr's, on the Catmull-Clark cage whose\n"
