@@ -1093,6 +1093,17 @@ static bool subd_tile(pctx *c, tsr_qnode n, double *P)
     return subd_points(c, ij, row * row, P);
 }
 
+/* A node whose points could not be had (out of memory): split it, in the
+ * piece's box. */
+static void node_unknown(const piece *p, nodeval *out)
+{
+    for (int k = 0; k < 3; k++) {
+        out->d[k] = INFINITY;
+        out->lo[k] = (float)p->lo[k];
+        out->hi[k] = (float)p->hi[k];
+    }
+}
+
 static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
 {
     const piece *p = &c->m->pieces[c->piece];
@@ -1144,11 +1155,7 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
     uint32_t N = c->N, row = N + 1;
     double *P = c->scratch;
     if (!subd_tile(c, n, P)) {
-        for (int k = 0; k < 3; k++) {
-            out->d[k] = INFINITY;
-            out->lo[k] = (float)p->lo[k];
-            out->hi[k] = (float)p->hi[k];
-        }
+        node_unknown(p, out);
         return;
     }
     double a[3] = {0}, b[3] = {0}, cc[3] = {0}, lo[3] = {INFINITY, INFINITY, INFINITY},
@@ -1195,11 +1202,7 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
             ij[2 * k + 1] = (2 * (n.y * N + j) + 1) << (sh - 1);
         }
         if (!subd_points(c, ij, 4, C)) {
-            for (int k = 0; k < 3; k++) {
-                out->d[k] = INFINITY;
-                out->lo[k] = (float)p->lo[k];
-                out->hi[k] = (float)p->hi[k];
-            }
+            node_unknown(p, out);
             return;
         }
         double worst = 0;
@@ -1605,7 +1608,6 @@ typedef struct builder {
     uint32_t tri_cap;
     uint8_t *used; /* per stitch mask, per tile vertex: used by the pattern */
     double *tile_pos; /* 3 (N+1)^2 */
-    double *tile_uv;  /* 2 (N+1)^2 */
     double *tile_tmp; /* 3 (N+1)^2, and 2 (N+1) (MAX_DEGREE+1) Bernstein values */
     double *vert_uv;  /* 2 (N+1)^2: the source's (u, v) of the tile's vertices */
     struct fpoint *fp; /* a neighbour's samples on a border segment (edge_foreign) */
@@ -2506,7 +2508,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         collect_spans(&ctx[p]);
     tsr_free(a, dirty);
     /* assemble */
-    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL, NULL, NULL, 0, 0, NULL, 0, NULL};
+    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL, NULL, 0, 0, NULL, 0, NULL};
     /* the tile patterns of every tile size in use, and which of a tile's
      * vertices each uses */
     const patcache *pats[NPAT] = {NULL};
@@ -2517,11 +2519,10 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
     if (st == TSR_OK) {
         local = tsr_alloc(a, (size_t)mrow * mrow * sizeof *local);
         b.tile_pos = tsr_alloc(a, (size_t)3 * mrow * mrow * sizeof(double));
-        b.tile_uv = tsr_alloc(a, (size_t)2 * mrow * mrow * sizeof(double));
         b.tile_tmp = tsr_alloc(a, ((size_t)3 * mrow * mrow + 2 * (size_t)mrow * (TSR_PATCH_MAX_DEGREE + 1)) * sizeof(double));
         b.vert_uv = tsr_alloc(a, (size_t)2 * mrow * mrow * sizeof(double));
         b.onmask = tsr_alloc(a, (size_t)mrow * mrow);
-        if (!local || !b.tile_pos || !b.tile_uv || !b.tile_tmp || !b.vert_uv || !b.onmask)
+        if (!local || !b.tile_pos || !b.tile_tmp || !b.vert_uv || !b.onmask)
             st = TSR_ERR_NOMEM;
     }
     /* room for everything at once: triangles exactly (but fans), vertices at most */
@@ -2623,7 +2624,6 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
 done:
     tsr_free(a, local);
     tsr_free(a, b.tile_pos);
-    tsr_free(a, b.tile_uv);
     tsr_free(a, b.tile_tmp);
     tsr_free(a, b.vert_uv);
     tsr_free(a, b.fp);

@@ -999,6 +999,16 @@ typedef struct model_result {
     uint64_t bfr_max_tris; /* Bfr's triangles at the largest rate searched */
 } model_result;
 
+/* An evaluation rate as member `key` of parent. */
+static void json_eval(cJSON *parent, const char *key, const char *evaluator, const eval_rate *r)
+{
+    cJSON *j = cJSON_AddObjectToObject(parent, key);
+    cJSON_AddStringToObject(j, "evaluator", evaluator);
+    cJSON_AddNumberToObject(j, "points_per_sweep", (double)r->points);
+    cJSON_AddNumberToObject(j, "positions_per_second", r->positions);
+    cJSON_AddNumberToObject(j, "with_derivatives_per_second", r->derivatives);
+}
+
 static cJSON *json_arow(const arow *r)
 {
     cJSON *j = cJSON_CreateObject();
@@ -1356,21 +1366,13 @@ int cli_bench_patch(int argc, char **argv)
                R->is_set ? "tsr_patch_eval" : "Bfr (tsr_subd_eval)", R->patches, (unsigned long long)R->eval.points,
                R->eval.positions / 1e6, R->eval.derivatives / 1e6, best / 1e6, best / R->eval.positions);
         cJSON *jm = cJSON_GetArrayItem(jmodels, p);
-        cJSON *je = cJSON_AddObjectToObject(jm, "evaluation");
-        cJSON_AddStringToObject(je, "evaluator", R->is_set ? "tsr_patch_eval" : "tsr_subd_eval");
-        cJSON_AddNumberToObject(je, "points_per_sweep", (double)R->eval.points);
-        cJSON_AddNumberToObject(je, "positions_per_second", R->eval.positions);
-        cJSON_AddNumberToObject(je, "with_derivatives_per_second", R->eval.derivatives);
+        json_eval(jm, "evaluation", R->is_set ? "tsr_patch_eval" : "tsr_subd_eval", &R->eval);
         if (R->bez_eval.ok) {
             printf("| %s | Bfr (tsr_subd_eval) on its Catmull-Clark cage (table 4) | %u | %llu | %.2f | %.2f | %.2f | "
                    "%.2f |\n",
                    R->name, R->patches, (unsigned long long)R->bez_eval.points, R->bez_eval.positions / 1e6,
                    R->bez_eval.derivatives / 1e6, best / 1e6, best / R->bez_eval.positions);
-            cJSON *jb = cJSON_AddObjectToObject(jm, "bfr_evaluation");
-            cJSON_AddStringToObject(jb, "evaluator", "tsr_subd_eval on tsr_subd_cage_from_bezier");
-            cJSON_AddNumberToObject(jb, "points_per_sweep", (double)R->bez_eval.points);
-            cJSON_AddNumberToObject(jb, "positions_per_second", R->bez_eval.positions);
-            cJSON_AddNumberToObject(jb, "with_derivatives_per_second", R->bez_eval.derivatives);
+            json_eval(jm, "bfr_evaluation", "tsr_subd_eval on tsr_subd_cage_from_bezier", &R->bez_eval);
         }
     }
 

@@ -2242,26 +2242,36 @@ typedef struct cage_case {
     int euler;     /* when not closed and manifold: the expected Euler characteristic, 99 unchecked */
 } cage_case;
 
+/* The Catmull-Clark model of the cage at path (named name in messages):
+ * *subd and the model, both NULL after a failed CHECK; the caller
+ * destroys both. */
+static tsr_pmodel *cage_model(const char *path, const char *name, tsr_subd **subd)
+{
+    tsr_cage cage;
+    tsr_error e = {0};
+    *subd = NULL;
+    if (tsr_cage_load(path, NULL, &cage, &e) != TSR_OK) {
+        CHECK_MSG(false, "%s", e.message);
+        return NULL;
+    }
+    tsr_status st = tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, subd, &e);
+    tsr_cage_free(&cage);
+    CHECK_MSG(st == TSR_OK, "%s: %s", name, e.message);
+    if (st != TSR_OK)
+        return NULL;
+    tsr_pmodel *m = NULL;
+    st = tsr_pmodel_from_subd(*subd, NULL, &m, &e);
+    CHECK_MSG(st == TSR_OK && m, "%s: tsr_pmodel_from_subd: %s (%s)", name, tsr_status_str(st), e.message);
+    return st == TSR_OK ? m : NULL;
+}
+
 static void run_cage(const char *dir, const cage_case *cc, double E)
 {
     char path[5200];
     snprintf(path, sizeof path, "%.4096s/%.1000s", dir, cc->file);
-    tsr_cage cage;
-    tsr_error e = {0};
-    if (tsr_cage_load(path, NULL, &cage, &e) != TSR_OK) {
-        CHECK_MSG(false, "%s", e.message);
-        return;
-    }
-    tsr_subd *subd = NULL;
-    tsr_status st = tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, &subd, &e);
-    tsr_cage_free(&cage);
-    CHECK_MSG(st == TSR_OK, "%s: %s", cc->file, e.message);
-    if (st != TSR_OK)
-        return;
-    tsr_pmodel *m = NULL;
-    st = tsr_pmodel_from_subd(subd, NULL, &m, &e);
-    CHECK_MSG(st == TSR_OK && m, "%s: tsr_pmodel_from_subd: %s (%s)", cc->file, tsr_status_str(st), e.message);
-    if (st == TSR_OK && m) {
+    tsr_subd *subd;
+    tsr_pmodel *m = cage_model(path, cc->file, &subd);
+    if (m) {
         tsr_pmodel_info info;
         tsr_pmodel_get_info(m, &info);
         uint32_t want_sources = 0;
@@ -2418,16 +2428,8 @@ TEST(data_osd_corner_estimate)
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         char path[5200];
         snprintf(path, sizeof path, "%.4096s/patches/osd/%s", data, cases[k].file);
-        tsr_cage cage;
-        tsr_error e = {0};
-        if (tsr_cage_load(path, NULL, &cage, &e) != TSR_OK)
-            SKIP("%s", e.message);
-        tsr_subd *subd = NULL;
-        tsr_pmodel *m = NULL;
-        CHECK(tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, &subd, &e) == TSR_OK);
-        tsr_cage_free(&cage);
-        if (subd)
-            CHECK(tsr_pmodel_from_subd(subd, NULL, &m, &e) == TSR_OK);
+        tsr_subd *subd;
+        tsr_pmodel *m = cage_model(path, cases[k].file, &subd);
         if (m) {
             tsr_pmodel_info info;
             tsr_pmodel_get_info(m, &info);
