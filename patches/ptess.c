@@ -928,6 +928,8 @@ typedef struct nodeval {
                       tsr_camera_box_factor, rounded up); else 1 */
     uint8_t force; /* split it: a finer neighbour's stitched tile needs it */
     uint8_t level;
+    uint32_t tile; /* subd: its tile's (N + 1)^2 points are pts[tidx[tile (N + 1)^2 + k]];
+                      UINT32_MAX: not kept (Bézier, or out of memory) */
 } nodeval;
 
 /* The nets of the four children of one node (level l - 1) of one piece,
@@ -960,15 +962,21 @@ typedef struct pctx {
     uint64_t *evaluations;
     double *scratch; /* subd tile positions */
     double *uv;
-    uint32_t *idx;   /* subd: a tile's points in pts */
+    uint32_t *idx;   /* subd: subd_points' points in pts */
     uint32_t *ij;    /* subd: a tile's lattice pairs */
+    uint32_t *tix;   /* subd: a tile's points in pts (subd_tile), and 4 more */
+    uint32_t *tat;   /* subd: where in the tile subd_tile's lookups go */
     kidnets *kids;   /* per level, shared by all pieces (selected in turn) */
     /* subd piece: every lattice point evaluated so far (a node's tile
      * shares its points with its parent's, its siblings' and, for a leaf,
      * with the mesh), so each is evaluated once per run */
     tsr_keymap pmemo; /* lattice key (lkey's j, i) -> index in pts */
     double *pts;      /* 3 per point */
+    uint32_t *vid;    /* per point: its mesh vertex (emission), UINT32_MAX before */
     uint32_t npts, cappts;
+    uint32_t *tidx;   /* per node computed: its tile's points (indices in pts), so
+                         emission reads a leaf's points without looking them up */
+    uint32_t ntidx, captidx; /* in tiles */
 } pctx;
 
 static void node_rect(const pctx *c, tsr_qnode n, double r[4])
@@ -1030,10 +1038,31 @@ static const double *node_net(pctx *c, tsr_qnode n)
  * layout without the piece). */
 static inline uint64_t pkey(uint32_t i, uint32_t j) { return (uint64_t)j << 20 | i; }
 
+/* Room in a subd piece's memo for extra more points. */
+static bool memo_room(pctx *c, uint32_t extra)
+{
+    if (c->npts + extra <= c->cappts)
+        return true;
+    uint32_t cap = c->cappts ? 2 * c->cappts : 1024;
+    while (cap < c->npts + extra)
+        cap *= 2;
+    double *np = tsr_realloc(c->alloc, c->pts, (size_t)cap * 3 * sizeof *np);
+    if (!np)
+        return false;
+    c->pts = np;
+    uint32_t *nv = tsr_realloc(c->alloc, c->vid, (size_t)cap * sizeof *nv);
+    if (!nv)
+        return false;
+    c->vid = nv;
+    c->cappts = cap;
+    return true;
+}
+
 /* Points of a subd piece's lattice into P (3 each): from the piece's memo,
  * the missing ones evaluated in one batch at (i / Z, j / Z) and kept.
- * ij holds count lattice pairs. false when out of memory (nomem set) or
- * when the evaluation fails. */
+ * ij holds count lattice pairs; their indices in pts into c->idx. P NULL:
+ * the indices only. false when out of memory (nomem set) or when the
+ * evaluation fails. */
 static bool subd_points(pctx *c, const uint32_t *ij, uint32_t count, double *P)
 {
     const piece *p = &c->m->pieces[c->piece];
@@ -1055,46 +1084,73 @@ static bool subd_points(pctx *c, const uint32_t *ij, uint32_t count, double *P)
         c->idx[k] = *slot;
     }
     if (miss) {
-        if (c->npts + miss > c->cappts) {
-            uint32_t cap = c->cappts ? 2 * c->cappts : 1024;
-            while (cap < c->npts + miss)
-                cap *= 2;
-            double *np = tsr_realloc(c->alloc, c->pts, (size_t)cap * 3 * sizeof *np);
-            if (!np) {
-                c->nomem = true;
-                return false;
-            }
-            c->pts = np;
-            c->cappts = cap;
+        if (!memo_room(c, miss)) {
+            c->nomem = true;
+            return false;
         }
         if (tsr_subd_eval(c->m->subd, p->face, p->sub, c->uv, miss, c->pts + 3 * (size_t)c->npts, NULL, NULL) !=
             TSR_OK) {
             c->nomem = true; /* (only NOMEM can fail here: the piece's patch exists) */
             return false;
         }
+        for (uint32_t k = 0; k < miss; k++)
+            c->vid[c->npts + k] = UINT32_MAX;
         c->npts += miss;
         *c->evaluations += miss;
     }
-    for (uint32_t k = 0; k < count; k++)
+    for (uint32_t k = 0; P && k < count; k++)
         memcpy(P + 3 * k, c->pts + 3 * (size_t)c->idx[k], 3 * sizeof *P);
     return true;
 }
 
-/* The (N + 1)^2 points of node n's tile of a subd piece into P. */
+/* Indices kept per subd node (nodeval.tile): its tile's (N + 1)^2 points,
+ * then the centres of its four corner cells (node_compute; UINT32_MAX
+ * until found). */
+static inline size_t tile_stride(const pctx *c) { return (size_t)(c->N + 1) * (c->N + 1) + 4; }
+
+/* The (N + 1)^2 points of node n's tile of a subd piece into P, their
+ * indices in pts into c->tix. A child's even points are its parent's tile
+ * points, and the point next to its corner of the parent the centre of the
+ * parent's corner cell: taken from the parent's kept indices, so only the
+ * others are looked up (15 of 25 at N = 4). */
 static bool subd_tile(pctx *c, tsr_qnode n, double *P)
 {
     uint32_t N = c->N, row = N + 1, sh = c->surf.levels - n.level;
-    uint32_t *ij = c->ij;
+    uint32_t *ij = c->ij, *tix = c->tix, *at = c->tat, cnt = 0;
+    const uint32_t *up = NULL;
+    if (n.level > 0) {
+        tsr_qnode pn = {n.x >> 1, n.y >> 1, (uint8_t)(n.level - 1)};
+        const uint32_t *slot = tsr_keymap_find(&c->memo, tsr_qnode_key(pn));
+        if (slot && c->nv[*slot].tile != UINT32_MAX)
+            up = c->tidx + (size_t)c->nv[*slot].tile * tile_stride(c);
+    }
+    uint32_t cx = n.x & 1, cy = n.y & 1, ox = cx * N / 2, oy = cy * N / 2;
+    uint32_t ci = cx ? N - 1 : 1, cj = cy ? N - 1 : 1; /* the parent's corner-cell centre */
     for (uint32_t j = 0; j <= N; j++)
         for (uint32_t i = 0; i <= N; i++) {
-            ij[2 * (j * row + i)] = (n.x * N + i) << sh;
-            ij[2 * (j * row + i) + 1] = (n.y * N + j) << sh;
+            uint32_t k = j * row + i, known = UINT32_MAX;
+            if (up && !(i & 1) && !(j & 1))
+                known = up[(oy + j / 2) * row + ox + i / 2];
+            else if (up && i == ci && j == cj)
+                known = up[row * row + cx + 2 * cy];
+            tix[k] = known;
+            if (known == UINT32_MAX) {
+                ij[2 * cnt] = (n.x * N + i) << sh;
+                ij[2 * cnt + 1] = (n.y * N + j) << sh;
+                at[cnt++] = k;
+            }
         }
-    return subd_points(c, ij, row * row, P);
+    if (cnt && !subd_points(c, ij, cnt, NULL))
+        return false;
+    for (uint32_t k = 0; k < cnt; k++)
+        tix[at[k]] = c->idx[k];
+    for (uint32_t k = 0; k < row * row; k++)
+        memcpy(P + 3 * k, c->pts + 3 * (size_t)tix[k], 3 * sizeof *P);
+    return true;
 }
 
-/* A node whose points could not be had (out of memory): split it, in the
- * piece's box. */
+/* A node whose points could not be had (out of memory; refine then stops
+ * and the run fails): an unknown error, the piece's box. */
 static void node_unknown(const piece *p, nodeval *out)
 {
     for (int k = 0; k < 3; k++) {
@@ -1104,12 +1160,33 @@ static void node_unknown(const piece *p, nodeval *out)
     }
 }
 
+/* Keeps the indices of the tile subd_tile just read (c->tix) for node
+ * value v, its corner-cell centres unknown; without memory v keeps none
+ * (its children and the emission look them up). */
+static void keep_tile(pctx *c, nodeval *v)
+{
+    size_t rr = (size_t)(c->N + 1) * (c->N + 1), st = tile_stride(c);
+    if (c->ntidx == c->captidx) {
+        uint32_t cap = c->captidx ? 2 * c->captidx : 64;
+        uint32_t *nt = tsr_realloc(c->alloc, c->tidx, cap * st * sizeof *nt);
+        if (!nt)
+            return;
+        c->tidx = nt;
+        c->captidx = cap;
+    }
+    uint32_t *t = c->tidx + c->ntidx * st;
+    memcpy(t, c->tix, rr * sizeof *t);
+    t[rr] = t[rr + 1] = t[rr + 2] = t[rr + 3] = UINT32_MAX;
+    v->tile = c->ntidx++;
+}
+
 static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
 {
     const piece *p = &c->m->pieces[c->piece];
     double r[4], d[3];
     node_rect(c, n, r);
     memset(out, 0, sizeof *out);
+    out->tile = UINT32_MAX;
     if (p->kind == KIND_BEZIER) {
         double ctrl[3 * TSR_BEZIER_MAX_POINTS], w[TSR_BEZIER_MAX_POINTS];
         tsr_patch sub = p->bez;
@@ -1158,6 +1235,7 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
         node_unknown(p, out);
         return;
     }
+    keep_tile(c, out);
     double a[3] = {0}, b[3] = {0}, cc[3] = {0}, lo[3] = {INFINITY, INFINITY, INFINITY},
            hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t j = 0; j <= N; j++)
@@ -1205,6 +1283,8 @@ static void node_compute(pctx *c, tsr_qnode n, nodeval *out)
             node_unknown(p, out);
             return;
         }
+        if (out->tile != UINT32_MAX)
+            memcpy(c->tidx + out->tile * tile_stride(c) + (size_t)row * row, c->idx, 4 * sizeof *c->idx);
         double worst = 0;
         for (int k = 0; k < 4; k++) {
             uint32_t i = corner[k][0] * (N - 1), j = corner[k][1] * (N - 1);
@@ -1348,6 +1428,9 @@ static bool refine(void *user, const tsr_surface *s, tsr_qnode n)
     pctx *c = user;
     (void)s;
     const nodeval *v = node_info(c, n);
+    if (c->nomem)
+        return false; /* the run fails: refining on (a node without its points
+                         reads as infinitely far off) would only take time */
     return v->force || node_measure(c, v, node_d(c, v, 0)) > c->tol;
 }
 
@@ -1610,6 +1693,7 @@ typedef struct builder {
     double *tile_pos; /* 3 (N+1)^2 */
     double *tile_tmp; /* 3 (N+1)^2, and 2 (N+1) (MAX_DEGREE+1) Bernstein values */
     double *vert_uv;  /* 2 (N+1)^2: the source's (u, v) of the tile's vertices */
+    uint32_t *tile_idx; /* (N+1)^2: a subd tile's points in its piece's memo */
     struct fpoint *fp; /* a neighbour's samples on a border segment (edge_foreign) */
     uint32_t nfp, capfp;
     struct pvert *pv;  /* their vertices */
@@ -1647,12 +1731,77 @@ static void bez_point(const tsr_patch *p, double s, double t, double pos[3])
         pos[c] = p->weights ? h[c] / h[3] : h[c];
 }
 
+/* Mesh vertex of lattice point q of a subd piece, qi its index in the
+ * piece's memo (UINT32_MAX: not known): as vertex_of, kept with the
+ * canonical point's memo entry (vid) instead of in the builder's map, so
+ * a point inside a piece costs no lookup. The position: pre, else the
+ * canonical point's from the memo (evaluated when missing); with normals
+ * evaluated there with its normal. */
+static uint32_t subd_vertex(builder *b, lpoint q, uint32_t qi, const double *pre)
+{
+    uint32_t Zq = lattice_size(b->ctx, q.piece);
+    if (qi != UINT32_MAX && q.i > 0 && q.j > 0 && q.i < Zq && q.j < Zq) {
+        /* inside its piece: its own canonical point, vertex made or kept */
+        pctx *c = &b->ctx[q.piece];
+        if (c->vid[qi] == UINT32_MAX && pre && !b->opt->normals)
+            c->vid[qi] = new_vertex(b, &b->m->pieces[q.piece], pre, NULL);
+        if (c->vid[qi] != UINT32_MAX)
+            return c->vid[qi];
+    }
+    lpoint cq;
+    if (!canonical(b->m, b->ctx, q, &b->cb, b->a, &cq))
+        return UINT32_MAX;
+    pctx *c = &b->ctx[cq.piece];
+    const piece *p = &b->m->pieces[cq.piece];
+    bool want_n = b->opt->normals, evaluated = false;
+    double pos[3], nr[3] = {0, 0, 1};
+    uint32_t ci = qi;
+    if (ci == UINT32_MAX || cq.piece != q.piece || cq.i != q.i || cq.j != q.j) {
+        if (!pre && !want_n) { /* the canonical point's position, from the memo or evaluated */
+            uint32_t ij[2] = {cq.i, cq.j};
+            if (!subd_points(c, ij, 1, pos))
+                return UINT32_MAX;
+            ci = c->idx[0];
+        } else {
+            bool found;
+            uint32_t *slot = memo_room(c, 1) ? tsr_keymap_slot(&c->pmemo, pkey(cq.i, cq.j), &found, b->a) : NULL;
+            if (!slot)
+                return UINT32_MAX;
+            if (!found) { /* not read by its piece's selection: kept at pre, or evaluated */
+                if (want_n) {
+                    uint32_t Z = lattice_size(b->ctx, cq.piece);
+                    subd_point(b->m->subd, p->face, p->sub, (double)cq.i / Z, (double)cq.j / Z, pos, nr);
+                    b->out->evaluations++;
+                    evaluated = true;
+                }
+                memcpy(c->pts + 3 * (size_t)c->npts, want_n ? pos : pre, 3 * sizeof *pos);
+                c->vid[c->npts] = UINT32_MAX;
+                *slot = c->npts++;
+            }
+            ci = *slot;
+        }
+    }
+    if (c->vid[ci] != UINT32_MAX)
+        return c->vid[ci];
+    if (want_n && !evaluated) {
+        uint32_t Z = lattice_size(b->ctx, cq.piece);
+        subd_point(b->m->subd, p->face, p->sub, (double)cq.i / Z, (double)cq.j / Z, pos, nr);
+        b->out->evaluations++;
+    } else if (!want_n) {
+        memcpy(pos, pre ? pre : c->pts + 3 * (size_t)ci, sizeof pos);
+    }
+    c->vid[ci] = new_vertex(b, p, pos, want_n ? nr : NULL);
+    return c->vid[ci];
+}
+
 /* Mesh vertex of lattice point q: made once, for its canonical point, at
  * pre when not NULL (q's own position: the points a link or collapsed edge
  * makes equal differ by rounding only), else evaluated at the canonical
- * point. */
-static uint32_t vertex_of(builder *b, lpoint q, const double *pre)
+ * point. qi: for a subd piece, q's index in its memo, or UINT32_MAX. */
+static uint32_t vertex_of(builder *b, lpoint q, const double *pre, uint32_t qi)
 {
+    if (b->m->pieces[q.piece].kind == KIND_SUBD)
+        return subd_vertex(b, q, qi, pre);
     lpoint c;
     if (!canonical(b->m, b->ctx, q, &b->cb, b->a, &c))
         return UINT32_MAX;
@@ -1670,18 +1819,11 @@ static uint32_t vertex_of(builder *b, lpoint q, const double *pre)
     } else {
         uint32_t Z = lattice_size(b->ctx, c.piece);
         double s = (double)c.i / Z, t = (double)c.j / Z;
-        if (p->kind == KIND_BEZIER && !want_n)
+        if (!want_n) /* a Bézier piece: subd pieces are subd_vertex's */
             bez_point(&p->bez, s, t, pos);
-        else if (p->kind == KIND_BEZIER)
-            tsr_patch_eval(&p->bez, s, t, pos, NULL, NULL, want_n ? nr : NULL);
-        else if (!want_n) { /* from the piece's memo, or evaluated and kept there */
-            uint32_t ij[2] = {c.i, c.j};
-            if (!subd_points(&b->ctx[c.piece], ij, 1, pos))
-                return UINT32_MAX;
-        } else
-            subd_point(b->m->subd, p->face, p->sub, s, t, pos, nr);
-        if (p->kind == KIND_BEZIER || want_n)
-            b->out->evaluations++;
+        else
+            tsr_patch_eval(&p->bez, s, t, pos, NULL, NULL, nr);
+        b->out->evaluations++;
     }
     *slot = new_vertex(b, p, pos, want_n ? nr : NULL);
     return *slot;
@@ -1742,7 +1884,9 @@ static inline void bez_tile(const double *C, const double *W, int du, int dv, co
 /* Positions of a leaf's tile vertices (those used set in used) into P
  * (3 per vertex, (N+1)^2): a tensor-product evaluation for a Bézier piece
  * (the Bernstein values of the tile's columns and rows, then per vertex
- * one (du+1)(dv+1) sum), one batched call for a subdivision face. */
+ * one (du+1)(dv+1) sum); for a subdivision face from the piece's memo
+ * (the tile's indices kept with the node, else looked up, the missing
+ * points evaluated in one batch), their indices into b->tile_idx. */
 static bool tile_positions(builder *b, uint32_t pi, tsr_qnode n, double r[4], uint32_t N, const uint8_t *used,
                            double *P)
 {
@@ -1750,6 +1894,16 @@ static bool tile_positions(builder *b, uint32_t pi, tsr_qnode n, double r[4], ui
     uint32_t row = N + 1;
     if (p->kind == KIND_SUBD) {
         pctx *c = &b->ctx[pi];
+        const nodeval *v = node_info(c, n);
+        if (v->tile != UINT32_MAX) { /* kept when the node was computed */
+            const uint32_t *ti = c->tidx + (size_t)v->tile * tile_stride(c);
+            for (uint32_t k = 0; k < row * row; k++)
+                if (used[k]) {
+                    memcpy(P + 3 * k, c->pts + 3 * (size_t)ti[k], 3 * sizeof *P);
+                    b->tile_idx[k] = ti[k];
+                }
+            return true;
+        }
         uint32_t cnt = 0, sh = c->surf.levels - n.level, *ij = c->ij;
         for (uint32_t j = 0; j <= N; j++)
             for (uint32_t i = 0; i <= N; i++)
@@ -1764,6 +1918,7 @@ static bool tile_positions(builder *b, uint32_t pi, tsr_qnode n, double r[4], ui
         for (uint32_t k = 0; k < row * row; k++)
             if (used[k]) {
                 memcpy(P + 3 * k, b->tile_tmp + 3 * cnt, 3 * sizeof *P);
+                b->tile_idx[k] = c->idx[cnt];
                 cnt++;
             }
         return true;
@@ -1959,7 +2114,9 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const patcache *pc, uint32
         const uint8_t *used = b->used + (size_t)mask * row * row;
         double r[4];
         node_rect(c, n, r);
-        bool pre = !b->opt->normals && tile_positions(b, pi, n, r, N, used, b->tile_pos);
+        bool subd = p->kind == KIND_SUBD;
+        bool have = (subd || !b->opt->normals) && tile_positions(b, pi, n, r, N, used, b->tile_pos);
+        bool pre = have && !b->opt->normals;
         double *vuv = b->vert_uv;
         for (uint32_t j = 0; j <= N; j++)
             for (uint32_t i = 0; i <= N; i++) {
@@ -1970,7 +2127,8 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const patcache *pc, uint32
                 if (pre && i > 0 && j > 0 && i < N && j < N)
                     v = new_vertex(b, p, pp, NULL); /* inside the tile: no other tile has it */
                 else
-                    v = vertex_of(b, (lpoint){pi, x0 + i * step, y0 + j * step}, pp);
+                    v = vertex_of(b, (lpoint){pi, x0 + i * step, y0 + j * step}, pp,
+                                  have && subd ? b->tile_idx[j * row + i] : UINT32_MAX);
                 if (v == UINT32_MAX)
                     return TSR_ERR_NOMEM;
                 local[j * row + i] = v;
@@ -2056,7 +2214,7 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const patcache *pc, uint32
             for (uint32_t x = 0; x < b->nfp; x++) {
                 const fpoint *f = &b->fp[x];
                 pvert *o = &b->pv[x];
-                o->v = vertex_of(b, f->q, NULL);
+                o->v = vertex_of(b, f->q, NULL, UINT32_MAX);
                 if (o->v == UINT32_MAX)
                     return TSR_ERR_NOMEM;
                 /* on the piece edge of its chain */
@@ -2284,7 +2442,7 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
                     if (inv_key[o] != UINT32_MAX) {
                         uint64_t kk = key[inv_key[o]] - 1;
                         lpoint q = {(uint32_t)(kk >> 40), (uint32_t)(kk & 0xFFFFF), (uint32_t)((kk >> 20) & 0xFFFFF)};
-                        mv[o] = vertex_of(b, q, NULL);
+                        mv[o] = vertex_of(b, q, NULL, UINT32_MAX);
                     } else {
                         double pos[3], nr[3] = {0, 0, 1};
                         tsr_pmodel_eval(m, src, uv[2 * k], uv[2 * k + 1], pos, b->opt->normals ? nr : NULL);
@@ -2425,7 +2583,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
     uint32_t row = opt.tile_n + 1, maxN = 4 * opt.tile_n - 2;
     maxN = maxN < opt.tile_n ? opt.tile_n : maxN > TSR_TILE_MAX ? TSR_TILE_MAX : maxN;
     double *scratch = tsr_alloc(a, ((size_t)row * row * 5 + 12) * sizeof *scratch);
-    uint32_t *iscratch = tsr_alloc(a, (size_t)row * row * 3 * sizeof *iscratch);
+    uint32_t *iscratch = tsr_alloc(a, ((size_t)row * row * 5 + 4) * sizeof *iscratch);
     kidnets *kids = tsr_alloc(a, ((size_t)opt.max_level + 1) * sizeof *kids);
     uint64_t evals = 0;
     tsr_status st = ctx && scratch && iscratch && kids ? TSR_OK : TSR_ERR_NOMEM;
@@ -2447,6 +2605,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         c->uv = scratch + 3 * (size_t)row * row;
         c->idx = iscratch;
         c->ij = iscratch + (size_t)row * row;
+        c->tix = iscratch + (size_t)row * row * 3;
+        c->tat = iscratch + (size_t)row * row * 4 + 4;
         c->kids = kids;
         c->evaluations = &evals;
         c->alloc = a;
@@ -2479,7 +2639,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         memset(dirty, 1, m->npieces);
     for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++)
         if (m->pieces[p].kind == KIND_BEZIER && !m->sources[m->pieces[p].source].trimmed)
-            st = choose_tile(&ctx[p], opt.tile_n, maxN);
+            if ((st = choose_tile(&ctx[p], opt.tile_n, maxN)) == TSR_OK && ctx[p].nomem)
+                st = TSR_ERR_NOMEM;
     double bound = 0;
     for (bool again = true; again && st == TSR_OK;) {
         out->passes++;
@@ -2488,6 +2649,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
                 continue;
             ctx[p].cur_key = 0;
             st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
+            if (st == TSR_OK && ctx[p].nomem)
+                st = TSR_ERR_NOMEM; /* stop at once (refine gave up) */
             dirty[p] = 0;
         }
         again = false;
@@ -2508,7 +2671,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         collect_spans(&ctx[p]);
     tsr_free(a, dirty);
     /* assemble */
-    builder b = {m, &opt, ctx, out, a, {0}, {0}, 0, NULL, NULL, NULL, NULL, NULL, 0, 0, NULL, 0, NULL};
+    builder b = {.m = m, .opt = &opt, .ctx = ctx, .out = out, .a = a};
     /* the tile patterns of every tile size in use, and which of a tile's
      * vertices each uses */
     const patcache *pats[NPAT] = {NULL};
@@ -2521,8 +2684,9 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         b.tile_pos = tsr_alloc(a, (size_t)3 * mrow * mrow * sizeof(double));
         b.tile_tmp = tsr_alloc(a, ((size_t)3 * mrow * mrow + 2 * (size_t)mrow * (TSR_PATCH_MAX_DEGREE + 1)) * sizeof(double));
         b.vert_uv = tsr_alloc(a, (size_t)2 * mrow * mrow * sizeof(double));
+        b.tile_idx = tsr_alloc(a, (size_t)mrow * mrow * sizeof *b.tile_idx);
         b.onmask = tsr_alloc(a, (size_t)mrow * mrow);
-        if (!local || !b.tile_pos || !b.tile_tmp || !b.vert_uv || !b.onmask)
+        if (!local || !b.tile_pos || !b.tile_tmp || !b.vert_uv || !b.tile_idx || !b.onmask)
             st = TSR_ERR_NOMEM;
     }
     /* room for everything at once: triangles exactly (but fans), vertices at most */
@@ -2551,8 +2715,9 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         if (st == TSR_OK && !out->tri_uv)
             st = TSR_ERR_NOMEM;
         b.tri_cap = (uint32_t)cap;
-        /* tile-border vertices go through the map: 4N of a tile's */
-        if (st == TSR_OK && !tsr_keymap_reserve(&b.map, (size_t)(want_border / 2) + 64, a))
+        /* tile-border vertices of Bézier pieces go through the map: 4N
+         * of a tile's (subd pieces keep theirs with their memo) */
+        if (st == TSR_OK && !m->subd && !tsr_keymap_reserve(&b.map, (size_t)(want_border / 2) + 64, a))
             st = TSR_ERR_NOMEM;
     }
     for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++) {
@@ -2626,6 +2791,7 @@ done:
     tsr_free(a, b.tile_pos);
     tsr_free(a, b.tile_tmp);
     tsr_free(a, b.vert_uv);
+    tsr_free(a, b.tile_idx);
     tsr_free(a, b.fp);
     tsr_free(a, b.onmask);
     tsr_free(a, b.pv);
@@ -2636,6 +2802,8 @@ done:
         tsr_keymap_free(&ctx[p].memo, a);
         tsr_keymap_free(&ctx[p].pmemo, a);
         tsr_free(a, ctx[p].pts);
+        tsr_free(a, ctx[p].vid);
+        tsr_free(a, ctx[p].tidx);
         tsr_free(a, ctx[p].nv);
         for (int e = 0; e < 4; e++) {
             tsr_free(a, ctx[p].act[e]);

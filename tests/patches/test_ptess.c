@@ -973,11 +973,14 @@ static void check_sphere(const char *what, const octant *o, double E, int expect
 
 /* All outward, some written reversed or transposed so the shared rows of
  * control points run backwards: nothing to mirror. */
+/* The eight octants with every net facing outward. */
+static const octant outward_octants[8] = {{1, 1, 1, false, false},   {-1, 1, 1, true, false}, {-1, -1, 1, true, true},
+                                          {1, -1, 1, false, true},   {1, 1, -1, false, true}, {-1, 1, -1, false, false},
+                                          {-1, -1, -1, true, false}, {1, -1, -1, true, true}};
+
 TEST(sphere_closed_outward_nets)
 {
-    const octant o[8] = {{1, 1, 1, false, false},   {-1, 1, 1, true, false}, {-1, -1, 1, true, true},
-                         {1, -1, 1, false, true},   {1, 1, -1, false, true}, {-1, 1, -1, false, false},
-                         {-1, -1, -1, true, false}, {1, -1, -1, true, true}};
+    const octant *o = outward_octants;
     for (int k = 0; k < 8; k++)
         CHECK(octant_outward(&o[k]));
     check_sphere("sphere_outward.obj", o, 2e-3, 0, 1);
@@ -1613,11 +1616,18 @@ static int shared_run_main(void *arg)
     return 0;
 }
 
+/* The same vertices (and normals), triangles and triangles' (u, v) and
+ * sources, bit for bit. */
 static bool same_mesh(const tsr_ptess_result *a, const tsr_ptess_result *b)
 {
-    return a->mesh.vertex_count == b->mesh.vertex_count && a->mesh.triangle_count == b->mesh.triangle_count &&
-           !memcmp(a->mesh.positions, b->mesh.positions, 3 * sizeof(float) * a->mesh.vertex_count) &&
-           !memcmp(a->mesh.indices, b->mesh.indices, 3 * sizeof(uint32_t) * a->mesh.triangle_count);
+    const tsr_mesh *x = &a->mesh, *y = &b->mesh;
+    size_t nv = x->vertex_count, nt = x->triangle_count;
+    return nv == y->vertex_count && nt == y->triangle_count &&
+           !memcmp(x->positions, y->positions, 3 * sizeof(float) * nv) &&
+           !memcmp(x->indices, y->indices, 3 * sizeof(uint32_t) * nt) && !x->normals == !y->normals &&
+           (!x->normals || !memcmp(x->normals, y->normals, 3 * sizeof(float) * nv)) &&
+           !memcmp(a->tri_uv, b->tri_uv, 6 * sizeof(double) * nt) &&
+           !memcmp(a->tri_source, b->tri_source, sizeof(uint32_t) * nt);
 }
 
 TEST(runs_share_model)
@@ -2242,6 +2252,127 @@ typedef struct cage_case {
     int euler;     /* when not closed and manifold: the expected Euler characteristic, 99 unchecked */
 } cage_case;
 
+/* A house: a box with a creased ridge roof, its gable ends pentagons
+ * (N-gon sub-patches), closed (allocation_failures). */
+static const char house_obj[] =
+    "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nv 0 0 1\nv 2 0 1\nv 2 1 1\nv 0 1 1\nv 0 0.5 1.5\nv 2 0.5 1.5\n"
+    "f 1 4 3 2\nf 1 2 6 5\nf 3 4 8 7\nf 1 5 9 8 4\nf 2 3 7 10 6\nf 5 6 10 9\nf 8 9 10 7\n"
+    "t crease 2/1/0 8 9 3.0\n";
+
+/* An allocator whose fail_at-th request (1-based; 0: none) fails, and
+ * with sticky set every later request of that size too (a retry of the
+ * same growth fails again). */
+typedef struct failing {
+    long live, calls, fail_at;
+    bool sticky;
+    size_t fail_size; /* 0 until the failure */
+} failing;
+
+static void *failing_realloc(void *user, void *ptr, size_t size)
+{
+    failing *f = user;
+    if (size == 0) {
+        if (ptr)
+            f->live--;
+        free(ptr);
+        return NULL;
+    }
+    if (++f->calls == f->fail_at || (f->sticky && size == f->fail_size)) {
+        f->fail_size = f->sticky ? size : 0;
+        return NULL;
+    }
+    void *q = realloc(ptr, size);
+    if (q && !ptr)
+        f->live++;
+    return q;
+}
+
+/* Runs m at max error E (and with normals) with every allocation failing
+ * in turn, once and sticky (failures of the same size after it too): a run
+ * keeps what it looked up (a node's values and tile points, a point's
+ * mesh vertex) where memory allows and looks it up again where it did
+ * not, so every run either fails with TSR_ERR_NOMEM, soon and leaking
+ * nothing, or gives exactly the mesh of a run with all the memory it
+ * asked for. optional: some failures leave a run its mesh (subd pieces'
+ * kept tile points; Bézier pieces keep nothing optional). */
+static void check_allocation_failures(const char *what, const tsr_pmodel *m, double E, bool optional)
+{
+    tsr_error e = {0};
+    for (int normals = 0; normals < 2; normals++) {
+        tsr_ptess_options o = {0};
+        o.max_error = E;
+        o.normals = normals;
+        failing f = {0, 0, 0, false, 0};
+        tsr_allocator al = {failing_realloc, &f};
+        tsr_ptess_result ref;
+        CHECK(tsr_ptess_run(m, &o, &al, &ref, &e) == TSR_OK);
+        long calls = f.calls;
+        CHECK_MSG(ref.mesh.triangle_count > 500 && calls > 20, "%s: %u triangles, %ld allocations", what,
+                  ref.mesh.triangle_count, calls);
+        tsr_validation v = validate(&ref.mesh);
+        check_conforming(what, &v);
+        CHECK_MSG(v.boundary_edges == 0, "%s: %u boundary edges", what, v.boundary_edges);
+        long failed = 0, kept = 0;
+        for (long k = 1; k <= 2 * calls; k++) {
+            f = (failing){0, 0, k > calls ? k - calls : k, k > calls, 0};
+            tsr_ptess_result r;
+            tsr_status st = tsr_ptess_run(m, &o, &al, &r, &e);
+            CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "%s: failure at allocation %ld%s: %s", what, f.fail_at,
+                      f.sticky ? " (sticky)" : "", tsr_status_str(st));
+            /* soon: a failed run gives up, it does not refine on (at
+             * most 8 times the requests of the whole run; refining on
+             * made 18,000 times as many, and took seconds) */
+            CHECK_MSG(st == TSR_OK || f.calls <= 8 * calls, "%s: failure at allocation %ld%s: %ld requests", what,
+                      f.fail_at, f.sticky ? " (sticky)" : "", f.calls);
+            if (st == TSR_OK)
+                CHECK_MSG(same_mesh(&r, &ref), "%s: failure at allocation %ld%s: another mesh", what, f.fail_at,
+                          f.sticky ? " (sticky)" : "");
+            failed += st != TSR_OK;
+            kept += st == TSR_OK;
+            tsr_ptess_result_free(&r);
+            CHECK_MSG(f.live == 0, "%s: failure at allocation %ld: %ld blocks leaked", what, f.fail_at, f.live);
+        }
+        /* both outcomes happen where some memory is optional */
+        CHECK_MSG(failed > 0 && (kept > 0) == optional, "%s: %ld runs failed, %ld did not", what, failed, kept);
+        tsr_ptess_result_free(&ref);
+    }
+}
+
+TEST(allocation_failures)
+{
+    /* a subdivision surface: creased, with N-gon faces */
+    tsr_cage cage;
+    tsr_error e = {0};
+    CHECK_MSG(tsr_cage_parse(house_obj, sizeof house_obj - 1, "house.obj", NULL, &cage, &e) == TSR_OK, "%s",
+              e.message);
+    tsr_subd *subd = NULL;
+    CHECK_MSG(tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, &subd, &e) == TSR_OK, "%s", e.message);
+    tsr_cage_free(&cage);
+    tsr_pmodel *m = NULL;
+    if (subd)
+        CHECK(tsr_pmodel_from_subd(subd, NULL, &m, &e) == TSR_OK);
+    if (m) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        CHECK(info.pieces == 5 + 2 * 5); /* 5 quads, 2 pentagons of 5 sub-patches */
+        check_allocation_failures("house.obj", m, 1e-3 * dist3(info.lo, info.hi), true);
+        tsr_pmodel_destroy(m);
+    }
+    tsr_subd_destroy(subd);
+    /* rational Bézier patches: linked, with collapsed edges */
+    sbuf b = {0};
+    sphere_obj(&b, outward_octants, 8);
+    tsr_patch_set set;
+    if (parse_set(&b, "sphere.obj", &set)) {
+        if (make_model(&set, &m)) {
+            check_allocation_failures("sphere.obj", m, 3e-3, false);
+            tsr_pmodel_destroy(m);
+        }
+        tsr_patch_set_free(&set);
+    }
+    free(b.s);
+}
+
 /* The Catmull-Clark model of the cage at path (named name in messages):
  * *subd and the model, both NULL after a failed CHECK; the caller
  * destroys both. */
@@ -2457,5 +2588,6 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
           T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform),
-          T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(data_osd_corner_estimate),
+          T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
+          T(data_osd_corner_estimate),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
