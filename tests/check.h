@@ -102,6 +102,39 @@ static inline const char *check_data_dir(void)
     return stat(buf, &st) == 0 && S_ISDIR(st.st_mode) ? buf : NULL;
 }
 
+/* An allocator for tests (tsr_allocator {check_realloc, &a}): counts the
+ * blocks alive and the requests (frees not counted), keeps the largest
+ * request, and fails the fail_at-th request (1-based; 0: none) and, when
+ * sticky, every later request of that size too (a retry of the same
+ * growth fails again). */
+typedef struct check_alloc {
+    long live, calls, fail_at;
+    bool sticky;
+    size_t fail_size; /* the failed request's size, when sticky */
+    size_t largest;
+} check_alloc;
+
+static inline void *check_realloc(void *user, void *ptr, size_t size)
+{
+    check_alloc *c = user;
+    if (size == 0) {
+        if (ptr)
+            c->live--;
+        free(ptr);
+        return NULL;
+    }
+    if (++c->calls == c->fail_at || (c->sticky && size == c->fail_size)) {
+        c->fail_size = c->sticky ? size : 0;
+        return NULL;
+    }
+    if (size > c->largest)
+        c->largest = size;
+    void *p = realloc(ptr, size);
+    if (p && !ptr)
+        c->live++;
+    return p;
+}
+
 /* A fresh temporary folder for the test's files (under $TMPDIR or /tmp). */
 static inline const char *check_temp_dir(void)
 {

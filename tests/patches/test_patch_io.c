@@ -31,32 +31,6 @@ static const char *write_temp(const char *dir, const char *name, const char *tex
     return path;
 }
 
-/* ---- Allocator that counts (and can fail) ------------------------------------ */
-
-typedef struct counting {
-    long live, calls, fail_at;
-    size_t largest;
-} counting;
-
-static void *counting_realloc(void *user, void *ptr, size_t size)
-{
-    counting *c = user;
-    if (size == 0) {
-        if (ptr)
-            c->live--;
-        free(ptr);
-        return NULL;
-    }
-    if (++c->calls == c->fail_at)
-        return NULL;
-    if (size > c->largest)
-        c->largest = size;
-    void *p = realloc(ptr, size);
-    if (p && !ptr)
-        c->live++;
-    return p;
-}
-
 /* ---- .bpt -------------------------------------------------------------------- */
 
 static const char *teapot_path(char *buf, size_t cap)
@@ -77,8 +51,8 @@ TEST(data_teapot_loads)
     char path[5000];
     if (!teapot_path(path, sizeof path))
         SKIP("no shared data folder with patches/teapot.bpt (set TESSERA_DATA)");
-    counting c = {0};
-    tsr_allocator al = {counting_realloc, &c};
+    check_alloc c = {0};
+    tsr_allocator al = {check_realloc, &c};
     tsr_patch_set s;
     tsr_error e = {0};
     CHECK_MSG(tsr_patch_set_load(path, TSR_PATCH_FORMAT_UNKNOWN, &al, &s, &e) == TSR_OK, "%s", e.message);
@@ -229,8 +203,8 @@ TEST(obj_freeform_trimmed)
     if (!dir)
         return;
     const char *path = write_temp(dir, "cyl.obj", freeform_obj);
-    counting c = {0};
-    tsr_allocator al = {counting_realloc, &c};
+    check_alloc c = {0};
+    tsr_allocator al = {check_realloc, &c};
     tsr_patch_set s;
     tsr_error e = {0};
     CHECK_MSG(tsr_patch_set_load(path, TSR_PATCH_FORMAT_UNKNOWN, &al, &s, &e) == TSR_OK, "%s", e.message);
@@ -316,7 +290,7 @@ TEST(obj_freeform_trimmed)
     /* every allocation failure is reported, and leaks nothing */
     long calls = c.calls;
     for (long k = 1; k <= calls; k++) {
-        c = (counting){0, 0, k, 0};
+        c = (check_alloc){.fail_at = k};
         tsr_status st =
             tsr_patch_set_parse(freeform_obj, sizeof freeform_obj - 1, "cyl.obj", TSR_PATCH_FORMAT_OBJ, &al, &s, &e);
         CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "failure at allocation %ld: status %d", k, (int)st);
@@ -415,8 +389,8 @@ TEST(data_osd_cages_load)
             continue;
         char p[10000];
         snprintf(p, sizeof p, "%s/%s", osd, de->d_name);
-        counting cnt = {0};
-        tsr_allocator al = {counting_realloc, &cnt};
+        check_alloc cnt = {0};
+        tsr_allocator al = {check_realloc, &cnt};
         tsr_cage c;
         tsr_error e = {0};
         CHECK_MSG(tsr_cage_load(p, &al, &c, &e) == TSR_OK, "%s", e.message);
@@ -647,8 +621,8 @@ TEST(bad_files_name_the_line)
         size_t len = strlen(b->text);
         if (!strcmp(b->name, "cage_binary_bytes"))
             len = 7; /* a NUL inside */
-        counting c = {0};
-        tsr_allocator al = {counting_realloc, &c};
+        check_alloc c = {0};
+        tsr_allocator al = {check_realloc, &c};
         tsr_error e = {0};
         tsr_status st;
         if (b->r == CAGE) {

@@ -121,27 +121,6 @@ static int bspline_basis(const double *kn, int count, int deg, double u, double 
 
 /* ---- models and results ------------------------------------------------------- */
 
-typedef struct live_count {
-    long live;
-    long calls;
-} live_count;
-
-static void *live_realloc(void *user, void *ptr, size_t size)
-{
-    live_count *c = user;
-    c->calls++;
-    if (size == 0) {
-        if (ptr)
-            c->live--;
-        free(ptr);
-        return NULL;
-    }
-    void *q = realloc(ptr, size);
-    if (q && !ptr)
-        c->live++;
-    return q;
-}
-
 static bool parse_set(const sbuf *text, const char *name, tsr_patch_set *set)
 {
     tsr_error e = {0};
@@ -616,8 +595,8 @@ TEST(quarter_cylinder_error)
         free(b.s);
         return;
     }
-    live_count lc = {0, 0};
-    tsr_allocator al = {live_realloc, &lc};
+    check_alloc lc = {0};
+    tsr_allocator al = {check_realloc, &lc};
     tsr_error e = {0};
     tsr_status st = tsr_pmodel_from_set(&set, &al, &m, &e);
     CHECK_MSG(st == TSR_OK && m, "%s", e.message);
@@ -2259,34 +2238,6 @@ static const char house_obj[] =
     "f 1 4 3 2\nf 1 2 6 5\nf 3 4 8 7\nf 1 5 9 8 4\nf 2 3 7 10 6\nf 5 6 10 9\nf 8 9 10 7\n"
     "t crease 2/1/0 8 9 3.0\n";
 
-/* An allocator whose fail_at-th request (1-based; 0: none) fails, and
- * with sticky set every later request of that size too (a retry of the
- * same growth fails again). */
-typedef struct failing {
-    long live, calls, fail_at;
-    bool sticky;
-    size_t fail_size; /* 0 until the failure */
-} failing;
-
-static void *failing_realloc(void *user, void *ptr, size_t size)
-{
-    failing *f = user;
-    if (size == 0) {
-        if (ptr)
-            f->live--;
-        free(ptr);
-        return NULL;
-    }
-    if (++f->calls == f->fail_at || (f->sticky && size == f->fail_size)) {
-        f->fail_size = f->sticky ? size : 0;
-        return NULL;
-    }
-    void *q = realloc(ptr, size);
-    if (q && !ptr)
-        f->live++;
-    return q;
-}
-
 /* Runs m at max error E (and with normals) with every allocation failing
  * in turn, once and sticky (failures of the same size after it too): a run
  * keeps what it looked up (a node's values and tile points, a point's
@@ -2302,8 +2253,8 @@ static void check_allocation_failures(const char *what, const tsr_pmodel *m, dou
         tsr_ptess_options o = {0};
         o.max_error = E;
         o.normals = normals;
-        failing f = {0, 0, 0, false, 0};
-        tsr_allocator al = {failing_realloc, &f};
+        check_alloc f = {0};
+        tsr_allocator al = {check_realloc, &f};
         tsr_ptess_result ref;
         CHECK(tsr_ptess_run(m, &o, &al, &ref, &e) == TSR_OK);
         long calls = f.calls;
@@ -2314,7 +2265,7 @@ static void check_allocation_failures(const char *what, const tsr_pmodel *m, dou
         CHECK_MSG(v.boundary_edges == 0, "%s: %u boundary edges", what, v.boundary_edges);
         long failed = 0, kept = 0;
         for (long k = 1; k <= 2 * calls; k++) {
-            f = (failing){0, 0, k > calls ? k - calls : k, k > calls, 0};
+            f = (check_alloc){.fail_at = k > calls ? k - calls : k, .sticky = k > calls};
             tsr_ptess_result r;
             tsr_status st = tsr_ptess_run(m, &o, &al, &r, &e);
             CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "%s: failure at allocation %ld%s: %s", what, f.fail_at,

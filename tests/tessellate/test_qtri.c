@@ -1167,26 +1167,6 @@ TEST(region_from_cells_matches_general_pass)
 
 /* ---- allocator: everything freed, and every failure handled ----------- */
 
-typedef struct counting {
-    long live, calls, fail_at;
-} counting;
-
-static void *counting_realloc(void *user, void *ptr, size_t size)
-{
-    counting *c = user;
-    if (size == 0) {
-        if (ptr)
-            c->live--;
-        free(ptr);
-        return NULL;
-    }
-    if (++c->calls == c->fail_at)
-        return NULL;
-    void *p = realloc(ptr, size);
-    if (p && !ptr)
-        c->live++;
-    return p;
-}
 
 TEST(allocator_failures)
 {
@@ -1198,8 +1178,8 @@ TEST(allocator_failures)
     seg[122] = 10, seg[123] = 50;
     tsr_pslg in = {xy, 60, seg, 62, NULL, 0};
     tsr_tri_options o = {.region = TSR_REGION_ENCLOSED};
-    counting c = {0, 0, 0};
-    tsr_allocator al = {counting_realloc, &c};
+    check_alloc c = {0};
+    tsr_allocator al = {check_realloc, &c};
     tsr_triangulation t;
     const char *why;
     CHECK(tsr__tri_quadtree(&in, &o, &t, &al, &why, NULL) == TSR_OK);
@@ -1207,7 +1187,7 @@ TEST(allocator_failures)
     tsr_triangulation_free(&t);
     CHECK_MSG(c.live == 0, "%ld blocks leaked", c.live);
     for (long k = 1; k <= calls; k += 1 + calls / 200) {
-        c = (counting){0, 0, k};
+        c = (check_alloc){.fail_at = k};
         tsr_status st = tsr__tri_quadtree(&in, &o, &t, &al, &why, NULL);
         CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "failure at allocation %ld: status %d", k, (int)st);
         if (st == TSR_OK)
@@ -1216,12 +1196,12 @@ TEST(allocator_failures)
     }
     /* and with the region chosen from the cells */
     bool done = false;
-    c = (counting){0, 0, 0};
+    c = (check_alloc){0};
     CHECK(tsr__tri_quadtree_region(&in, &o, &t, &al, &done, &why, NULL) == TSR_OK && done);
     calls = c.calls;
     tsr_triangulation_free(&t);
     for (long k = 1; k <= calls; k += 1 + calls / 200) {
-        c = (counting){0, 0, k};
+        c = (check_alloc){.fail_at = k};
         tsr_status st = tsr__tri_quadtree_region(&in, &o, &t, &al, &done, &why, NULL);
         CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "region: failure at allocation %ld: status %d", k, (int)st);
         if (st == TSR_OK)
