@@ -1068,6 +1068,10 @@ static bool subd_points(pctx *c, const uint32_t *ij, uint32_t count, double *P)
     const piece *p = &c->m->pieces[c->piece];
     double Z = (double)(c->N << c->surf.levels);
     uint32_t miss = 0;
+    if (!memo_room(c, count)) { /* before any key goes in: none is left without its point */
+        c->nomem = true;
+        return false;
+    }
     for (uint32_t k = 0; k < count; k++) {
         bool found;
         uint32_t *slot = tsr_keymap_slot(&c->pmemo, pkey(ij[2 * k], ij[2 * k + 1]), &found, c->alloc);
@@ -1084,10 +1088,6 @@ static bool subd_points(pctx *c, const uint32_t *ij, uint32_t count, double *P)
         c->idx[k] = *slot;
     }
     if (miss) {
-        if (!memo_room(c, miss)) {
-            c->nomem = true;
-            return false;
-        }
         if (tsr_subd_eval(c->m->subd, p->face, p->sub, c->uv, miss, c->pts + 3 * (size_t)c->npts, NULL, NULL) !=
             TSR_OK) {
             c->nomem = true; /* (only NOMEM can fail here: the piece's patch exists) */
@@ -2116,6 +2116,8 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const patcache *pc, uint32
         node_rect(c, n, r);
         bool subd = p->kind == KIND_SUBD;
         bool have = (subd || !b->opt->normals) && tile_positions(b, pi, n, r, N, used, b->tile_pos);
+        if (subd && !have)
+            return TSR_ERR_NOMEM; /* (the only way a subd tile's points fail) */
         bool pre = have && !b->opt->normals;
         double *vuv = b->vert_uv;
         for (uint32_t j = 0; j <= N; j++)

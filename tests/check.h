@@ -106,9 +106,9 @@ static inline const char *check_data_dir(void)
  * blocks alive and the requests (frees not counted), keeps the largest
  * request, and fails the fail_at-th request (1-based; 0: none) and, when
  * sticky, every later request of that size too (a retry of the same
- * growth fails again). */
+ * growth fails again), and the fail_also-th request (0: none). */
 typedef struct check_alloc {
-    long live, calls, fail_at;
+    long live, calls, fail_at, fail_also;
     bool sticky;
     size_t fail_size; /* the failed request's size, when sticky */
     size_t largest;
@@ -123,10 +123,12 @@ static inline void *check_realloc(void *user, void *ptr, size_t size)
         free(ptr);
         return NULL;
     }
-    if (++c->calls == c->fail_at || (c->sticky && size == c->fail_size)) {
+    if (++c->calls == c->fail_at || (c->sticky && c->fail_size && size == c->fail_size)) {
         c->fail_size = c->sticky ? size : 0;
         return NULL;
     }
+    if (c->calls == c->fail_also)
+        return NULL;
     if (size > c->largest)
         c->largest = size;
     void *p = realloc(ptr, size);

@@ -2238,14 +2238,40 @@ static const char house_obj[] =
     "f 1 4 3 2\nf 1 2 6 5\nf 3 4 8 7\nf 1 5 9 8 4\nf 2 3 7 10 6\nf 5 6 10 9\nf 8 9 10 7\n"
     "t crease 2/1/0 8 9 3.0\n";
 
+/* One run of m with the failures f plans: TSR_ERR_NOMEM, soon (at most
+ * 8 times the requests of the whole run, calls; refining on after a
+ * failure made 18,000 times as many, and took seconds) and leaking
+ * nothing, or exactly ref's mesh. Returns whether it succeeded. */
+static bool failing_run(const char *what, const tsr_pmodel *m, const tsr_ptess_options *o, check_alloc f, long calls,
+                        const tsr_ptess_result *ref)
+{
+    tsr_error e = {0};
+    tsr_allocator al = {check_realloc, &f};
+    tsr_ptess_result r;
+    tsr_status st = tsr_ptess_run(m, o, &al, &r, &e);
+    char plan[96];
+    snprintf(plan, sizeof plan, "failure at allocation %ld%s%s", f.fail_at, f.sticky ? " (sticky)" : "",
+             f.fail_also ? " and another" : "");
+    CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "%s: %s: %s", what, plan, tsr_status_str(st));
+    CHECK_MSG(st == TSR_OK || f.calls <= 8 * calls, "%s: %s: %ld requests", what, plan, f.calls);
+    if (st == TSR_OK)
+        CHECK_MSG(same_mesh(&r, ref), "%s: %s: another mesh", what, plan);
+    tsr_ptess_result_free(&r);
+    CHECK_MSG(f.live == 0, "%s: %s: %ld blocks leaked", what, plan, f.live);
+    return st == TSR_OK;
+}
+
 /* Runs m at max error E (and with normals) with every allocation failing
- * in turn, once and sticky (failures of the same size after it too): a run
- * keeps what it looked up (a node's values and tile points, a point's
+ * in turn, once and sticky (failures of the same size after it too): a
+ * run keeps what it looked up (a node's values and tile points, a point's
  * mesh vertex) where memory allows and looks it up again where it did
- * not, so every run either fails with TSR_ERR_NOMEM, soon and leaking
- * nothing, or gives exactly the mesh of a run with all the memory it
- * asked for. optional: some failures leave a run its mesh (subd pieces'
- * kept tile points; Bézier pieces keep nothing optional). */
+ * not, so every run either fails with TSR_ERR_NOMEM or gives exactly the
+ * mesh of a run with all the memory it asked for (failing_run). Then,
+ * after the first and the last sticky failure that left a run its mesh
+ * (memory it could do without), every other request failing too: the
+ * paths that look up again fail cleanly. optional: some failures leave a
+ * run its mesh (subd pieces' kept tile points; Bézier pieces keep nothing
+ * optional). */
 static void check_allocation_failures(const char *what, const tsr_pmodel *m, double E, bool optional)
 {
     tsr_error e = {0};
@@ -2263,28 +2289,25 @@ static void check_allocation_failures(const char *what, const tsr_pmodel *m, dou
         tsr_validation v = validate(&ref.mesh);
         check_conforming(what, &v);
         CHECK_MSG(v.boundary_edges == 0, "%s: %u boundary edges", what, v.boundary_edges);
-        long failed = 0, kept = 0;
+        long failed = 0, kept = 0, first_kept = 0, last_kept = 0;
         for (long k = 1; k <= 2 * calls; k++) {
-            f = (check_alloc){.fail_at = k > calls ? k - calls : k, .sticky = k > calls};
-            tsr_ptess_result r;
-            tsr_status st = tsr_ptess_run(m, &o, &al, &r, &e);
-            CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "%s: failure at allocation %ld%s: %s", what, f.fail_at,
-                      f.sticky ? " (sticky)" : "", tsr_status_str(st));
-            /* soon: a failed run gives up, it does not refine on (at
-             * most 8 times the requests of the whole run; refining on
-             * made 18,000 times as many, and took seconds) */
-            CHECK_MSG(st == TSR_OK || f.calls <= 8 * calls, "%s: failure at allocation %ld%s: %ld requests", what,
-                      f.fail_at, f.sticky ? " (sticky)" : "", f.calls);
-            if (st == TSR_OK)
-                CHECK_MSG(same_mesh(&r, &ref), "%s: failure at allocation %ld%s: another mesh", what, f.fail_at,
-                          f.sticky ? " (sticky)" : "");
-            failed += st != TSR_OK;
-            kept += st == TSR_OK;
-            tsr_ptess_result_free(&r);
-            CHECK_MSG(f.live == 0, "%s: failure at allocation %ld: %ld blocks leaked", what, f.fail_at, f.live);
+            bool sticky = k > calls, ok = failing_run(
+                                          what, m, &o, (check_alloc){.fail_at = sticky ? k - calls : k, .sticky = sticky},
+                                          calls, &ref);
+            failed += !ok;
+            kept += ok;
+            if (ok && sticky) {
+                first_kept = first_kept ? first_kept : k - calls;
+                last_kept = k - calls;
+            }
         }
         /* both outcomes happen where some memory is optional */
         CHECK_MSG(failed > 0 && (kept > 0) == optional, "%s: %ld runs failed, %ld did not", what, failed, kept);
+        for (int t = 0; t < 2 && first_kept; t++)
+            for (long j = 1; j <= calls; j++)
+                failing_run(what, m, &o,
+                            (check_alloc){.fail_at = t ? last_kept : first_kept, .sticky = true, .fail_also = j}, calls,
+                            &ref);
         tsr_ptess_result_free(&ref);
     }
 }
