@@ -2650,7 +2650,13 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
             if (!dirty[p])
                 continue;
             ctx[p].cur_key = 0;
-            st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
+            /* a subd piece's point map sized like its predecessor's grew
+             * (the faces of one cage are alike), not grown by rehashing from 16 */
+            if (p > 0 && m->pieces[p].kind == KIND_SUBD && !ctx[p].npts && ctx[p - 1].npts >= 512 &&
+                !tsr_keymap_reserve(&ctx[p].pmemo, ctx[p - 1].npts, a))
+                st = TSR_ERR_NOMEM;
+            if (st == TSR_OK)
+                st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
             if (st == TSR_OK && ctx[p].nomem)
                 st = TSR_ERR_NOMEM; /* stop at once (refine gave up) */
             dirty[p] = 0;
