@@ -1731,6 +1731,16 @@ static void bez_point(const tsr_patch *p, double s, double t, double pos[3])
         pos[c] = p->weights ? h[c] / h[3] : h[c];
 }
 
+/* Position and normal of a subd piece's lattice point q, evaluated (and
+ * counted). */
+static void subd_lattice_eval(builder *b, lpoint q, double pos[3], double nr[3])
+{
+    const piece *p = &b->m->pieces[q.piece];
+    uint32_t Z = lattice_size(b->ctx, q.piece);
+    subd_point(b->m->subd, p->face, p->sub, (double)q.i / Z, (double)q.j / Z, pos, nr);
+    b->out->evaluations++;
+}
+
 /* Mesh vertex of lattice point q of a subd piece, qi its index in the
  * piece's memo (UINT32_MAX: not known): as vertex_of, kept with the
  * canonical point's memo entry (vid) instead of in the builder's map, so
@@ -1769,9 +1779,7 @@ static uint32_t subd_vertex(builder *b, lpoint q, uint32_t qi, const double *pre
                 return UINT32_MAX;
             if (!found) { /* not read by its piece's selection: kept at pre, or evaluated */
                 if (want_n) {
-                    uint32_t Z = lattice_size(b->ctx, cq.piece);
-                    subd_point(b->m->subd, p->face, p->sub, (double)cq.i / Z, (double)cq.j / Z, pos, nr);
-                    b->out->evaluations++;
+                    subd_lattice_eval(b, cq, pos, nr);
                     evaluated = true;
                 }
                 memcpy(c->pts + 3 * (size_t)c->npts, want_n ? pos : pre, 3 * sizeof *pos);
@@ -1784,9 +1792,7 @@ static uint32_t subd_vertex(builder *b, lpoint q, uint32_t qi, const double *pre
     if (c->vid[ci] != UINT32_MAX)
         return c->vid[ci];
     if (want_n && !evaluated) {
-        uint32_t Z = lattice_size(b->ctx, cq.piece);
-        subd_point(b->m->subd, p->face, p->sub, (double)cq.i / Z, (double)cq.j / Z, pos, nr);
-        b->out->evaluations++;
+        subd_lattice_eval(b, cq, pos, nr);
     } else if (!want_n) {
         memcpy(pos, pre ? pre : c->pts + 3 * (size_t)ci, sizeof pos);
     }
@@ -2130,7 +2136,7 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const patcache *pc, uint32
                     v = new_vertex(b, p, pp, NULL); /* inside the tile: no other tile has it */
                 else
                     v = vertex_of(b, (lpoint){pi, x0 + i * step, y0 + j * step}, pp,
-                                  have && subd ? b->tile_idx[j * row + i] : UINT32_MAX);
+                                  subd ? b->tile_idx[j * row + i] : UINT32_MAX);
                 if (v == UINT32_MAX)
                     return TSR_ERR_NOMEM;
                 local[j * row + i] = v;
@@ -2650,8 +2656,9 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
             if (!dirty[p])
                 continue;
             ctx[p].cur_key = 0;
-            /* a subd piece's point map sized like its predecessor's grew
-             * (the faces of one cage are alike), not grown by rehashing from 16 */
+            /* a subd piece's point map starts at the size its predecessor's
+             * reached (the faces of one cage are alike) rather than
+             * rehashing up from 16 slots */
             if (p > 0 && m->pieces[p].kind == KIND_SUBD && !ctx[p].npts && ctx[p - 1].npts >= 512 &&
                 !tsr_keymap_reserve(&ctx[p].pmemo, ctx[p - 1].npts, a))
                 st = TSR_ERR_NOMEM;
