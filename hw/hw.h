@@ -49,7 +49,8 @@ typedef enum tsr_hw_height_format { TSR_HW_HEIGHT_U16 = 1, TSR_HW_HEIGHT_F32 = 2
 
 enum {
     TSR_HW_FRAME_WIREFRAME = 1, /* overlay edges, coloured by LOD level, tile borders bright */
-    TSR_HW_FRAME_GEOMORPH = 2   /* apply the tiles' morph weights */
+    TSR_HW_FRAME_GEOMORPH = 2,  /* apply the tiles' morph weights */
+    TSR_HW_FRAME_NORMALS = 4    /* colour = the shading normal n as (n + 1) / 2, unlit, no fog (a debug view) */
 };
 
 /* Everything a frame needs besides its tiles. */
@@ -71,7 +72,19 @@ typedef struct tsr_hw_frame {
  * TSR_HW_FRAME_GEOMORPH, odd vertices inside the tile move towards where
  * the parent tile puts them (the mean of the two even neighbours along the
  * parent's edge or diagonal) by the weight `morph`; edge vertices never
- * move, so morphing opens no crack. */
+ * move, so morphing opens no crack.
+ *
+ * Normals. Vertex (i, j) is shaded with normalize(-dz/dx, -dz/dy, 1) from
+ * central differences of the stored heights at (i +- r, j) and (i, j +- r),
+ * with r = 1 inside the tile. On an edge with a neighbouring draw, the
+ * samples beyond the edge are the neighbour's, and r is the ratio of the
+ * coarser of the two spacings to this tile's (2 towards a coarser
+ * neighbour, 1 otherwise; at a corner the larger of its two edges'), so a
+ * vertex two tiles share gets the same differences from both and their
+ * lighting meets without a seam. A difference whose far sample is missing
+ * (no neighbour, no-data, or not on the neighbour's lattice) is one-sided;
+ * with none on either side, that slope is 0. The neighbours are read from
+ * the pool where they already are: no bytes are uploaded for them. */
 typedef struct tsr_hw_tile_draw {
     tsr_hw_buffer samples;  /* a VERTEX buffer */
     uint64_t samples_offset; /* byte offset of the word holding sample 0, a multiple of 4 */
@@ -89,6 +102,16 @@ typedef struct tsr_hw_tile_draw {
     float morph;            /* in [0, 1] */
     uint8_t level;          /* quadtree level (wireframe colour) */
     uint8_t parity;         /* bit 0: node x odd, bit 1: node y odd (its quarter of the parent) */
+    /* The draws across the edges (normals, above): 1 + the neighbour's
+     * draw number in this frame (0 for the frame's first draw_tile), 0 for
+     * none, per half edge: neighbour[2 e + h] for edge e in the order of
+     * TSR_EDGE_* (0 south j = 0, 1 east i = n, 2 north j = n, 3 west
+     * i = 0) and half h (0 towards smaller i or j). A neighbour at the same
+     * level or coarser covers both halves; finer ones one half each. A
+     * neighbour must share the edge and its vertices (spacing 1/2, 1 or 2
+     * times this tile's, lattices aligned): one that does not only loses
+     * the central differences, never the draw. */
+    uint32_t neighbour[8];
 } tsr_hw_tile_draw;
 
 /* What one frame cost the device. */
@@ -121,7 +144,10 @@ typedef struct tsr_hw_backend tsr_hw_backend;
  *    full); outside a frame it is complete when upload returns.
  *  - begin_frame / draw_tile / end_frame: one frame. draw_tile validates
  *    the draw (buffers of the right kind, ranges inside them) and returns
- *    false, drawing nothing, when it is invalid. end_frame submits and,
+ *    false, drawing nothing, when it is invalid. When a draw names a
+ *    neighbour beyond the frame's draws (or itself), end_frame draws none
+ *    of the frame's tiles (its uploads still happen) and returns false.
+ *    Otherwise end_frame submits and,
  *    for an offscreen target, waits for the image; it fills *stats when
  *    not NULL. A frame must be ended before the next begins.
  *  - read_color: the last frame's colour, width*height RGBA8 pixels, row
@@ -195,6 +221,8 @@ typedef struct tsr_hw_tile {
     float morph;
     uint8_t stitch;         /* TSR_EDGE_* bits */
     uint8_t level, parity;  /* as in tsr_hw_tile_draw */
+    uint32_t neighbour[8];  /* as in tsr_hw_tile_draw, numbering this frame's tiles: 1 + index, 0 none
+                             * (all 0: the tile's border normals are one-sided) */
 } tsr_hw_tile;
 
 /* Fills the tile's (n+1)^2 samples (index j*(n+1)+i; NaN for no-data);
@@ -233,8 +261,11 @@ void tsr_hw_renderer_destroy(tsr_hw_renderer *r);
 /* Draws one frame of `count` tiles: tiles already resident are drawn from
  * the cache; the others are fetched, encoded and uploaded (evicting the
  * least recently drawn tiles that this frame does not use), then drawn.
- * Fails with TSR_ERR_NOMEM when the frame's tiles alone exceed the
- * budget, and with the fetch's or the backend's failure otherwise. */
+ * Draw k is tile k, so a tile's neighbour numbers pass to its draw as they
+ * are. Fails with TSR_ERR_ARGUMENT for a tile naming a neighbour beyond
+ * `count` or itself, with TSR_ERR_NOMEM when the frame's tiles alone
+ * exceed the budget, and with the fetch's or the backend's failure
+ * otherwise. */
 tsr_status tsr_hw_renderer_frame(tsr_hw_renderer *r, const tsr_hw_frame *frame, const tsr_hw_tile *tiles,
                                  uint32_t count, tsr_hw_fetch_fn fetch, void *user, tsr_hw_render_stats *stats,
                                  tsr_error *err);

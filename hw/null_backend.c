@@ -19,6 +19,8 @@ typedef struct null_backend {
     uint32_t count, cap;
     bool in_frame;
     uint64_t frame_triangles;
+    uint32_t frame_draws, max_neighbour; /* this frame's draws, the largest neighbour number named */
+    bool self_neighbour;                 /* a draw named itself */
 } null_backend;
 
 static const tsr_allocator *alloc_of(null_backend *b) { return b->alloc.realloc ? &b->alloc : NULL; }
@@ -85,6 +87,8 @@ static bool nb_begin_frame(tsr_hw_backend *self, const tsr_hw_frame *frame)
         return false;
     b->in_frame = true;
     b->frame_triangles = 0;
+    b->frame_draws = b->max_neighbour = 0;
+    b->self_neighbour = false;
     return true;
 }
 
@@ -96,6 +100,11 @@ static bool nb_draw_tile(tsr_hw_backend *self, const tsr_hw_tile_draw *d)
     null_buffer *s = lookup(b, d->samples), *ix = lookup(b, d->indices);
     if (!s || s->kind != TSR_HW_VERTEX || !ix || ix->kind != TSR_HW_INDEX || !tsr_hw_draw_fits(d, s->size, ix->size))
         return false;
+    b->frame_draws++;
+    for (int k = 0; k < 8; k++) {
+        b->max_neighbour = d->neighbour[k] > b->max_neighbour ? d->neighbour[k] : b->max_neighbour;
+        b->self_neighbour |= d->neighbour[k] == b->frame_draws;
+    }
     self->stats.draws++;
     self->stats.triangles_drawn += d->index_count / 3;
     b->frame_triangles += d->index_count / 3;
@@ -108,6 +117,8 @@ static bool nb_end_frame(tsr_hw_backend *self, tsr_hw_frame_stats *stats)
     if (!b->in_frame)
         return false;
     b->in_frame = false;
+    if (b->max_neighbour > b->frame_draws || b->self_neighbour)
+        return false; /* a neighbour beyond the frame's draws, or itself */
     self->stats.frames++;
     if (stats) {
         memset(stats, 0, sizeof *stats);

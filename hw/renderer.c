@@ -602,7 +602,8 @@ static void drop_pending(tsr_hw_renderer *r, uint32_t count)
  * FLT_MAX is undefined behaviour). */
 static bool fits_float(double x) { return fabs(x) <= FLT_MAX; }
 
-static tsr_status check_tile(const tsr_hw_frame *frame, const tsr_hw_tile *t, uint32_t k, tsr_error *err)
+static tsr_status check_tile(const tsr_hw_frame *frame, const tsr_hw_tile *t, uint32_t k, uint32_t count,
+                             tsr_error *err)
 {
     const char *why = NULL;
     if (!fits_float(t->spacing[0]) || !fits_float(t->spacing[1]) || !((float)t->spacing[0] > 0) ||
@@ -616,6 +617,9 @@ static tsr_status check_tile(const tsr_hw_frame *frame, const tsr_hw_tile *t, ui
         why = "morph outside [0, 1]";
     else if (t->stitch > 15)
         why = "stitch has bits beyond TSR_EDGE_*";
+    for (int e = 0; e < 8 && !why; e++)
+        if (t->neighbour[e] > count || t->neighbour[e] == k + 1)
+            why = t->neighbour[e] > count ? "a neighbour beyond the frame's tiles" : "itself as a neighbour";
     if (why)
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "hw renderer: tile %" PRIu32 " (key %#" PRIx64 "): %s", k, t->key,
                              why);
@@ -635,7 +639,7 @@ tsr_status tsr_hw_renderer_frame(tsr_hw_renderer *r, const tsr_hw_frame *frame, 
     if (!isfinite(frame->eye[0]) || !isfinite(frame->eye[1]) || !isfinite(frame->eye[2]))
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "hw renderer: the frame's eye is not finite");
     for (uint32_t k = 0; k < count; k++) {
-        tsr_status s = check_tile(frame, &tiles[k], k, err);
+        tsr_status s = check_tile(frame, &tiles[k], k, count, err);
         if (s != TSR_OK)
             return s;
     }
@@ -728,6 +732,7 @@ tsr_status tsr_hw_renderer_frame(tsr_hw_renderer *r, const tsr_hw_frame *frame, 
         d.morph = t->morph;
         d.level = t->level;
         d.parity = t->parity;
+        memcpy(d.neighbour, t->neighbour, sizeof d.neighbour); /* draw k is tile k */
         if (!r->be->draw_tile(r->be, &d))
             status = tsr_error_set(err, TSR_ERR_IO, "hw renderer: the %s backend refused the draw of tile %" PRIu32
                                                     " (key %#" PRIx64 ")",

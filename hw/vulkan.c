@@ -64,7 +64,20 @@ typedef struct vk_push {
     float origin[2], spacing[2], limit[2];
     float z_base, z_step, morph;
     uint32_t n, bits, first;
+    uint64_t tiles;   /* the frame's vk_tile_rec array */
+    uint32_t draw_no; /* this draw's record in it */
 } vk_push;
+
+/* Must match TileRec in shaders/common.glsl (scalar layout, 80 bytes):
+ * what a draw's neighbours need to read its samples. */
+typedef struct vk_tile_rec {
+    uint64_t samples;
+    float origin[2], spacing[2];
+    float z_base, z_step;
+    uint32_t n, bits, first;
+    uint32_t neighbour[8]; /* tsr_hw_tile_draw's */
+    uint32_t pad;
+} vk_tile_rec;
 
 typedef struct vk_buffer {
     VkBuffer buf;
@@ -85,6 +98,7 @@ typedef struct vk_slot {
     VkFence fence;
     VkSemaphore acquired, rendered;
     vk_buffer frame; /* host-visible vk_frame_data */
+    vk_buffer tiles; /* host-visible vk_tile_rec per draw; grows */
     bool submitted;
 } vk_slot;
 
@@ -749,7 +763,46 @@ static void fill_frame_data(vk_backend *b, vk_frame_data *fd)
     fd->flags = f->flags;
 }
 
-static void push_draw(vk_backend *b, VkCommandBuffer cb, const tsr_hw_tile_draw *d, VkDeviceAddress frame)
+static uint32_t draw_bits(const tsr_hw_tile_draw *d)
+{
+    return (d->format == TSR_HW_HEIGHT_U16 ? 1u : 0u) | (uint32_t)d->level << 8 | (uint32_t)(d->parity & 3) << 16;
+}
+
+/* The frame's tile records (vk_tile_rec per draw) into the slot's buffer,
+ * grown as needed; false when a draw names a neighbour beyond the frame's
+ * draws or itself, or when out of memory. */
+static bool fill_tile_records(vk_backend *b, vk_slot *s)
+{
+    for (uint32_t i = 0; i < b->ndraws; i++)
+        for (int k = 0; k < 8; k++)
+            if (b->draws[i].neighbour[k] > b->ndraws || b->draws[i].neighbour[k] == i + 1)
+                return false;
+    uint64_t need = (uint64_t)(b->ndraws ? b->ndraws : 1) * sizeof(vk_tile_rec);
+    if (s->tiles.size < need) {
+        uint64_t size = s->tiles.size * 2 > need ? s->tiles.size * 2 : need;
+        free_buffer(b, &s->tiles);
+        if (!make_buffer(b, &s->tiles, size, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true))
+            return false;
+    }
+    vk_tile_rec *rec = s->tiles.mapped;
+    for (uint32_t i = 0; i < b->ndraws; i++) {
+        const tsr_hw_tile_draw *d = &b->draws[i];
+        vk_tile_rec t = {.samples = lookup(b, d->samples)->addr + d->samples_offset,
+                         .origin = {d->origin[0], d->origin[1]},
+                         .spacing = {d->spacing[0], d->spacing[1]},
+                         .z_base = d->z_base,
+                         .z_step = d->z_step,
+                         .n = d->n,
+                         .bits = draw_bits(d),
+                         .first = d->first_sample};
+        memcpy(t.neighbour, d->neighbour, sizeof t.neighbour);
+        memcpy(rec + i, &t, sizeof t);
+    }
+    return true;
+}
+
+static void push_draw(vk_backend *b, VkCommandBuffer cb, const tsr_hw_tile_draw *d, VkDeviceAddress frame,
+                      VkDeviceAddress tiles, uint32_t draw_no)
 {
     vk_push pc = {.frame = frame,
                   .samples = lookup(b, d->samples)->addr + d->samples_offset,
@@ -761,12 +814,13 @@ static void push_draw(vk_backend *b, VkCommandBuffer cb, const tsr_hw_tile_draw 
                   .morph = d->morph,
                   .n = d->n,
                   .first = d->first_sample,
-                  .bits = (d->format == TSR_HW_HEIGHT_U16 ? 1u : 0u) | (uint32_t)d->level << 8 |
-                          (uint32_t)(d->parity & 3) << 16};
+                  .bits = draw_bits(d),
+                  .tiles = tiles,
+                  .draw_no = draw_no};
     vkCmdPushConstants(cb, b->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof pc, &pc);
 }
 
-static void draw_list(vk_backend *b, VkCommandBuffer cb, VkDeviceAddress frame)
+static void draw_list(vk_backend *b, VkCommandBuffer cb, VkDeviceAddress frame, VkDeviceAddress tiles)
 {
     tsr_hw_buffer bound = 0;
     for (uint32_t i = 0; i < b->ndraws; i++) {
@@ -775,7 +829,7 @@ static void draw_list(vk_backend *b, VkCommandBuffer cb, VkDeviceAddress frame)
             vkCmdBindIndexBuffer(cb, lookup(b, d->indices)->buf, 0, VK_INDEX_TYPE_UINT32);
             bound = d->indices;
         }
-        push_draw(b, cb, d, frame);
+        push_draw(b, cb, d, frame, tiles, i);
         if (d->index_count)
             vkCmdDrawIndexed(cb, d->index_count, 1, d->first_index, 0, 0);
     }
@@ -788,6 +842,13 @@ static bool vb_end_frame(tsr_hw_backend *self, tsr_hw_frame_stats *out)
         return false;
     b->in_frame = false;
     vk_slot *s = &b->slots[b->cur];
+    /* a draw naming a neighbour it cannot have, or no memory for the
+     * records: none of the frame's draws (its uploads still happen) */
+    bool drawn = fill_tile_records(b, s);
+    if (!drawn) {
+        b->ndraws = 0;
+        b->frame_tris = 0;
+    }
     vk_frame_data fd;
     fill_frame_data(b, &fd);
     memcpy(s->frame.mapped, &fd, sizeof fd);
@@ -860,12 +921,12 @@ offscreen_only:;
     if (b->has_stats)
         vkCmdBeginQuery(cb, b->stats_pool, q, 0);
     vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_GRAPHICS, b->fill);
-    draw_list(b, cb, s->frame.addr);
+    draw_list(b, cb, s->frame.addr, s->tiles.addr);
     if (b->has_stats)
         vkCmdEndQuery(cb, b->stats_pool, q);
     if (b->frame.flags & TSR_HW_FRAME_WIREFRAME) {
         vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_GRAPHICS, b->wire);
-        draw_list(b, cb, s->frame.addr);
+        draw_list(b, cb, s->frame.addr, s->tiles.addr);
     }
     vkCmdEndRendering(cb);
 
@@ -957,7 +1018,7 @@ offscreen_only:;
     b->cur = (b->cur + 1) % b->nslots;
     if (out)
         *out = st;
-    return true;
+    return drawn;
 }
 
 static bool vb_read_color(tsr_hw_backend *self, uint8_t *rgba)
@@ -993,6 +1054,7 @@ static void vb_destroy(tsr_hw_backend *self)
         for (uint32_t i = 0; i < MAX_SLOTS; i++) {
             vk_slot *s = &b->slots[i];
             free_buffer(b, &s->frame);
+            free_buffer(b, &s->tiles);
             if (s->fence)
                 vkDestroyFence(b->dev, s->fence, NULL);
             if (s->acquired)

@@ -63,6 +63,7 @@ void fly_free(fly_ctx *f)
     if (f->terrain)
         tsr_terrain_destroy(f->terrain);
     free(f->tiles);
+    tsr_keymap_free(&f->drawn, NULL);
     memset(f, 0, sizeof *f);
 }
 
@@ -95,7 +96,8 @@ void fly_frame_desc(const fly_ctx *f, const tsr_camera *cam, tsr_hw_frame *frame
     frame->zmin = (float)f->zmin;
     frame->zmax = (float)f->zmax;
     frame->spacing_min = (float)(f->dx < f->dy ? f->dx : f->dy);
-    frame->flags = (f->o.wireframe ? TSR_HW_FRAME_WIREFRAME : 0) | (f->o.geomorph ? TSR_HW_FRAME_GEOMORPH : 0);
+    frame->flags = (f->o.wireframe ? TSR_HW_FRAME_WIREFRAME : 0) | (f->o.geomorph ? TSR_HW_FRAME_GEOMORPH : 0) |
+                   (f->o.show_normals ? TSR_HW_FRAME_NORMALS : 0);
 }
 
 static tsr_qnode node_of_key(uint64_t key)
@@ -130,6 +132,57 @@ static bool fetch(void *user, const tsr_hw_tile *tile, float *samples)
         }
     }
     return true;
+}
+
+/* 1 + the index of the drawn tile of node (x, y, level), 0 for none. */
+static uint32_t drawn_tile(const fly_ctx *f, uint32_t x, uint32_t y, int level)
+{
+    if (level < 0)
+        return 0;
+    const uint32_t *hit = tsr_keymap_find(&f->drawn, tsr_qnode_key((tsr_qnode){x, y, (uint8_t)level}));
+    return hit ? *hit : 0;
+}
+
+/* Each drawn tile's neighbours across its edges (tsr_hw_tile.neighbour):
+ * the leaf at the same level, else the coarser one (the cut is
+ * restricted: neighbours differ by at most one level), else the two finer
+ * ones along the edge. Culled leaves are not drawn: no neighbour there. */
+static tsr_status link_neighbours(fly_ctx *f, uint32_t count, tsr_error *err)
+{
+    if (f->drawn.slots) { /* emptied, its room kept for the next frame */
+        memset(f->drawn.slots, 0, (f->drawn.mask + 1) * sizeof *f->drawn.slots);
+        f->drawn.count = 0;
+    }
+    if (!tsr_keymap_reserve(&f->drawn, count, NULL))
+        return tsr_error_set(err, TSR_ERR_NOMEM, "out of memory for the neighbours of %u tiles", count);
+    for (uint32_t k = 0; k < count; k++) {
+        bool found;
+        *tsr_keymap_slot(&f->drawn, f->tiles[k].key, &found, NULL) = k + 1; /* reserved: no failure */
+    }
+    static const int dir[4][2] = {{0, -1}, {1, 0}, {0, 1}, {-1, 0}}; /* TSR_EDGE_* order */
+    for (uint32_t k = 0; k < count; k++) {
+        tsr_hw_tile *t = &f->tiles[k];
+        tsr_qnode n = node_of_key(t->key);
+        int64_t side = (int64_t)1 << n.level;
+        for (int e = 0; e < 4; e++) {
+            int64_t nx = (int64_t)n.x + dir[e][0], ny = (int64_t)n.y + dir[e][1];
+            uint32_t *nb = t->neighbour + 2 * e;
+            nb[0] = nb[1] = 0;
+            if (nx < 0 || ny < 0 || nx >= side || ny >= side)
+                continue;
+            uint32_t x = (uint32_t)nx, y = (uint32_t)ny, hit = drawn_tile(f, x, y, n.level);
+            if (!hit)
+                hit = drawn_tile(f, x >> 1, y >> 1, n.level - 1);
+            if (hit) {
+                nb[0] = nb[1] = hit;
+                continue;
+            }
+            for (uint32_t h = 0; h < 2; h++) /* the finer pair along the edge */
+                nb[h] = drawn_tile(f, 2 * x + (e == 3 ? 1 : e == 1 ? 0 : h), 2 * y + (e == 0 ? 1 : e == 2 ? 0 : h),
+                                   n.level + 1);
+        }
+    }
+    return TSR_OK;
 }
 
 tsr_status fly_frame(fly_ctx *f, const tsr_camera *cam, fly_frame_stats *st, tsr_error *err)
@@ -174,6 +227,12 @@ tsr_status fly_frame(fly_ctx *f, const tsr_camera *cam, fly_frame_stats *st, tsr
         t->stitch = L[i].stitch;
         t->level = n.level;
         t->parity = (uint8_t)((n.x & 1) | (n.y & 1) << 1);
+        memset(t->neighbour, 0, sizeof t->neighbour);
+    }
+    if (!f->o.one_sided_normals) {
+        tsr_status ln = link_neighbours(f, count, err);
+        if (ln != TSR_OK)
+            return ln;
     }
     st->leaves = nl;
     st->select_ms = (cli_now() - t0) * 1e3;

@@ -16,6 +16,9 @@ typedef struct fly_options {
     bool wireframe, geomorph;
     uint64_t cache_bytes; /* renderer budget (default 256 MiB) */
     double fog_distance;  /* 0: a third of the terrain's diagonal; < 0: none */
+    bool show_normals;    /* draw the shading normals as colours (TSR_HW_FRAME_NORMALS) */
+    bool one_sided_normals; /* pass no neighbours: border normals from each tile's own samples
+                             * (the seams of earlier versions; for comparison) */
 } fly_options;
 
 typedef struct fly_frame_stats {
@@ -32,6 +35,7 @@ typedef struct fly_ctx {
     tsr_hw_renderer *renderer;
     tsr_hw_tile *tiles;
     uint32_t tiles_cap;
+    tsr_keymap drawn; /* a drawn tile's node key -> 1 + its index in tiles */
     fly_options o;
     double dx, dy, dz, zmin, zmax;
     uint32_t levels;

@@ -17,6 +17,25 @@ layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Sam
     uint w[];
 };
 
+// What a draw's neighbours need to read its samples: one per draw of the
+// frame, in draw order (struct vk_tile_rec).
+struct TileRec {
+    Samples samples;
+    vec2 origin;
+    vec2 spacing;
+    float z_base;
+    float z_step;
+    uint n;
+    uint bits;
+    uint first;
+    uint nb[8];       // 1 + the draw across each half edge (2 edge + half), 0 none
+    uint pad;
+};
+
+layout(buffer_reference, scalar, buffer_reference_align = 8) readonly buffer Tiles {
+    TileRec t[];
+};
+
 layout(push_constant, scalar) uniform Push {
     Frame frame;
     Samples samples;
@@ -29,6 +48,8 @@ layout(push_constant, scalar) uniform Push {
     uint n;           // quads per side
     uint bits;        // bit 0: U16 format; bits 8..15: level; bits 16..17: parity
     uint first;       // U16: sample 0 is the high half of the first word
+    Tiles tiles;      // the frame's draws
+    uint draw_no;     // this draw's record in tiles
 } pc;
 
 vec3 sky_colour(vec3 dir)

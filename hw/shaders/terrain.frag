@@ -12,6 +12,10 @@ void main()
     if (v_valid < 0.999)
         discard; // a triangle with a no-data corner is a hole
     vec3 nrm = normalize(v_normal);
+    if ((pc.frame.flags & 4u) != 0u) { // TSR_HW_FRAME_NORMALS
+        o_colour = vec4(0.5 * nrm + 0.5, 1.0);
+        return;
+    }
     float zr = pc.frame.ramp.y - pc.frame.ramp.x;
     float t = zr > 0.0 ? clamp((v_pos.z - pc.frame.ramp.x) / zr, 0.0, 1.0) : 0.5;
     float slope = 1.0 - nrm.z; // 0 flat, 1 vertical

@@ -6,29 +6,82 @@ layout(location = 1) out vec3 v_normal;
 layout(location = 2) out vec2 v_local; // (i, j) in the tile
 layout(location = 3) out float v_valid;
 
+// Where sample k of a tile's store lies: its 32-bit word (U16: two a word,
+// after `first` halves).
+uint word_of(uint k, uint bits, uint first)
+{
+    return (bits & 1u) != 0u ? (k + first) >> 1u : k;
+}
+
+// Sample k from its word; true when it is not no-data.
+bool decode(uint word, uint k, uint bits, uint first, float z_base, float z_step, out float h)
+{
+    if ((bits & 1u) != 0u) {
+        uint code = ((k + first) & 1u) != 0u ? word >> 16u : word & 0xFFFFu;
+        h = z_base + z_step * float(code);
+        return code != 0xFFFFu;
+    }
+    float s = uintBitsToFloat(word);
+    h = z_base + z_step * s;
+    return !isnan(s);
+}
+
 // Sample (i, j) of the tile, true when it is not no-data.
 bool fetch(int i, int j, out float h)
 {
     uint k = uint(j) * (pc.n + 1u) + uint(i);
-    if ((pc.bits & 1u) != 0u) {
-        k += pc.first;
-        uint word = pc.samples.w[k >> 1u];
-        uint code = (k & 1u) != 0u ? word >> 16u : word & 0xFFFFu;
-        h = pc.z_base + pc.z_step * float(code);
-        return code != 0xFFFFu;
-    }
-    float s = uintBitsToFloat(pc.samples.w[k]);
-    h = pc.z_base + pc.z_step * s;
-    return !isnan(s);
+    return decode(pc.samples.w[word_of(k, pc.bits, pc.first)], k, pc.bits, pc.first, pc.z_base, pc.z_step, h);
 }
 
-float height_or(int i, int j, float fallback)
+// The draw across edge e (TSR_EDGE_* order: 0 south, 1 east, 2 north,
+// 3 west) at position `along` of it, plus one; 0: none.
+uint neighbour(uint e, int along)
+{
+    return pc.tiles.t[pc.draw_no].nb[2u * e + (2 * along > int(pc.n) ? 1u : 0u)];
+}
+
+// The height at (i, j) of this tile's lattice, which may lie beyond one
+// edge: then the neighbour's sample there, if it has one. False when
+// there is none or it is no-data.
+bool height_at(int i, int j, out float h)
 {
     int n = int(pc.n);
-    if (i < 0 || j < 0 || i > n || j > n)
-        return fallback;
-    float h;
-    return fetch(i, j, h) ? h : fallback;
+    if (i >= 0 && j >= 0 && i <= n && j <= n)
+        return fetch(i, j, h);
+    uint e = j < 0 ? 0u : i > n ? 1u : j > n ? 2u : 3u;
+    int along = (e & 1u) == 0u ? i : j;
+    if (along < 0 || along > n)
+        return false; /* beyond a corner: never asked */
+    uint nb = neighbour(e, along);
+    if (nb == 0u)
+        return false;
+    nb -= 1u;
+    vec2 q = (pc.origin + vec2(float(i), float(j)) * pc.spacing - pc.tiles.t[nb].origin) / pc.tiles.t[nb].spacing;
+    vec2 qr = round(q);
+    int m = int(pc.tiles.t[nb].n);
+    if (any(greaterThan(abs(q - qr), vec2(0.01))) || any(lessThan(qr, vec2(0.0))) ||
+        any(greaterThan(qr, vec2(float(m)))))
+        return false; /* not on the neighbour's lattice */
+    uint k = uint(qr.y) * uint(m + 1) + uint(qr.x), bits = pc.tiles.t[nb].bits, first = pc.tiles.t[nb].first;
+    uint word = pc.tiles.t[nb].samples.w[word_of(k, bits, first)];
+    return decode(word, k, bits, first, pc.tiles.t[nb].z_base, pc.tiles.t[nb].z_step, h);
+}
+
+// 2 when the draw across edge e at `along` is coarser than this one, else 1.
+int ratio(uint e, int along)
+{
+    uint nb = neighbour(e, along);
+    return nb != 0u && pc.tiles.t[nb - 1u].spacing.x > 1.5 * pc.spacing.x ? 2 : 1;
+}
+
+// dz per world unit along (di, dj) at (i, j), from the heights r steps
+// either side: central where both are there, else one-sided, else 0.
+float slope(int i, int j, int di, int dj, int r, float h, float step)
+{
+    float ha, hb;
+    bool a = height_at(i - r * di, j - r * dj, ha), b = height_at(i + r * di, j + r * dj, hb);
+    int span = (a ? r : 0) + (b ? r : 0);
+    return span > 0 ? ((b ? hb : h) - (a ? ha : h)) / (float(span) * step) : 0.0;
 }
 
 void main()
@@ -41,13 +94,20 @@ void main()
     if (!ok)
         h = pc.z_base;
 
-    // Normal from the tile's own samples: central differences inside,
-    // one-sided at the tile's edges.
-    int il = max(i - 1, 0), ir = min(i + 1, n), jd = max(j - 1, 0), ju = min(j + 1, n);
-    float hl = height_or(il, j, h), hr = height_or(ir, j, h);
-    float hd = height_or(i, jd, h), hu = height_or(i, ju, h);
-    float gx = (hr - hl) / (float(ir - il) * pc.spacing.x);
-    float gy = (hu - hd) / (float(ju - jd) * pc.spacing.y);
+    // Normal from central differences (hw.h): across an edge with the
+    // neighbour's samples, at the coarser spacing of the two, so that the
+    // tiles sharing a vertex shade it alike.
+    int r = 1;
+    if (j == 0)
+        r = max(r, ratio(0u, i));
+    if (i == n)
+        r = max(r, ratio(1u, j));
+    if (j == n)
+        r = max(r, ratio(2u, i));
+    if (i == 0)
+        r = max(r, ratio(3u, j));
+    float gx = slope(i, j, 1, 0, r, h, pc.spacing.x);
+    float gy = slope(i, j, 0, 1, r, h, pc.spacing.y);
     vec3 nrm = normalize(vec3(-gx, -gy, 1.0));
 
     // Geomorph: odd vertices inside the tile move towards the parent's

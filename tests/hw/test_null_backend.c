@@ -144,12 +144,32 @@ TEST(frames_and_draws)
     CHECK(b->end_frame(b, NULL));
     CHECK(b->stats.draws == 6 && b->stats.triangles_drawn == 160 && b->stats.frames == 3);
 
+    /* neighbours name draws of the same frame, never itself: draw 1
+     * naming draw 2 (number 3) is valid once draw 2 exists */
+    CHECK(b->begin_frame(b, &frame));
+    x = d;
+    x.neighbour[0] = x.neighbour[1] = 1;
+    x.neighbour[7] = 3;
+    CHECK(b->draw_tile(b, &d) && b->draw_tile(b, &x) && b->draw_tile(b, &d));
+    CHECK(b->end_frame(b, NULL));
+    CHECK(b->stats.frames == 4);
+    x.neighbour[7] = 2;
+    CHECK(b->begin_frame(b, &frame));
+    CHECK(b->draw_tile(b, &d) && b->draw_tile(b, &x)); /* names itself */
+    CHECK(!b->end_frame(b, NULL));
+    x.neighbour[7] = 0;
+    x.neighbour[4] = 3;
+    CHECK(b->begin_frame(b, &frame)); /* a failed end_frame still ends the frame */
+    CHECK(b->draw_tile(b, &d) && b->draw_tile(b, &x)); /* names a third draw that never comes */
+    CHECK(!b->end_frame(b, NULL));
+    CHECK(b->stats.frames == 4 && b->stats.draws == 13);
+
     /* a destroyed buffer cannot be drawn from */
     b->destroy_buffer(b, vb);
     CHECK(b->begin_frame(b, &frame));
     CHECK(!b->draw_tile(b, &d));
     CHECK(b->end_frame(b, NULL));
-    CHECK(b->stats.draws == 6);
+    CHECK(b->stats.draws == 13);
     b->destroy(b);
 }
 

@@ -199,6 +199,185 @@ TEST(triangles_drawn_match_cut)
     tsr_heightfield_destroy(hf);
 }
 
+/* fly's neighbours (tsr_hw_tile.neighbour) against geometry, on the null
+ * backend (no device needed): across each half edge of each drawn tile,
+ * the drawn tile whose rectangle holds the half edge's midpoint moved a
+ * little outwards, or none. */
+TEST(neighbours_match_geometry)
+{
+    tsr_hw_backend *b = tsr_hw_null_create(W, H, NULL);
+    tsr_heightfield *hf = make_terrain();
+    fly_options o = {.tile_n = 8, .pixel_error = 1};
+    fly_ctx f;
+    tsr_error err = {0};
+    CHECK(fly_init(&f, hf, b, &o, &err) == TSR_OK);
+    uint32_t relation[3] = {0}; /* half edges whose neighbour is coarser, as fine, finer */
+    for (size_t vi = 0; vi < sizeof views / sizeof views[0]; vi++) {
+        tsr_camera cam;
+        fly_frame_stats fs;
+        CHECK(fly_camera(&f, views[vi].eye, views[vi].target, &cam));
+        CHECK(fly_frame(&f, &cam, &fs, &err) == TSR_OK);
+        uint32_t count = fs.render.tiles, wrong = 0;
+        CHECK(count > 50);
+        for (uint32_t k = 0; k < count; k++) {
+            const tsr_hw_tile *t = &f.tiles[k];
+            double side = o.tile_n * t->spacing[0];
+            for (int e = 0; e < 4; e++)
+                for (int h = 0; h < 2; h++) {
+                    double along = (h + 0.5) / 2 * side, out = 1e-3 * t->spacing[0], p[2];
+                    p[0] = t->origin[0] + (e == 1 ? side + out : e == 3 ? -out : along);
+                    p[1] = t->origin[1] + (e == 2 ? side + out : e == 0 ? -out : along);
+                    uint32_t want = 0;
+                    for (uint32_t u = 0; u < count; u++) {
+                        const tsr_hw_tile *v = &f.tiles[u];
+                        double vs = o.tile_n * v->spacing[0];
+                        if (u != k && p[0] >= v->origin[0] && p[0] <= v->origin[0] + vs && p[1] >= v->origin[1] &&
+                            p[1] <= v->origin[1] + vs) {
+                            CHECK_MSG(!want, "two tiles hold one point");
+                            want = u + 1;
+                        }
+                    }
+                    wrong += t->neighbour[2 * e + h] != want;
+                    if (want)
+                        relation[f.tiles[want - 1].level < t->level   ? 0
+                                 : f.tiles[want - 1].level == t->level ? 1
+                                                                       : 2]++;
+                }
+        }
+        CHECK_MSG(wrong == 0, "view %zu: %u of %u half edges with the wrong neighbour", vi, wrong, 8 * count);
+    }
+    CHECK(relation[0] > 0 && relation[1] > 0 && relation[2] > 0);
+    fly_free(&f);
+    b->destroy(b);
+    tsr_heightfield_destroy(hf);
+}
+
+/* A quadratic bowl, h = a x^2 + b y^2 + c x y about the centre: central
+ * differences of its samples at any step are its exact gradient, and the
+ * gradient is linear, so drawn normals interpolated across a triangle
+ * stay near the true ones; a one-sided difference is off by a s (s the
+ * step) instead. */
+#define BOWL_A 2.3e-4
+#define BOWL_B 1.5e-4
+#define BOWL_C 1.0e-4
+static void bowl_gradient(double x, double y, double g[2])
+{
+    x -= 1280;
+    y -= 1280;
+    g[0] = 2 * BOWL_A * x + BOWL_C * y;
+    g[1] = 2 * BOWL_B * y + BOWL_C * x;
+}
+
+static tsr_heightfield *make_bowl(void)
+{
+    tsr_heightfield *hf = tsr_heightfield_create(257, 257, NULL);
+    float *h = tsr_heightfield_data(hf);
+    for (int j = 0; j < 257; j++)
+        for (int i = 0; i < 257; i++) {
+            double x = i * 10.0 - 1280, y = j * 10.0 - 1280;
+            h[j * 257 + i] = (float)(BOWL_A * x * x + BOWL_B * y * y + BOWL_C * x * y);
+        }
+    tsr_heightfield_set_spacing(hf, 10, 10, 1);
+    return hf;
+}
+
+/* The normals drawn (TSR_HW_FRAME_NORMALS) against the bowl's true normal
+ * at every terrain pixel's point (from its depth): with the neighbours'
+ * samples at tile borders the whole image is within colour rounding and
+ * interpolation; with one-sided border normals (as before neighbours were
+ * passed) the borders of the coarse tiles are not, so the check can fail.
+ * A cut of several levels (tiles of 8, a low oblique view). */
+static void normal_errors(tsr_hw_backend *b, const tsr_heightfield *hf, bool one_sided, double tol, double *worst,
+                          uint32_t *over, uint32_t *levels_drawn)
+{
+    fly_options o = {.tile_n = 8, .pixel_error = 1, .fog_distance = -1, .show_normals = true,
+                     .one_sided_normals = one_sided};
+    fly_ctx f;
+    tsr_error err = {0};
+    CHECK(fly_init(&f, hf, b, &o, &err) == TSR_OK);
+    view v = {{1280, 300, 350}, {1280, 1600, 50}};
+    uint8_t *emap = calloc(W * H, 4);
+    float *depth = malloc(W * H * sizeof *depth);
+    fly_frame_stats fs;
+    uint8_t *rgba = render(&f, &v, &fs, depth);
+    tsr_camera cam;
+    fly_camera(&f, v.eye, v.target, &cam);
+    uint32_t lv = 0, top = f.levels;
+    const tsr_qleaf *L = tsr_quadtree_leaves(f.qt);
+    for (uint32_t i = 0; i < tsr_quadtree_leaf_count(f.qt); i++)
+        if (!L[i].culled) {
+            lv |= 1u << L[i].node.level;
+            top = L[i].node.level < top ? L[i].node.level : top;
+        }
+    /* the terrain's own border has no neighbour: its normals stay
+     * one-sided, which reaches one cell of the coarsest tile inwards */
+    double margin = f.dx * (1u << (f.levels - top));
+    *levels_drawn = (uint32_t)__builtin_popcount(lv);
+    *worst = 0;
+    *over = 0;
+    uint32_t hits = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            float d = depth[y * W + x];
+            if (!(d > 0))
+                continue;
+            double u = (x + 0.5 - W / 2.0) / cam.K, w = -(y + 0.5 - H / 2.0) / cam.K, p[3];
+            for (int k = 0; k < 3; k++)
+                p[k] = cam.eye[k] + cam.near_dist / d * (cam.fwd[k] + u * cam.right[k] + w * cam.up[k]);
+            if (fmin(p[0], p[1]) < margin || fmax(p[0], p[1]) > 2560 - margin)
+                continue;
+            hits++;
+            double g[2], n[3], m[3], len = 0, mlen = 0, e = 0;
+            bowl_gradient(p[0], p[1], g);
+            n[0] = -g[0], n[1] = -g[1], n[2] = 1;
+            for (int k = 0; k < 3; k++) {
+                m[k] = rgba[4 * (y * W + x) + k] / 255.0 * 2 - 1;
+                len += n[k] * n[k];
+                mlen += m[k] * m[k];
+            }
+            for (int k = 0; k < 3; k++)
+                e = fmax(e, fabs(n[k] / sqrt(len) - m[k] / sqrt(mlen)));
+            *worst = fmax(*worst, e);
+            *over += e > tol;
+            emap[4 * (y * W + x)] = (uint8_t)fmin(255, e / 0.03 * 255);
+            emap[4 * (y * W + x) + 3] = 255;
+        }
+    if (getenv("TSR_SAVE_NORMALS")) {
+        char path[256];
+        snprintf(path, sizeof path, "%s_%d.png", getenv("TSR_SAVE_NORMALS"), one_sided);
+        tsr_image_save_u8(path, W, H, 4, rgba, &err);
+        snprintf(path, sizeof path, "%s_%d_err.png", getenv("TSR_SAVE_NORMALS"), one_sided);
+        tsr_image_save_u8(path, W, H, 4, emap, &err);
+    }
+    free(emap);
+    CHECK(hits > W * H / 3);
+    CHECK_MSG(b->stats.validation_messages == 0, "%llu validation messages",
+              (unsigned long long)b->stats.validation_messages);
+    free(rgba);
+    free(depth);
+    fly_free(&f);
+}
+
+TEST(normals_continuous_across_tiles)
+{
+    tsr_hw_backend *b = backend();
+    if (!b)
+        SKIP("no Vulkan device");
+    tsr_heightfield *hf = make_bowl();
+    double tol = 0.008, worst, worst1;
+    uint32_t over, over1, levels, levels1;
+    normal_errors(b, hf, false, tol, &worst, &over, &levels);
+    normal_errors(b, hf, true, tol, &worst1, &over1, &levels1);
+    fprintf(stderr, "normals: %u levels drawn; worst component error %.4f (%u pixels over %.3f); one-sided "
+            "borders: %.4f (%u pixels over)\n", levels, worst, over, tol, worst1, over1);
+    CHECK(levels >= 3 && levels1 == levels);
+    CHECK_MSG(over == 0, "%u pixels' normals off by more than %.3f (worst %.4f)", over, tol, worst);
+    CHECK_MSG(over1 > 100, "one-sided border normals: only %u pixels over %.3f: the check cannot see seams", over1,
+              tol);
+    b->destroy(b);
+    tsr_heightfield_destroy(hf);
+}
+
 static double differing(const uint8_t *a, const uint8_t *b, int tol)
 {
     uint32_t n = 0;
@@ -281,4 +460,6 @@ TEST(image_moves_and_matches_reference)
     tsr_heightfield_destroy(hf);
 }
 
-TEST_MAIN(T(depth_matches_picking), T(triangles_drawn_match_cut), T(image_moves_and_matches_reference))
+TEST_MAIN(T(neighbours_match_geometry), T(depth_matches_picking), T(triangles_drawn_match_cut),
+          T(normals_continuous_across_tiles),
+          T(image_moves_and_matches_reference))

@@ -217,6 +217,7 @@ static void check_draws(const tsr_hw_tile *tiles, uint32_t count, const tsr_hw_f
             CHECK(d->spacing[a] == (float)t->spacing[a]);
         }
         CHECK(d->morph == t->morph && d->level == t->level && d->parity == t->parity);
+        CHECK(memcmp(d->neighbour, t->neighbour, sizeof d->neighbour) == 0); /* draw k is tile k */
         uint32_t tri = tsr_tile_pattern(g_n, t->stitch, pat);
         CHECK(d->index_count == 3 * tri);
         CHECK(R.mem[d->indices] && ((uint64_t)d->first_index + d->index_count) * 4 <= R.size[d->indices]);
@@ -507,6 +508,37 @@ TEST(second_frame_uploads_nothing)
 
     tsr_hw_renderer_destroy(r);
     CHECK(b->stats.buffers_live == 0 && b->stats.bytes_live == 0);
+    b->destroy(b);
+}
+
+/* Tiles naming each other as neighbours: the draws carry the numbers as
+ * they are (check_draws), resident or not. */
+TEST(neighbours_pass_to_draws)
+{
+    tsr_hw_backend *b = make_backend();
+    tsr_hw_renderer *r = make_renderer(b, 8, 1 << 20, 0);
+    enum { N = 30 };
+    tsr_hw_tile tiles[N];
+    for (uint32_t k = 0; k < N; k++) {
+        tiles[k] = make_tile(700 + k, 0, 0);
+        for (int e = 0; e < 8; e++) {
+            uint32_t nb = (uint32_t)(rnd() % (N + 1));
+            tiles[k].neighbour[e] = nb == k + 1 ? 0 : nb;
+        }
+    }
+    tsr_hw_frame f = make_frame(10, 20, 30);
+    fetcher fe = {0};
+    tsr_hw_render_stats st;
+    tsr_error err = {0};
+    for (int pass = 0; pass < 2; pass++) {
+        tsr_status s = run_frame(r, &f, tiles, N, &fe, &st, &err);
+        CHECK_MSG(s == TSR_OK, "%s", err.message);
+        CHECK(st.tiles_uploaded == (pass ? 0u : (uint32_t)N));
+        check_draws(tiles, N, &f, 0);
+        for (uint32_t k = 0; k < N; k++) /* the cut keeps its tiles, the neighbours change */
+            tiles[k].neighbour[k % 8] = (k + 1) % N + 1;
+    }
+    tsr_hw_renderer_destroy(r);
     b->destroy(b);
 }
 
@@ -859,6 +891,8 @@ TEST(bad_tiles_and_options_refused)
     REFUSED(t.morph = 1.5f);
     REFUSED(t.morph = NAN);
     REFUSED(t.stitch = 16);
+    REFUSED(t.neighbour[5] = 2); /* beyond the frame's one tile */
+    REFUSED(t.neighbour[0] = 1); /* itself */
 #undef REFUSED
     CHECK(fe.calls == 0 && b->stats.frames == 0);
     t = make_tile(99, 0, 0);
@@ -875,6 +909,7 @@ TEST(bad_tiles_and_options_refused)
 
 TEST_MAIN(T(encode_integer_tiles_lossless), T(encode_span_beyond_u16), T(encode_float_tiles),
           T(encode_constant_all_nan_inf), T(view_proj_matches_camera), T(second_frame_uploads_nothing),
+          T(neighbours_pass_to_draws),
           T(moving_cut_uploads_one_tile), T(lru_evicts_least_recently_drawn), T(lru_matches_model),
           T(lru_matches_model_many_tiles), T(frame_over_budget_fails_nomem), T(f32_tile_defragments_pool),
           T(mixed_formats_random_frames), T(eye_relative_origins_far_from_the_origin),
