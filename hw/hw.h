@@ -76,15 +76,17 @@ typedef struct tsr_hw_frame {
  *
  * Normals. Vertex (i, j) is shaded with normalize(-dz/dx, -dz/dy, 1) from
  * central differences of the stored heights at (i +- r, j) and (i, j +- r),
- * with r = 1 inside the tile. On an edge with a neighbouring draw, the
- * samples beyond the edge are the neighbour's, and r is the ratio of the
- * coarser of the two spacings to this tile's (2 towards a coarser
- * neighbour, 1 otherwise; at a corner the larger of its two edges'), so a
- * vertex two tiles share gets the same differences from both and their
- * lighting meets without a seam. A difference whose far sample is missing
- * (no neighbour, no-data, or not on the neighbour's lattice) is one-sided;
- * with none on either side, that slope is 0. The neighbours are read from
- * the pool where they already are: no bytes are uploaded for them. */
+ * with r = 1 inside the tile. At the border r is the coarsest spacing of
+ * the drawn tiles that meet at the vertex, over this tile's: on an edge,
+ * 2 towards a coarser neighbour, else 1; at a corner 1, 2 or 4, from the
+ * tiles across its two edges and the one across the corner (found through
+ * those two's neighbours). The samples beyond an edge are the neighbour's.
+ * So every tile at a vertex takes the same differences of the same
+ * samples, and their lighting meets without a seam. A difference whose
+ * far sample is missing (no neighbour, no-data, or not on the neighbour's
+ * lattice, e.g. beyond a tile of n = 2) is one-sided; with none on either
+ * side, that slope is 0. The neighbours are read from the pool where they
+ * already are: no bytes are uploaded for them. */
 typedef struct tsr_hw_tile_draw {
     tsr_hw_buffer samples;  /* a VERTEX buffer */
     uint64_t samples_offset; /* byte offset of the word holding sample 0, a multiple of 4 */
@@ -145,9 +147,11 @@ typedef struct tsr_hw_backend tsr_hw_backend;
  *  - begin_frame / draw_tile / end_frame: one frame. draw_tile validates
  *    the draw (buffers of the right kind, ranges inside them) and returns
  *    false, drawing nothing, when it is invalid. When a draw names a
- *    neighbour beyond the frame's draws (or itself), end_frame draws none
- *    of the frame's tiles (its uploads still happen) and returns false.
- *    Otherwise end_frame submits and,
+ *    neighbour beyond the frame's draws (or itself), a draw's buffer was
+ *    destroyed since draw_tile, or the backend has no memory for the
+ *    frame's draw records, end_frame draws none of the
+ *    frame's tiles (its uploads still happen, the frame counts, *stats
+ *    says 0 triangles) and returns false. Otherwise end_frame submits and,
  *    for an offscreen target, waits for the image; it fills *stats when
  *    not NULL. A frame must be ended before the next begins.
  *  - read_color: the last frame's colour, width*height RGBA8 pixels, row
@@ -182,7 +186,8 @@ uint64_t tsr_hw_draw_sample_bytes(tsr_hw_height_format format, uint32_t n, uint3
  * the draw's buffers and their kinds right: n, format and first_sample,
  * the samples inside a samples buffer of samples_size bytes from a
  * 4-byte aligned offset, whole triangles inside an index buffer of
- * indices_size bytes, spacing > 0, morph in [0, 1] (NaN fails). */
+ * indices_size bytes, spacing > 0 and finite, origin finite, morph in
+ * [0, 1] (NaN fails). */
 bool tsr_hw_draw_fits(const tsr_hw_tile_draw *d, uint64_t samples_size, uint64_t indices_size);
 
 /* The view-projection matrix of a prepared camera (see tsr_camera in

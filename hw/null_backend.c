@@ -10,6 +10,7 @@
 typedef struct null_buffer {
     tsr_hw_buffer_kind kind; /* 0 when the slot is free */
     uint64_t size;
+    uint64_t drawn_in;       /* the last frame (1 + frames before it) with a draw from it */
 } null_buffer;
 
 typedef struct null_backend {
@@ -21,6 +22,7 @@ typedef struct null_backend {
     uint64_t frame_triangles;
     uint32_t frame_draws, max_neighbour; /* this frame's draws, the largest neighbour number named */
     bool self_neighbour;                 /* a draw named itself */
+    bool lost;                           /* a buffer this frame draws from was destroyed */
 } null_backend;
 
 static const tsr_allocator *alloc_of(null_backend *b) { return b->alloc.realloc ? &b->alloc : NULL; }
@@ -56,6 +58,7 @@ static tsr_hw_buffer nb_create(tsr_hw_backend *self, tsr_hw_buffer_kind kind, ui
     }
     b->buffers[slot].kind = kind;
     b->buffers[slot].size = size;
+    b->buffers[slot].drawn_in = 0;
     self->stats.buffers_live++;
     self->stats.bytes_live += size;
     return slot + 1;
@@ -72,9 +75,12 @@ static bool nb_upload(tsr_hw_backend *self, tsr_hw_buffer id, uint64_t offset, c
 
 static void nb_destroy_buffer(tsr_hw_backend *self, tsr_hw_buffer id)
 {
-    null_buffer *buf = lookup((null_backend *)self, id);
+    null_backend *b = (null_backend *)self;
+    null_buffer *buf = lookup(b, id);
     if (!buf)
         return;
+    if (b->in_frame && buf->drawn_in == self->stats.frames + 1)
+        b->lost = true;
     self->stats.buffers_live--;
     self->stats.bytes_live -= buf->size;
     buf->kind = 0;
@@ -88,7 +94,7 @@ static bool nb_begin_frame(tsr_hw_backend *self, const tsr_hw_frame *frame)
     b->in_frame = true;
     b->frame_triangles = 0;
     b->frame_draws = b->max_neighbour = 0;
-    b->self_neighbour = false;
+    b->self_neighbour = b->lost = false;
     return true;
 }
 
@@ -100,6 +106,7 @@ static bool nb_draw_tile(tsr_hw_backend *self, const tsr_hw_tile_draw *d)
     null_buffer *s = lookup(b, d->samples), *ix = lookup(b, d->indices);
     if (!s || s->kind != TSR_HW_VERTEX || !ix || ix->kind != TSR_HW_INDEX || !tsr_hw_draw_fits(d, s->size, ix->size))
         return false;
+    s->drawn_in = ix->drawn_in = self->stats.frames + 1;
     b->frame_draws++;
     for (int k = 0; k < 8; k++) {
         b->max_neighbour = d->neighbour[k] > b->max_neighbour ? d->neighbour[k] : b->max_neighbour;
@@ -117,14 +124,15 @@ static bool nb_end_frame(tsr_hw_backend *self, tsr_hw_frame_stats *stats)
     if (!b->in_frame)
         return false;
     b->in_frame = false;
-    if (b->max_neighbour > b->frame_draws || b->self_neighbour)
-        return false; /* a neighbour beyond the frame's draws, or itself */
+    /* a neighbour beyond the frame's draws, or itself, or a buffer gone:
+     * nothing drawn */
+    bool drawn = b->max_neighbour <= b->frame_draws && !b->self_neighbour && !b->lost;
     self->stats.frames++;
     if (stats) {
         memset(stats, 0, sizeof *stats);
-        stats->triangles = b->frame_triangles;
+        stats->triangles = drawn ? b->frame_triangles : 0;
     }
-    return true;
+    return drawn;
 }
 
 static bool nb_read_color(tsr_hw_backend *self, uint8_t *rgba)

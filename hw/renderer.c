@@ -84,8 +84,10 @@ bool tsr_hw_draw_fits(const tsr_hw_tile_draw *d, uint64_t samples_size, uint64_t
         return false;
     if (d->index_count % 3 || ((uint64_t)d->first_index + d->index_count) * 4 > indices_size)
         return false;
-    /* negated comparisons so that NaN fails too */
-    return d->spacing[0] > 0 && d->spacing[1] > 0 && d->morph >= 0 && d->morph <= 1;
+    /* negated comparisons so that NaN fails too; finite positions, since
+     * the shader finds neighbours' samples from them */
+    return d->spacing[0] > 0 && d->spacing[1] > 0 && isfinite(d->spacing[0]) && isfinite(d->spacing[1]) &&
+           isfinite(d->origin[0]) && isfinite(d->origin[1]) && d->morph >= 0 && d->morph <= 1;
 }
 
 static void put_word(void *dst, uint32_t w, uint32_t word)

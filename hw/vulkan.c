@@ -770,13 +770,19 @@ static uint32_t draw_bits(const tsr_hw_tile_draw *d)
 
 /* The frame's tile records (vk_tile_rec per draw) into the slot's buffer,
  * grown as needed; false when a draw names a neighbour beyond the frame's
- * draws or itself, or when out of memory. */
+ * draws or itself, when a draw's buffer was destroyed since draw_tile, or
+ * when out of memory. */
 static bool fill_tile_records(vk_backend *b, vk_slot *s)
 {
-    for (uint32_t i = 0; i < b->ndraws; i++)
+    for (uint32_t i = 0; i < b->ndraws; i++) {
+        const tsr_hw_tile_draw *d = &b->draws[i];
+        const vk_buffer *sb = lookup(b, d->samples), *ib = lookup(b, d->indices);
+        if (!sb || !ib || sb->kind != TSR_HW_VERTEX || ib->kind != TSR_HW_INDEX)
+            return false; /* destroyed since draw_tile */
         for (int k = 0; k < 8; k++)
-            if (b->draws[i].neighbour[k] > b->ndraws || b->draws[i].neighbour[k] == i + 1)
+            if (d->neighbour[k] > b->ndraws || d->neighbour[k] == i + 1)
                 return false;
+    }
     uint64_t need = (uint64_t)(b->ndraws ? b->ndraws : 1) * sizeof(vk_tile_rec);
     if (s->tiles.size < need) {
         uint64_t size = s->tiles.size * 2 > need ? s->tiles.size * 2 : need;

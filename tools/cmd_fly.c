@@ -23,8 +23,9 @@ static void help(FILE *f)
                "pixel error off screen, crack-free, with geomorphing.\n\n"
                "In a window: mouse (hold the left button) looks around, W A S D fly, Q and E go down and up,\n"
                "Shift goes faster, + and - raise and lower the pixel error, F toggles the wireframe (tile\n"
-               "borders white, levels in colour), G toggles geomorphing, Esc quits. The title bar shows frame\n"
-               "time, tiles, triangles, pixel error and MB resident.\n\n"
+               "borders white, levels in colour), G toggles geomorphing, N shows the shading normals as\n"
+               "colours, Esc quits. The title bar shows frame time, tiles, triangles, pixel error and MB\n"
+               "resident.\n\n"
                "options:\n"
                "  --headless            render offscreen along the flight path instead of a window\n"
                "  --frames N            headless: frames to render (default 120); window: quit after N\n"
@@ -38,6 +39,7 @@ static void help(FILE *f)
                "  --fov DEG             vertical field of view (default 60)\n"
                "  --wireframe           start with the wireframe overlay\n"
                "  --no-geomorph         start without geomorphing\n"
+               "  --show-normals        draw the shading normals as colours (x red, y green, z blue), unlit\n"
                "  --cache MB            resident tile budget (default 256)\n"
                "  --device NAME|INDEX   the Vulkan device (default: TESSERA_VK_DEVICE, else a discrete GPU,\n"
                "                        then integrated, then lavapipe)\n"
@@ -315,6 +317,8 @@ static void key_cb(GLFWwindow *w, int key, int scancode, int action, int mods)
         f->o.wireframe = !f->o.wireframe;
     else if (key == GLFW_KEY_G && action == GLFW_PRESS)
         f->o.geomorph = !f->o.geomorph;
+    else if (key == GLFW_KEY_N && action == GLFW_PRESS)
+        f->o.show_normals = !f->o.show_normals;
     else if (key == GLFW_KEY_EQUAL || key == GLFW_KEY_KP_ADD)
         f->o.pixel_error = fmin(f->o.pixel_error * 1.25, 64);
     else if (key == GLFW_KEY_MINUS || key == GLFW_KEY_KP_SUBTRACT)
@@ -432,10 +436,10 @@ static int run_window(fly_args *a, const tsr_heightfield *hf)
             title_at = now;
             char title[256];
             snprintf(title, sizeof title,
-                     "tessera fly - %.1f ms - %u tiles - %.0fk triangles - tau %.2f px - %.0f MB resident%s%s",
+                     "tessera fly - %.1f ms - %u tiles - %.0fk triangles - tau %.2f px - %.0f MB resident%s%s%s",
                      recs[nrec - 1].frame_ms, fs.render.tiles, fs.render.triangles / 1e3, f.o.pixel_error,
                      fs.render.bytes_resident / 1048576.0, f.o.wireframe ? " - wireframe" : "",
-                     f.o.geomorph ? "" : " - no geomorph");
+                     f.o.geomorph ? "" : " - no geomorph", f.o.show_normals ? " - normals" : "");
             glfwSetWindowTitle(win, title);
         }
     }
@@ -481,6 +485,8 @@ static int run(int argc, char **argv)
             a.o.wireframe = true;
         else if (!strcmp(arg, "--no-geomorph"))
             a.o.geomorph = false;
+        else if (!strcmp(arg, "--show-normals"))
+            a.o.show_normals = true;
         else if (!strcmp(arg, "--frames") && more) {
             if (!cli_parse_u32(argv[++i], 1, 1000000, &a.frames)) {
                 cli_error("fly", "--frames wants a count from 1 to 1000000, not '%s'", argv[i]);

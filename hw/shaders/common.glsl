@@ -10,7 +10,7 @@ layout(buffer_reference, scalar, buffer_reference_align = 16) readonly buffer Fr
     vec4 ramp;        // x: zmin - eye z, y: zmax - eye z, z: finest spacing, w: unused
     vec4 sky_zenith;  // rgb
     vec4 sky_horizon; // rgb; also the fog colour
-    uint flags;       // 1 wireframe, 2 geomorph
+    uint flags;       // 1 wireframe, 2 geomorph, 4 normals as colours
 };
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Samples {

@@ -40,6 +40,27 @@ uint neighbour(uint e, int along)
     return pc.tiles.t[pc.draw_no].nb[2u * e + (2 * along > int(pc.n) ? 1u : 0u)];
 }
 
+// World x, y (relative to the eye) of vertex (i, j) of this tile, before
+// the clamp onto the extent (the lattice goes on beyond it).
+vec2 world(int i, int j)
+{
+    return pc.origin + vec2(float(i), float(j)) * pc.spacing;
+}
+
+// Where point p (as world()) lies on the lattice of draw `rec`: false when
+// it is not one of that tile's vertices. Written so that NaN fails.
+bool lattice_of(uint rec, vec2 p, out ivec2 k)
+{
+    vec2 q = (p - pc.tiles.t[rec].origin) / pc.tiles.t[rec].spacing;
+    vec2 qr = round(q);
+    k = ivec2(0);
+    if (!(all(lessThanEqual(abs(q - qr), vec2(0.01))) && all(greaterThanEqual(qr, vec2(0.0))) &&
+          all(lessThanEqual(qr, vec2(float(pc.tiles.t[rec].n))))))
+        return false;
+    k = ivec2(qr);
+    return true;
+}
+
 // The height at (i, j) of this tile's lattice, which may lie beyond one
 // edge: then the neighbour's sample there, if it has one. False when
 // there is none or it is no-data.
@@ -53,25 +74,51 @@ bool height_at(int i, int j, out float h)
     if (along < 0 || along > n)
         return false; /* beyond a corner: never asked */
     uint nb = neighbour(e, along);
-    if (nb == 0u)
+    ivec2 k;
+    if (nb == 0u || !lattice_of(nb - 1u, world(i, j), k))
         return false;
     nb -= 1u;
-    vec2 q = (pc.origin + vec2(float(i), float(j)) * pc.spacing - pc.tiles.t[nb].origin) / pc.tiles.t[nb].spacing;
-    vec2 qr = round(q);
-    int m = int(pc.tiles.t[nb].n);
-    if (any(greaterThan(abs(q - qr), vec2(0.01))) || any(lessThan(qr, vec2(0.0))) ||
-        any(greaterThan(qr, vec2(float(m)))))
-        return false; /* not on the neighbour's lattice */
-    uint k = uint(qr.y) * uint(m + 1) + uint(qr.x), bits = pc.tiles.t[nb].bits, first = pc.tiles.t[nb].first;
-    uint word = pc.tiles.t[nb].samples.w[word_of(k, bits, first)];
-    return decode(word, k, bits, first, pc.tiles.t[nb].z_base, pc.tiles.t[nb].z_step, h);
+    uint m = pc.tiles.t[nb].n, bits = pc.tiles.t[nb].bits, first = pc.tiles.t[nb].first;
+    uint q = uint(k.y) * (m + 1u) + uint(k.x);
+    uint word = pc.tiles.t[nb].samples.w[word_of(q, bits, first)];
+    return decode(word, q, bits, first, pc.tiles.t[nb].z_base, pc.tiles.t[nb].z_step, h);
 }
 
-// 2 when the draw across edge e at `along` is coarser than this one, else 1.
-int ratio(uint e, int along)
+// Draw nb's spacing (1 + its number; 0: none) over this one's, at least 1.
+float coarser(uint nb)
 {
-    uint nb = neighbour(e, along);
-    return nb != 0u && pc.tiles.t[nb - 1u].spacing.x > 1.5 * pc.spacing.x ? 2 : 1;
+    return nb == 0u ? 1.0 : max(1.0, pc.tiles.t[nb - 1u].spacing.x / pc.spacing.x);
+}
+
+// The step at vertex `along` of edge e (not a corner): 2 when the draw
+// across is coarser than this one, else 1.
+int edge_ratio(uint e, int along)
+{
+    return int(coarser(neighbour(e, along)) + 0.5);
+}
+
+// The step at corner (ci, cj) (each 0 or n): the coarsest spacing among
+// the tiles that meet there, in this tile's (1, 2 or 4): this one, the two
+// across its edges, and the one across the corner, found through the
+// first of those two that is drawn (across its edge at the corner, or that
+// tile itself where the corner lies inside its edge). Every tile at the
+// corner finds the same tiles, so all take the same step.
+int corner_ratio(int ci, int cj)
+{
+    uint eh = cj == 0 ? 0u : 2u, ev = ci == 0 ? 3u : 1u;
+    uint a = neighbour(ev, cj), b = neighbour(eh, ci), d = 0u;
+    vec2 v = world(ci, cj);
+    ivec2 k;
+    if (a != 0u && lattice_of(a - 1u, v, k)) {
+        int m = int(pc.tiles.t[a - 1u].n);
+        bool on = eh == 0u ? k.y == 0 : k.y == m;
+        d = on ? pc.tiles.t[a - 1u].nb[2u * eh + (2 * k.x > m ? 1u : 0u)] : a;
+    } else if (b != 0u && lattice_of(b - 1u, v, k)) {
+        int m = int(pc.tiles.t[b - 1u].n);
+        bool on = ev == 3u ? k.x == 0 : k.x == m;
+        d = on ? pc.tiles.t[b - 1u].nb[2u * ev + (2 * k.y > m ? 1u : 0u)] : b;
+    }
+    return int(max(max(coarser(a), coarser(b)), coarser(d)) + 0.5);
 }
 
 // dz per world unit along (di, dj) at (i, j), from the heights r steps
@@ -97,15 +144,11 @@ void main()
     // Normal from central differences (hw.h): across an edge with the
     // neighbour's samples, at the coarser spacing of the two, so that the
     // tiles sharing a vertex shade it alike.
-    int r = 1;
-    if (j == 0)
-        r = max(r, ratio(0u, i));
-    if (i == n)
-        r = max(r, ratio(1u, j));
-    if (j == n)
-        r = max(r, ratio(2u, i));
-    if (i == 0)
-        r = max(r, ratio(3u, j));
+    bool on_i = i == 0 || i == n, on_j = j == 0 || j == n;
+    int r = on_i && on_j ? corner_ratio(i, j)
+          : on_j         ? edge_ratio(j == 0 ? 0u : 2u, i)
+          : on_i         ? edge_ratio(i == 0 ? 3u : 1u, j)
+                         : 1;
     float gx = slope(i, j, 1, 0, r, h, pc.spacing.x);
     float gy = slope(i, j, 0, 1, r, h, pc.spacing.y);
     vec3 nrm = normalize(vec3(-gx, -gy, 1.0));

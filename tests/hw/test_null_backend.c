@@ -102,6 +102,9 @@ TEST(frames_and_draws)
     BAD(x.spacing[0] = 0, "zero x spacing");
     BAD(x.spacing[1] = -1, "negative y spacing");
     BAD(x.spacing[0] = NAN, "NaN spacing");
+    BAD(x.spacing[1] = INFINITY, "infinite spacing");
+    BAD(x.origin[0] = NAN, "NaN origin");
+    BAD(x.origin[1] = -INFINITY, "infinite origin");
     BAD(x.morph = -0.01f, "morph below 0");
     BAD(x.morph = 1.01f, "morph above 1");
     BAD(x.morph = NAN, "NaN morph");
@@ -161,15 +164,31 @@ TEST(frames_and_draws)
     x.neighbour[4] = 3;
     CHECK(b->begin_frame(b, &frame)); /* a failed end_frame still ends the frame */
     CHECK(b->draw_tile(b, &d) && b->draw_tile(b, &x)); /* names a third draw that never comes */
+    memset(&fs, 0xab, sizeof fs);
+    CHECK(!b->end_frame(b, &fs) && fs.triangles == 0);
+    CHECK(b->stats.frames == 6 && b->stats.draws == 13); /* failed frames count */
+
+    /* a buffer destroyed after a draw of the frame used it fails the frame */
+    tsr_hw_buffer vb2 = b->create_buffer(b, TSR_HW_VERTEX, 200);
+    x = d;
+    x.samples = vb2;
+    CHECK(b->begin_frame(b, &frame));
+    CHECK(b->draw_tile(b, &x));
+    b->destroy_buffer(b, vb2);
     CHECK(!b->end_frame(b, NULL));
-    CHECK(b->stats.frames == 4 && b->stats.draws == 13);
+    CHECK(b->begin_frame(b, &frame)); /* a buffer not drawn from may go */
+    vb2 = b->create_buffer(b, TSR_HW_VERTEX, 200);
+    CHECK(b->draw_tile(b, &d));
+    b->destroy_buffer(b, vb2);
+    CHECK(b->end_frame(b, NULL));
+    CHECK(b->stats.draws == 15);
 
     /* a destroyed buffer cannot be drawn from */
     b->destroy_buffer(b, vb);
     CHECK(b->begin_frame(b, &frame));
     CHECK(!b->draw_tile(b, &d));
     CHECK(b->end_frame(b, NULL));
-    CHECK(b->stats.draws == 13);
+    CHECK(b->stats.draws == 15);
     b->destroy(b);
 }
 

@@ -53,6 +53,27 @@ printf '# eye only\n100 100 900\n4000 600 800\n4000 4000 700\n' > "$dir/path.txt
 [ "$(ls "$dir/p" | wc -l)" -eq 3 ] || fail "--path frames"
 echo "ok --path"
 
+# --show-normals: looking down on the terrain, the frame is the normals as
+# colours, (n + 1) / 2: blue (z) near 1 and red, green (x, y) near 1/2 on
+# average, which the lit frame of the same view is not
+printf '2560 2300 4000 2560 2600 0\n2600 2300 4000 2600 2600 0\n' > "$dir/down.txt"
+for mode in lit normals; do
+  extra=; [ $mode = normals ] && extra=--show-normals
+  "$tessera" fly "$dir/t.png" --dx 20 --headless --frames 1 --width 64 --height 48 --out "$dir/$mode" \
+    --path "$dir/down.txt" $extra --quiet || fail "--show-normals ($mode)"
+  oiiotool --stats "$dir/$mode/frame_00000.png" | grep 'Stats Avg' | head -1 > "$dir/$mode.avg"
+done
+python3 - "$dir/lit.avg" "$dir/normals.avg" <<'PY' || fail "--show-normals colours"
+import re, sys
+def avg(p):
+    return [float(x) for x in re.findall(r"[-0-9.]+", open(p).read().split(":", 1)[1])[:3]]
+lit, nrm = avg(sys.argv[1]), avg(sys.argv[2])
+def normals_like(c):
+    return c[2] > 0.9 * 255 and abs(c[0] - 127.5) < 40 and abs(c[1] - 127.5) < 40
+assert normals_like(nrm) and not normals_like(lit), (nrm, lit)
+print("ok --show-normals: average RGB %s (lit %s)" % (nrm, lit))
+PY
+
 # --video: assembled by ffmpeg when it is installed, else a clear failure
 # that leaves the frames and no video
 if command -v ffmpeg >/dev/null; then
