@@ -199,6 +199,19 @@ TEST(triangles_drawn_match_cut)
     tsr_heightfield_destroy(hf);
 }
 
+/* The world point drawn at pixel (x, y), from its depth; false where
+ * nothing was drawn. */
+static bool pixel_point(const tsr_camera *cam, const float *depth, int x, int y, double p[3])
+{
+    float d = depth[y * W + x];
+    if (!(d > 0))
+        return false;
+    double u = (x + 0.5 - W / 2.0) / cam->K, w = -(y + 0.5 - H / 2.0) / cam->K;
+    for (int k = 0; k < 3; k++)
+        p[k] = cam->eye[k] + cam->near_dist / d * (cam->fwd[k] + u * cam->right[k] + w * cam->up[k]);
+    return true;
+}
+
 /* fly's neighbours (tsr_hw_tile.neighbour) against geometry, on the null
  * backend (no device needed): across each half edge of each drawn tile,
  * the drawn tile whose rectangle holds the half edge's midpoint moved a
@@ -318,12 +331,9 @@ static void normal_errors(tsr_hw_backend *b, const tsr_heightfield *hf, bool one
     uint32_t hits = 0;
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) {
-            float d = depth[y * W + x];
-            if (!(d > 0))
+            double p[3];
+            if (!pixel_point(&cam, depth, x, y, p))
                 continue;
-            double u = (x + 0.5 - W / 2.0) / cam.K, w = -(y + 0.5 - H / 2.0) / cam.K, p[3];
-            for (int k = 0; k < 3; k++)
-                p[k] = cam.eye[k] + cam.near_dist / d * (cam.fwd[k] + u * cam.right[k] + w * cam.up[k]);
             if (fmin(p[0], p[1]) < margin || fmax(p[0], p[1]) > 2560 - margin)
                 continue;
             hits++;
@@ -501,12 +511,9 @@ TEST(border_normals_follow_the_rule)
     double worst = 0, tol = 0.008;
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) {
-            float d = depth[y * W + x];
-            if (!(d > 0))
+            double p[3];
+            if (!pixel_point(&cam, depth, x, y, p))
                 continue;
-            double u = (x + 0.5 - W / 2.0) / cam.K, w = -(y + 0.5 - H / 2.0) / cam.K, p[3];
-            for (int k = 0; k < 3; k++)
-                p[k] = cam.eye[k] + cam.near_dist / d * (cam.fwd[k] + u * cam.right[k] + w * cam.up[k]);
             /* the drawn tile and the triangle of its pattern under the point:
              * the one it is deepest inside */
             double best = -INFINITY, want[3] = {0};
