@@ -81,8 +81,10 @@ typedef struct tsr_hw_frame {
  * 2 towards a coarser neighbour, else 1; at a corner 1, 2 or 4, from the
  * tiles across its two edges and the one across the corner (found through
  * those two's neighbours). The samples beyond an edge are the neighbour's.
- * So every tile at a vertex takes the same differences of the same
- * samples, and their lighting meets without a seam. A difference whose
+ * So every drawn tile at a vertex takes the same differences of the same
+ * samples, and their lighting meets without a seam (next to a tile not
+ * drawn, e.g. culled off screen, or beyond a tile of n = 2, they may
+ * differ). A difference whose
  * far sample is missing (no neighbour, no-data, or not on the neighbour's
  * lattice, e.g. beyond a tile of n = 2) is one-sided; with none on either
  * side, that slope is 0. The neighbours are read from the pool where they

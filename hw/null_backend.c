@@ -10,7 +10,7 @@
 typedef struct null_buffer {
     tsr_hw_buffer_kind kind; /* 0 when the slot is free */
     uint64_t size;
-    uint64_t drawn_in;       /* the last frame (1 + frames before it) with a draw from it */
+    uint64_t drawn_in;       /* the last frame (frame_no) with a draw from it */
 } null_buffer;
 
 typedef struct null_backend {
@@ -19,6 +19,7 @@ typedef struct null_backend {
     null_buffer *buffers;
     uint32_t count, cap;
     bool in_frame;
+    uint64_t frame_no; /* frames begun */
     uint64_t frame_triangles;
     uint32_t frame_draws, max_neighbour; /* this frame's draws, the largest neighbour number named */
     bool self_neighbour;                 /* a draw named itself */
@@ -79,7 +80,7 @@ static void nb_destroy_buffer(tsr_hw_backend *self, tsr_hw_buffer id)
     null_buffer *buf = lookup(b, id);
     if (!buf)
         return;
-    if (b->in_frame && buf->drawn_in == self->stats.frames + 1)
+    if (b->in_frame && buf->drawn_in == b->frame_no)
         b->lost = true;
     self->stats.buffers_live--;
     self->stats.bytes_live -= buf->size;
@@ -92,6 +93,7 @@ static bool nb_begin_frame(tsr_hw_backend *self, const tsr_hw_frame *frame)
     if (b->in_frame || !frame)
         return false;
     b->in_frame = true;
+    b->frame_no++;
     b->frame_triangles = 0;
     b->frame_draws = b->max_neighbour = 0;
     b->self_neighbour = b->lost = false;
@@ -106,7 +108,7 @@ static bool nb_draw_tile(tsr_hw_backend *self, const tsr_hw_tile_draw *d)
     null_buffer *s = lookup(b, d->samples), *ix = lookup(b, d->indices);
     if (!s || s->kind != TSR_HW_VERTEX || !ix || ix->kind != TSR_HW_INDEX || !tsr_hw_draw_fits(d, s->size, ix->size))
         return false;
-    s->drawn_in = ix->drawn_in = self->stats.frames + 1;
+    s->drawn_in = ix->drawn_in = b->frame_no;
     b->frame_draws++;
     for (int k = 0; k < 8; k++) {
         b->max_neighbour = d->neighbour[k] > b->max_neighbour ? d->neighbour[k] : b->max_neighbour;

@@ -86,6 +86,7 @@ typedef struct vk_buffer {
     uint64_t size;
     tsr_hw_buffer_kind kind; /* 0: free slot */
     void *mapped;
+    uint64_t drawn_in; /* the last frame (frame_no) with a draw from it */
 } vk_buffer;
 
 typedef struct vk_copy {
@@ -140,6 +141,8 @@ typedef struct vk_backend {
     vk_slot slots[MAX_SLOTS];
     uint32_t nslots, cur;
     bool in_frame;
+    uint64_t frame_no; /* frames begun */
+    bool lost;         /* a buffer this frame draws from was destroyed */
     tsr_hw_frame frame;
     tsr_hw_tile_draw *draws;
     uint32_t ndraws, capdraws;
@@ -327,6 +330,8 @@ static void vb_destroy_buffer(tsr_hw_backend *self, tsr_hw_buffer id)
     vk_buffer *v = lookup(b, id);
     if (!v)
         return;
+    if (b->in_frame && v->drawn_in == b->frame_no)
+        b->lost = true; /* even if its id comes back before end_frame */
     /* a frame in flight may still read it */
     vkQueueWaitIdle(b->queue);
     self->stats.buffers_live--;
@@ -690,6 +695,8 @@ static bool vb_begin_frame(tsr_hw_backend *self, const tsr_hw_frame *f)
     }
     b->frame = *f;
     b->in_frame = true;
+    b->frame_no++;
+    b->lost = false;
     b->ndraws = 0;
     b->frame_tris = 0;
     b->ring_head = 0;
@@ -714,6 +721,7 @@ static bool vb_draw_tile(tsr_hw_backend *self, const tsr_hw_tile_draw *d)
         b->capdraws = cap;
     }
     b->draws[b->ndraws++] = *d;
+    sb->drawn_in = ib->drawn_in = b->frame_no;
     self->stats.draws++;
     self->stats.triangles_drawn += d->index_count / 3;
     b->frame_tris += d->index_count / 3;
@@ -774,6 +782,8 @@ static uint32_t draw_bits(const tsr_hw_tile_draw *d)
  * when out of memory. */
 static bool fill_tile_records(vk_backend *b, vk_slot *s)
 {
+    if (b->lost)
+        return false;
     for (uint32_t i = 0; i < b->ndraws; i++) {
         const tsr_hw_tile_draw *d = &b->draws[i];
         const vk_buffer *sb = lookup(b, d->samples), *ib = lookup(b, d->indices);

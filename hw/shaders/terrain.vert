@@ -48,13 +48,15 @@ vec2 world(int i, int j)
 }
 
 // Where point p (as world()) lies on the lattice of draw `rec`: false when
-// it is not one of that tile's vertices. Written so that NaN fails.
+// it is not one of that tile's vertices (points off the lattice are half a
+// step away or more, so a quarter step of float rounding is tolerated).
+// Written so that NaN fails.
 bool lattice_of(uint rec, vec2 p, out ivec2 k)
 {
     vec2 q = (p - pc.tiles.t[rec].origin) / pc.tiles.t[rec].spacing;
     vec2 qr = round(q);
     k = ivec2(0);
-    if (!(all(lessThanEqual(abs(q - qr), vec2(0.01))) && all(greaterThanEqual(qr, vec2(0.0))) &&
+    if (!(all(lessThanEqual(abs(q - qr), vec2(0.25))) && all(greaterThanEqual(qr, vec2(0.0))) &&
           all(lessThanEqual(qr, vec2(float(pc.tiles.t[rec].n))))))
         return false;
     k = ivec2(qr);
