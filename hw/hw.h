@@ -87,8 +87,10 @@ typedef struct tsr_hw_frame {
  * differ). A difference whose
  * far sample is missing (no neighbour, no-data, or not on the neighbour's
  * lattice, e.g. beyond a tile of n = 2) is one-sided; with none on either
- * side, that slope is 0. The neighbours are read from the pool where they
- * already are: no bytes are uploaded for them. */
+ * side, that slope is 0. With TSR_HW_FRAME_GEOMORPH, the slopes of the
+ * vertices inside the tile move with the heights: mix(slope at r = 1,
+ * slope at r = 2 (the parent's spacing), morph). The neighbours are read
+ * from the pool where they already are: no bytes are uploaded for them. */
 typedef struct tsr_hw_tile_draw {
     tsr_hw_buffer samples;  /* a VERTEX buffer */
     uint64_t samples_offset; /* byte offset of the word holding sample 0, a multiple of 4 */

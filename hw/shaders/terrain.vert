@@ -153,6 +153,13 @@ void main()
                          : 1;
     float gx = slope(i, j, 1, 0, r, h, pc.spacing.x);
     float gy = slope(i, j, 0, 1, r, h, pc.spacing.y);
+    // Geomorphing, the slopes inside the tile move with the heights towards
+    // the parent's: differences at twice the step, its spacing (so lighting
+    // does not jump where a tile splits). Border vertices keep the rule's.
+    if ((pc.frame.flags & 2u) != 0u && pc.morph > 0.0 && !on_i && !on_j) {
+        gx = mix(gx, slope(i, j, 1, 0, 2, h, pc.spacing.x), pc.morph);
+        gy = mix(gy, slope(i, j, 0, 1, 2, h, pc.spacing.y), pc.morph);
+    }
     vec3 nrm = normalize(vec3(-gx, -gy, 1.0));
 
     // Geomorph: odd vertices inside the tile move towards the parent's

@@ -477,23 +477,38 @@ static float wavy_height(int i, int j)
 typedef struct rule_ctx {
     const tsr_hw_tile *tiles;
     uint32_t count, n;
-    uint8_t *step, *covered; /* per sample: the largest step (in samples) of a drawn tile holding it */
+    uint8_t *step;    /* per sample: the largest step (in samples) of a drawn tile holding it */
+    uint8_t *covered; /* per sample: some drawn tile holds it */
+    uint8_t *lattice; /* per sample: it is a vertex of a drawn tile holding it (the shader can read it) */
 } rule_ctx;
 
 static int tile_step(const tsr_hw_tile *t) { return (int)lround(t->spacing[0] / 10); }
 
-/* The expected normal at sample (X, Y), as the shader makes it. */
-static void rule_normal(const rule_ctx *c, int X, int Y, double nrm[3])
+/* The shader's slopes at sample (X, Y) with step S (in samples): central,
+ * else one-sided, else 0. */
+static void rule_slopes(const rule_ctx *c, int X, int Y, int S, double g[2])
 {
-    int S = c->step[Y * WN + X];
-    double g[2];
     for (int a = 0; a < 2; a++) {
         int dx = a == 0, dy = a == 1, ax = X - S * dx, ay = Y - S * dy, bx = X + S * dx, by = Y + S * dy;
-        bool ha = ax >= 0 && ay >= 0 && c->covered[ay * WN + ax];
-        bool hb = bx < WN && by < WN && c->covered[by * WN + bx];
+        bool ha = ax >= 0 && ay >= 0 && c->lattice[ay * WN + ax];
+        bool hb = bx < WN && by < WN && c->lattice[by * WN + bx];
         double h0 = wavy_height(X, Y), A = ha ? wavy_height(ax, ay) : h0, B = hb ? wavy_height(bx, by) : h0;
         int span = (ha ? S : 0) + (hb ? S : 0);
         g[a] = span ? (B - A) / (span * 10.0) : 0;
+    }
+}
+
+/* The expected normal at sample (X, Y), as the shader makes it: the
+ * rule's step; at a vertex inside a tile of step S morphing by `morph`,
+ * the slopes mixed with those at 2 S. */
+static void rule_normal(const rule_ctx *c, int X, int Y, int S, double morph, double nrm[3])
+{
+    double g[2], g2[2];
+    rule_slopes(c, X, Y, c->step[Y * WN + X], g);
+    if (morph > 0) {
+        rule_slopes(c, X, Y, 2 * S, g2);
+        for (int a = 0; a < 2; a++)
+            g[a] = g[a] * (1 - morph) + g2[a] * morph;
     }
     double len = sqrt(g[0] * g[0] + g[1] * g[1] + 1);
     nrm[0] = -g[0] / len, nrm[1] = -g[1] / len, nrm[2] = 1 / len;
@@ -510,7 +525,7 @@ TEST(border_normals_follow_the_rule)
         for (int i = 0; i < WN; i++)
             hv[j * WN + i] = wavy_height(i, j);
     tsr_heightfield_set_spacing(hf, 10, 10, 1);
-    fly_options o = {.tile_n = 8, .pixel_error = 2, .fog_distance = -1, .show_normals = true};
+    fly_options o = {.tile_n = 8, .pixel_error = 2, .fog_distance = -1, .show_normals = true, .geomorph = true};
     fly_ctx f;
     tsr_error err = {0};
     CHECK(fly_init(&f, hf, b, &o, &err) == TSR_OK);
@@ -520,7 +535,7 @@ TEST(border_normals_follow_the_rule)
     uint8_t *rgba = render(&f, &v, &fs, depth);
     tsr_camera cam;
     fly_camera(&f, v.eye, v.target, &cam);
-    rule_ctx c = {f.tiles, fs.render.tiles, o.tile_n, calloc(WN * WN, 1), calloc(WN * WN, 1)};
+    rule_ctx c = {f.tiles, fs.render.tiles, o.tile_n, calloc(WN * WN, 1), calloc(WN * WN, 1), calloc(WN * WN, 1)};
     uint32_t lv = 0;
     for (uint32_t k = 0; k < c.count; k++) {
         const tsr_hw_tile *t = &c.tiles[k];
@@ -529,6 +544,7 @@ TEST(border_normals_follow_the_rule)
         for (int Y = Y0; Y <= Y0 + S * (int)c.n && Y < WN; Y++)
             for (int X = X0; X <= X0 + S * (int)c.n && X < WN; X++) {
                 c.covered[Y * WN + X] = 1;
+                c.lattice[Y * WN + X] |= (X - X0) % S == 0 && (Y - Y0) % S == 0;
                 c.step[Y * WN + X] = (uint8_t)(S > c.step[Y * WN + X] ? S : c.step[Y * WN + X]);
             }
     }
@@ -583,10 +599,10 @@ TEST(border_normals_follow_the_rule)
                 stair == MAX_STAIR)
                 continue;
             double n1[3], n2[3];
-            rule_normal(&c, X, Y, n1);
+            rule_normal(&c, X, Y, S, 0, n1);
             uint8_t keep = c.step[Y * WN + X];
             c.step[Y * WN + X] = (uint8_t)edges;
-            rule_normal(&c, X, Y, n2);
+            rule_normal(&c, X, Y, S, 0, n2);
             c.step[Y * WN + X] = keep;
             st[stair].k = k, st[stair].X = X, st[stair].Y = Y, st[stair].diff = 0;
             for (int a = 0; a < 3; a++)
@@ -639,7 +655,8 @@ TEST(border_normals_follow_the_rule)
                             if (st[z].k == k && st[z].X == X && st[z].Y == Y)
                                 near_stair += bc[e] * st[z].diff;
                         double nv[3];
-                        rule_normal(&c, X < WN ? X : WN - 1, Y < WN ? Y : WN - 1, nv);
+                        bool inside = vx[e] > 0 && vy[e] > 0 && vx[e] < c.n && vy[e] < c.n;
+                        rule_normal(&c, X < WN ? X : WN - 1, Y < WN ? Y : WN - 1, S, inside ? t->morph : 0, nv);
                         for (int a = 0; a < 3; a++)
                             sum[a] += bc[e] * nv[a];
                     }
@@ -673,6 +690,7 @@ TEST(border_normals_follow_the_rule)
     free(whole);
     free(c.step);
     free(c.covered);
+    free(c.lattice);
     free(rgba);
     free(depth);
     fly_free(&f);
