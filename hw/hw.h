@@ -87,10 +87,14 @@ typedef struct tsr_hw_frame {
  * differ). A difference whose
  * far sample is missing (no neighbour, no-data, or not on the neighbour's
  * lattice, e.g. beyond a tile of n = 2) is one-sided; with none on either
- * side, that slope is 0. With TSR_HW_FRAME_GEOMORPH, the slopes of the
- * vertices inside the tile move with the heights: mix(slope at r = 1,
- * slope at r = 2 (the parent's spacing), morph). The neighbours are read
- * from the pool where they already are: no bytes are uploaded for them. */
+ * side, that slope is 0. With TSR_HW_FRAME_GEOMORPH, a vertex inside the
+ * tile moves its normal as its height, by `morph`, towards what the parent
+ * tile draws there: at an even vertex the parent's normal (differences at
+ * r = 2, its spacing), at an odd one the mean of the parent's normals at
+ * the two even vertices whose mean its height goes to (not renormalised:
+ * the fragment shader normalises after interpolating, as for the parent).
+ * The neighbours are read from the pool where they already are: no bytes
+ * are uploaded for them. */
 typedef struct tsr_hw_tile_draw {
     tsr_hw_buffer samples;  /* a VERTEX buffer */
     uint64_t samples_offset; /* byte offset of the word holding sample 0, a multiple of 4 */

@@ -133,6 +133,13 @@ float slope(int i, int j, int di, int dj, int r, float h, float step)
     return span > 0 ? ((b ? hb : h) - (a ? ha : h)) / (float(span) * step) : 0.0;
 }
 
+// The parent tile's normal at even vertex (i, j) of this one (height h):
+// differences at twice this tile's step.
+vec3 parent_normal(int i, int j, float h)
+{
+    return normalize(vec3(-slope(i, j, 1, 0, 2, h, pc.spacing.x), -slope(i, j, 0, 1, 2, h, pc.spacing.y), 1.0));
+}
+
 void main()
 {
     uint idx = uint(gl_VertexIndex);
@@ -153,38 +160,44 @@ void main()
                          : 1;
     float gx = slope(i, j, 1, 0, r, h, pc.spacing.x);
     float gy = slope(i, j, 0, 1, r, h, pc.spacing.y);
-    // Geomorphing, the slopes inside the tile move with the heights towards
-    // the parent's: differences at twice the step, its spacing (so lighting
-    // does not jump where a tile splits). Border vertices keep the rule's.
-    if ((pc.frame.flags & 2u) != 0u && pc.morph > 0.0 && !on_i && !on_j) {
-        gx = mix(gx, slope(i, j, 1, 0, 2, h, pc.spacing.x), pc.morph);
-        gy = mix(gy, slope(i, j, 0, 1, 2, h, pc.spacing.y), pc.morph);
-    }
     vec3 nrm = normalize(vec3(-gx, -gy, 1.0));
 
-    // Geomorph: odd vertices inside the tile move towards the parent's
-    // surface, the mean of the two even neighbours along the parent's edge
-    // or (at a parent quad's centre) its union-jack diagonal.
-    if ((pc.frame.flags & 2u) != 0u && pc.morph > 0.0 && ok && i > 0 && j > 0 && i < n && j < n &&
-        ((i & 1) != 0 || (j & 1) != 0)) {
-        int ai, aj, bi, bj;
-        if ((j & 1) == 0) {
-            ai = i - 1; aj = j; bi = i + 1; bj = j;
-        } else if ((i & 1) == 0) {
-            ai = i; aj = j - 1; bi = i; bj = j + 1;
+    // Geomorph: vertices inside the tile move towards what the parent tile
+    // draws there. Odd ones: the height to the mean of the two even
+    // neighbours along the parent's edge or (at a parent quad's centre) its
+    // union-jack diagonal, and the normal to the mean of the parent's
+    // normals at those two (what the parent's triangle interpolates); even
+    // ones keep their height and take the parent's normal (differences at
+    // twice the step, its spacing). The blended normal is not renormalised
+    // (the fragment shader normalises after interpolating, as for the
+    // parent), so at morph 1 the tile lights as its parent does.
+    if ((pc.frame.flags & 2u) != 0u && pc.morph > 0.0 && ok && !on_i && !on_j) {
+        vec3 target;
+        if (((i | j) & 1) == 0) {
+            target = parent_normal(i, j, h);
         } else {
-            uint parity = (pc.bits >> 16u) & 3u;
-            int pqi = int(parity & 1u) * (n / 2) + (i - 1) / 2;
-            int pqj = int(parity >> 1u) * (n / 2) + (j - 1) / 2;
-            if (((pqi + pqj) & 1) == 0) {
-                ai = i - 1; aj = j - 1; bi = i + 1; bj = j + 1;
+            int ai, aj, bi, bj;
+            if ((j & 1) == 0) {
+                ai = i - 1; aj = j; bi = i + 1; bj = j;
+            } else if ((i & 1) == 0) {
+                ai = i; aj = j - 1; bi = i; bj = j + 1;
             } else {
-                ai = i + 1; aj = j - 1; bi = i - 1; bj = j + 1;
+                uint parity = (pc.bits >> 16u) & 3u;
+                int pqi = int(parity & 1u) * (n / 2) + (i - 1) / 2;
+                int pqj = int(parity >> 1u) * (n / 2) + (j - 1) / 2;
+                if (((pqi + pqj) & 1) == 0) {
+                    ai = i - 1; aj = j - 1; bi = i + 1; bj = j + 1;
+                } else {
+                    ai = i + 1; aj = j - 1; bi = i - 1; bj = j + 1;
+                }
             }
+            float ha, hb;
+            bool oka = fetch(ai, aj, ha), okb = fetch(bi, bj, hb);
+            target = oka && okb ? 0.5 * (parent_normal(ai, aj, ha) + parent_normal(bi, bj, hb)) : nrm;
+            if (oka && okb)
+                h = mix(h, 0.5 * (ha + hb), pc.morph);
         }
-        float ha, hb;
-        if (fetch(ai, aj, ha) && fetch(bi, bj, hb))
-            h = mix(h, 0.5 * (ha + hb), pc.morph);
+        nrm = mix(nrm, target, pc.morph);
     }
 
     vec3 p = vec3(min(pc.origin + vec2(float(i), float(j)) * pc.spacing, pc.limit), h);

@@ -456,10 +456,11 @@ TEST(normals_continuous_across_tiles)
 /* The rule of hw.h for the normals, checked on the GPU's image against
  * an oracle built from geometry alone (not from the neighbour numbers):
  * the step at a vertex is the largest spacing of the drawn tiles whose
- * rectangles hold it, the far samples are the heightfield's where a
- * drawn tile covers them (else the difference is one-sided), and a pixel's
- * normal is the triangle's three vertex normals blended by its
- * barycentric coordinates. A wavy terrain of integer heights (stored
+ * rectangles hold it, the far samples are the heightfield's where they
+ * are vertices of a drawn tile (else the difference is one-sided), inside
+ * a morphing tile the normal is blended towards the parent's as the
+ * heights are, and a pixel's normal is the triangle's three vertex normals
+ * blended by its barycentric coordinates. A wavy terrain of integer heights (stored
  * exactly), so that steps of s and 2 s give clearly different normals: a
  * tile taking another step than its neighbour at a shared vertex, the
  * corner across the diagonal included, shows as pixels off. The view is
@@ -498,20 +499,48 @@ static void rule_slopes(const rule_ctx *c, int X, int Y, int S, double g[2])
     }
 }
 
-/* The expected normal at sample (X, Y), as the shader makes it: the
- * rule's step; at a vertex inside a tile of step S morphing by `morph`,
- * the slopes mixed with those at 2 S. */
-static void rule_normal(const rule_ctx *c, int X, int Y, int S, double morph, double nrm[3])
+/* The normal from slopes g: (-g, 1) normalised. */
+static void slope_normal(const double g[2], double nrm[3])
 {
-    double g[2], g2[2];
-    rule_slopes(c, X, Y, c->step[Y * WN + X], g);
-    if (morph > 0) {
-        rule_slopes(c, X, Y, 2 * S, g2);
-        for (int a = 0; a < 2; a++)
-            g[a] = g[a] * (1 - morph) + g2[a] * morph;
-    }
     double len = sqrt(g[0] * g[0] + g[1] * g[1] + 1);
     nrm[0] = -g[0] / len, nrm[1] = -g[1] / len, nrm[2] = 1 / len;
+}
+
+/* The normal the shader gives vertex (i, j) of tile t: slopes at the
+ * rule's step; inside a morphing tile, blended (not renormalised) towards
+ * the parent's normal there, at an odd vertex the mean of the parent's
+ * normals at the two even vertices whose mean its height morphs to. */
+static void rule_vertex(const rule_ctx *c, const tsr_hw_tile *t, int i, int j, double nrm[3])
+{
+    int S = tile_step(t), n = (int)c->n, X0 = (int)lround(t->origin[0] / 10), Y0 = (int)lround(t->origin[1] / 10);
+    int X = X0 + S * i, Y = Y0 + S * j;
+    X = X < WN ? X : WN - 1;
+    Y = Y < WN ? Y : WN - 1;
+    double g[2];
+    rule_slopes(c, X, Y, c->step[Y * WN + X], g);
+    slope_normal(g, nrm);
+    if (!(t->morph > 0) || i <= 0 || j <= 0 || i >= n || j >= n)
+        return;
+    int pair[2][2] = {{i, j}, {i, j}}; /* even: the vertex itself */
+    if ((i & 1) && !(j & 1))
+        pair[0][0] = i - 1, pair[1][0] = i + 1;
+    else if (!(i & 1) && (j & 1))
+        pair[0][1] = j - 1, pair[1][1] = j + 1;
+    else if (i & 1) {
+        int pqi = (t->parity & 1) * (n / 2) + (i - 1) / 2, pqj = (t->parity >> 1) * (n / 2) + (j - 1) / 2;
+        int d = ((pqi + pqj) & 1) == 0 ? 1 : -1;
+        pair[0][0] = i - d, pair[0][1] = j - 1, pair[1][0] = i + d, pair[1][1] = j + 1;
+    }
+    double target[3] = {0};
+    for (int e = 0; e < 2; e++) {
+        double g2[2], n2[3];
+        rule_slopes(c, X0 + S * pair[e][0], Y0 + S * pair[e][1], 2 * S, g2);
+        slope_normal(g2, n2);
+        for (int a = 0; a < 3; a++)
+            target[a] += 0.5 * n2[a];
+    }
+    for (int a = 0; a < 3; a++)
+        nrm[a] += (target[a] - nrm[a]) * t->morph;
 }
 
 TEST(border_normals_follow_the_rule)
@@ -598,12 +627,11 @@ TEST(border_normals_follow_the_rule)
             if (!whole[k] || across[2] <= edges || !across[0] || !across[1] || X >= WN || Y >= WN ||
                 stair == MAX_STAIR)
                 continue;
-            double n1[3], n2[3];
-            rule_normal(&c, X, Y, S, 0, n1);
-            uint8_t keep = c.step[Y * WN + X];
-            c.step[Y * WN + X] = (uint8_t)edges;
-            rule_normal(&c, X, Y, S, 0, n2);
-            c.step[Y * WN + X] = keep;
+            double n1[3], n2[3], g[2];
+            rule_slopes(&c, X, Y, c.step[Y * WN + X], g);
+            slope_normal(g, n1);
+            rule_slopes(&c, X, Y, edges, g);
+            slope_normal(g, n2);
             st[stair].k = k, st[stair].X = X, st[stair].Y = Y, st[stair].diff = 0;
             for (int a = 0; a < 3; a++)
                 st[stair].diff = fmax(st[stair].diff, fabs(n1[a] - n2[a]));
@@ -655,8 +683,7 @@ TEST(border_normals_follow_the_rule)
                             if (st[z].k == k && st[z].X == X && st[z].Y == Y)
                                 near_stair += bc[e] * st[z].diff;
                         double nv[3];
-                        bool inside = vx[e] > 0 && vy[e] > 0 && vx[e] < c.n && vy[e] < c.n;
-                        rule_normal(&c, X < WN ? X : WN - 1, Y < WN ? Y : WN - 1, S, inside ? t->morph : 0, nv);
+                        rule_vertex(&c, t, (int)vx[e], (int)vy[e], nv);
                         for (int a = 0; a < 3; a++)
                             sum[a] += bc[e] * nv[a];
                     }
