@@ -783,16 +783,11 @@ static uint32_t draw_bits(const tsr_hw_tile_draw *d)
 static bool fill_tile_records(vk_backend *b, vk_slot *s)
 {
     if (b->lost)
-        return false;
-    for (uint32_t i = 0; i < b->ndraws; i++) {
-        const tsr_hw_tile_draw *d = &b->draws[i];
-        const vk_buffer *sb = lookup(b, d->samples), *ib = lookup(b, d->indices);
-        if (!sb || !ib || sb->kind != TSR_HW_VERTEX || ib->kind != TSR_HW_INDEX)
-            return false; /* destroyed since draw_tile */
+        return false; /* a draw's buffer destroyed since draw_tile (its id may be back) */
+    for (uint32_t i = 0; i < b->ndraws; i++)
         for (int k = 0; k < 8; k++)
-            if (d->neighbour[k] > b->ndraws || d->neighbour[k] == i + 1)
+            if (b->draws[i].neighbour[k] > b->ndraws || b->draws[i].neighbour[k] == i + 1)
                 return false;
-    }
     uint64_t need = (uint64_t)(b->ndraws ? b->ndraws : 1) * sizeof(vk_tile_rec);
     if (s->tiles.size < need) {
         uint64_t size = s->tiles.size * 2 > need ? s->tiles.size * 2 : need;

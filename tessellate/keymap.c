@@ -69,6 +69,13 @@ uint32_t *tsr_keymap_find(const tsr_keymap *m, uint64_t key)
     return m->slots[h].key == k ? &m->slots[h].val : NULL;
 }
 
+void tsr_keymap_clear(tsr_keymap *m)
+{
+    if (m->slots)
+        memset(m->slots, 0, (m->mask + 1) * sizeof *m->slots);
+    m->count = 0;
+}
+
 void tsr_keymap_free(tsr_keymap *m, const tsr_allocator *a)
 {
     tsr_free(a, m->slots);

@@ -211,6 +211,8 @@ bool tsr_keymap_reserve(tsr_keymap *m, size_t n, const tsr_allocator *a);
 uint32_t *tsr_keymap_slot(tsr_keymap *m, uint64_t key, bool *found, const tsr_allocator *a);
 /* The value of key, or NULL when absent. */
 uint32_t *tsr_keymap_find(const tsr_keymap *m, uint64_t key);
+/* Removes every key, keeping the room (for a map refilled each frame). */
+void tsr_keymap_clear(tsr_keymap *m);
 void tsr_keymap_free(tsr_keymap *m, const tsr_allocator *a);
 
 /* ---- Validation -------------------------------------------------------- */

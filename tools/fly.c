@@ -149,10 +149,7 @@ static uint32_t drawn_tile(const fly_ctx *f, uint32_t x, uint32_t y, int level)
  * ones along the edge. Culled leaves are not drawn: no neighbour there. */
 static tsr_status link_neighbours(fly_ctx *f, uint32_t count, tsr_error *err)
 {
-    if (f->drawn.slots) { /* emptied, its room kept for the next frame */
-        memset(f->drawn.slots, 0, (f->drawn.mask + 1) * sizeof *f->drawn.slots);
-        f->drawn.count = 0;
-    }
+    tsr_keymap_clear(&f->drawn);
     if (!tsr_keymap_reserve(&f->drawn, count, NULL))
         return tsr_error_set(err, TSR_ERR_NOMEM, "out of memory for the neighbours of %u tiles", count);
     for (uint32_t k = 0; k < count; k++) {

@@ -211,5 +211,33 @@ TEST(custom_allocator_is_used_and_balanced)
     CHECK(counted == 0);
 }
 
+/* tsr_keymap_clear empties the map and keeps its room: the same keys go
+ * back without growing, old keys are gone. */
+TEST(keymap_clear_keeps_room)
+{
+    tsr_keymap m = {0};
+    tsr_keymap_clear(&m); /* an empty map */
+    CHECK(m.count == 0 && !m.slots);
+    bool found;
+    for (uint64_t k = 0; k < 300; k++)
+        *tsr_keymap_slot(&m, k * 7919, &found, NULL) = (uint32_t)k;
+    size_t mask = m.mask;
+    tsr_keymap_clear(&m);
+    CHECK(m.count == 0 && m.mask == mask);
+    for (uint64_t k = 0; k < 300; k++)
+        CHECK(!tsr_keymap_find(&m, k * 7919));
+    for (uint64_t k = 0; k < 300; k++) {
+        *tsr_keymap_slot(&m, k * 7919 + 1, &found, NULL) = (uint32_t)(k + 5);
+        CHECK(!found);
+    }
+    CHECK(m.count == 300 && m.mask == mask);
+    for (uint64_t k = 0; k < 300; k++) {
+        const uint32_t *v = tsr_keymap_find(&m, k * 7919 + 1);
+        CHECK(v && *v == k + 5);
+    }
+    tsr_keymap_free(&m, NULL);
+}
+
 TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing),
-          T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced))
+          T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced),
+          T(keymap_clear_keeps_room))
