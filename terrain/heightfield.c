@@ -298,13 +298,32 @@ tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts, 
     return TSR_OK;
 }
 
+/* The format path's extension names: 1 PNG (16-bit), 2 float (TIFF,
+ * OpenEXR); 0 (with err set) none that save writes. */
+static int save_format(const char *path, tsr_error *err)
+{
+    const char *slash = strrchr(path, '/'), *dot = strrchr(slash ? slash + 1 : path, '.');
+    if (dot && !strcasecmp(dot, ".png"))
+        return 1;
+    if (dot && (!strcasecmp(dot, ".tif") || !strcasecmp(dot, ".tiff") || !strcasecmp(dot, ".exr")))
+        return 2;
+    tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: unknown heightfield format (use .png, .tif or .exr)", path);
+    return 0;
+}
+
+tsr_status tsr_heightfield_save_check(const char *path, tsr_error *err)
+{
+    if (!save_format(path, err))
+        return TSR_ERR_ARGUMENT;
+    return tsr_atomic_probe(path, err);
+}
+
 tsr_status tsr_heightfield_save(const tsr_heightfield *hf, const char *path, tsr_save_info *info, tsr_error *err)
 {
-    const char *dot = strrchr(path, '.');
-    bool png = dot && !strcasecmp(dot, ".png");
-    bool flt = dot && (!strcasecmp(dot, ".tif") || !strcasecmp(dot, ".tiff") || !strcasecmp(dot, ".exr"));
-    if (!png && !flt)
-        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: unknown heightfield format (use .png, .tif or .exr)", path);
+    int format = save_format(path, err);
+    if (!format)
+        return TSR_ERR_ARGUMENT;
+    bool png = format == 1;
     double scale = 1, offset = 0;
     const float *values = hf->data;
     float *q = NULL;

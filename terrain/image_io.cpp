@@ -192,6 +192,35 @@ extern "C" tsr_status tsr_image_write(const char *path, const char *tmp, uint32_
     return TSR_OK;
 }
 
+// OpenImageIO's writer for path's extension; NULL, with err set, when
+// there is none.
+static ImageOutput::unique_ptr image_writer(const char *path, tsr_error *err)
+{
+    const char *slash = std::strrchr(path, '/');
+    const char *dot = std::strrchr(slash ? slash + 1 : path, '.');
+    if (!dot) {
+        tsr_error_set(err, TSR_ERR_UNSUPPORTED, "%s: no extension to choose an image format by (use .png or .tif)",
+                      path);
+        return nullptr;
+    }
+    auto out = ImageOutput::create(path);
+    if (!out) {
+        std::string e = one_line(OIIO::geterror());
+        tsr_error_set(err, TSR_ERR_UNSUPPORTED, "%s: no image writer for extension \"%s\" (use .png or .tif)%s%s%s",
+                      path, dot, e.empty() ? "" : " (", e.c_str(), e.empty() ? "" : ")");
+    }
+    return out;
+}
+
+extern "C" tsr_status tsr_image_save_check(const char *path, tsr_error *err)
+{
+    if (!path || !*path)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "no image path");
+    if (!image_writer(path, err))
+        return TSR_ERR_UNSUPPORTED;
+    return tsr_atomic_probe(path, err);
+}
+
 extern "C" tsr_status tsr_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
                                         const uint8_t *pixels, tsr_error *err)
 {
@@ -202,17 +231,9 @@ extern "C" tsr_status tsr_image_save_u8(const char *path, uint32_t width, uint32
         return tsr_error_set(err, TSR_ERR_TOO_LARGE, "%s: image %ux%u too large to write", path, width, height);
     // The writer is picked by the extension alone: an unknown one is
     // refused before anything is created on disk.
-    const char *slash = std::strrchr(path, '/');
-    const char *dot = std::strrchr(slash ? slash + 1 : path, '.');
-    if (!dot)
-        return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "%s: no extension to choose an image format by (use .png or .tif)",
-                             path);
-    auto out = ImageOutput::create(path);
-    if (!out) {
-        std::string e = one_line(OIIO::geterror());
-        return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "%s: no image writer for extension \"%s\" (use .png or .tif)%s%s%s",
-                             path, dot, e.empty() ? "" : " (", e.c_str(), e.empty() ? "" : ")");
-    }
+    auto out = image_writer(path, err);
+    if (!out)
+        return TSR_ERR_UNSUPPORTED;
     ImageSpec spec((int)width, (int)height, (int)channels, TypeDesc::UINT8);
     char tmp[4096];
     tsr_status s = tsr_atomic_begin(path, tmp, sizeof tmp, err);

@@ -105,21 +105,30 @@ typedef struct tsr_save_info {
  * and renamed, so failure leaves no file. info may be NULL. */
 tsr_status tsr_heightfield_save(const tsr_heightfield *hf, const char *path, tsr_save_info *info,
                                 tsr_error *err);
+/* Whether tsr_heightfield_save would take path: its extension names a
+ * format it writes and a file can be made there (tsr_atomic_probe). */
+tsr_status tsr_heightfield_save_check(const char *path, tsr_error *err);
 
 /* ---- Sample terrain ---------------------------------------------------- */
 
 /* Zero means default for every field. */
 typedef struct tsr_generate_options {
-    uint32_t seed;       /* any value; same seed, same terrain */
-    double relief;       /* height range in metres; default 1200 */
-    double feature_size; /* largest features, in samples; default width / 3 */
+    uint32_t seed;               /* any value; same seed, same terrain */
+    double relief;               /* height range in metres; default 1200 */
+    double feature_size;         /* largest features, in samples; default width / 3 */
     uint32_t erosion_iterations; /* thermal erosion passes; default 40 */
+    uint32_t threads;            /* for the noise; 0: one per processor */
+    /* Called now and then with the fraction done (0..1, non-decreasing),
+     * one call at a time but maybe from another thread; NULL: none. */
+    void (*progress)(void *user, double fraction);
+    void *progress_user;
 } tsr_generate_options;
 
 /* Fills hf with a realistic terrain: domain-warped fractal noise blended
- * with ridged multifractal mountains, then thermal erosion that relaxes
- * slopes above the talus angle. Deterministic for a given seed and size,
- * on every platform (integer hashing, no library random numbers). */
+ * with ridged multifractal mountains, then hydraulic erosion (droplets)
+ * and thermal erosion that relaxes slopes above the talus angle.
+ * Deterministic for a given seed and size, the same whatever the thread
+ * count (integer hashing, no library random numbers). */
 void tsr_terrain_generate(tsr_heightfield *hf, const tsr_generate_options *opts);
 
 /* A fast fractal terrain for benchmarks at large sizes: midpoint
@@ -293,6 +302,9 @@ bool tsr_terrain_pick(const tsr_terrain *t, const double origin[3], const double
  * before touching the disk (TSR_ERR_UNSUPPORTED); messages name path. */
 tsr_status tsr_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
                              const uint8_t *pixels, tsr_error *err);
+/* Whether tsr_image_save_u8 would take path: an image writer for its
+ * extension, and a file can be made there (tsr_atomic_probe). */
+tsr_status tsr_image_save_check(const char *path, tsr_error *err);
 
 /* ---- Independent error measurement -------------------------------------- */
 

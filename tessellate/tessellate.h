@@ -150,6 +150,10 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
 tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err);
 /* Removes tmp after a failed write. */
 void tsr_atomic_abort(const char *tmp);
+/* Whether an output could be made at path: creates the temporary that
+ * tsr_atomic_begin would and removes it, leaving the disk as it was. For
+ * commands to refuse an unwritable output before long work, not after. */
+tsr_status tsr_atomic_probe(const char *path, tsr_error *err);
 
 /* ---- Reading text inputs ----------------------------------------------- */
 

@@ -54,6 +54,15 @@ tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err)
 
 void tsr_atomic_abort(const char *tmp) { remove(tmp); }
 
+tsr_status tsr_atomic_probe(const char *path, tsr_error *err)
+{
+    char tmp[4096];
+    tsr_status s = tsr_atomic_begin(path, tmp, sizeof tmp, err);
+    if (s == TSR_OK)
+        tsr_atomic_abort(tmp);
+    return s;
+}
+
 /* ---- Reading text inputs ------------------------------------------------ */
 
 tsr_status tsr_read_file(const char *path, uint64_t max_bytes, const tsr_allocator *alloc, char **buf, size_t *len,

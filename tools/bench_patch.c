@@ -1093,6 +1093,8 @@ int cli_bench_patch(int argc, char **argv)
         if (!cams_given)
             ncam = 2;
     }
+    if (!cli_outputs_writable("bench patch", 1, &json_path)) /* before the runs, not after them */
+        return CLI_FAIL;
     const char *data = getenv("TESSERA_DATA");
     if (!data || !*data)
         data = "../shared/data";

@@ -165,3 +165,47 @@ tsr_status cli_write_text(const char *path, const char *text, tsr_error *err)
     }
     return tsr_atomic_commit(tmp, path, err);
 }
+
+void cli_progress_start(cli_progress *p, const char *cmd, bool on)
+{
+    *p = (cli_progress){cmd, on && isatty(2), false, cli_now(), 0};
+}
+
+void cli_progress_cb(void *user, double f)
+{
+    cli_progress *p = user;
+    if (!p->on)
+        return;
+    double now = cli_now();
+    if (now - p->t0 < 1.0 || now - p->last < 0.1)
+        return;
+    p->last = now;
+    f = f < 0 ? 0 : f > 1 ? 1 : f;
+    int width = 40, fill = (int)(f * width + 0.5);
+    char bar[48];
+    for (int i = 0; i < width; i++)
+        bar[i] = i < fill ? '#' : '.';
+    bar[width] = '\0';
+    fprintf(stderr, "\rtessera %s: [%s] %3d%%", p->cmd, bar, (int)(f * 100 + 0.5));
+    fflush(stderr);
+    p->shown = true;
+}
+
+void cli_progress_end(cli_progress *p)
+{
+    if (p->shown)
+        fprintf(stderr, "\r%*s\r", (int)strlen(p->cmd) + 58, "");
+    p->shown = false;
+}
+
+bool cli_outputs_writable(const char *cmd, int n, const char *const *paths)
+{
+    for (int i = 0; i < n; i++) {
+        tsr_error err = {0};
+        if (paths[i] && tsr_atomic_probe(paths[i], &err) != TSR_OK) {
+            cli_error(cmd, "%s", err.message);
+            return false;
+        }
+    }
+    return true;
+}

@@ -59,6 +59,25 @@ bool cli_is_help(const char *arg);
 /* Seconds from a monotonic clock. */
 double cli_now(void);
 
+/* A progress bar on stderr, "tessera CMD: [####....]  42%": drawn only
+ * when on (not --quiet) and stderr is a terminal, once the work has taken
+ * a second, at most ten times a second; cli_progress_end erases it. */
+typedef struct cli_progress {
+    const char *cmd;
+    bool on, shown;
+    double t0, last;
+} cli_progress;
+void cli_progress_start(cli_progress *p, const char *cmd, bool on);
+/* A progress callback of the library (user: the cli_progress). */
+void cli_progress_cb(void *user, double fraction);
+void cli_progress_end(cli_progress *p);
+
+/* Checks, before long work, that outputs can be written: for each of the
+ * n paths not NULL (NULL: not asked for), that a file can be made there
+ * (tsr_atomic_probe); prints the error and returns false at the first
+ * that cannot. */
+bool cli_outputs_writable(const char *cmd, int n, const char *const *paths);
+
 /* Writes text to path atomically (temporary, then rename). */
 tsr_status cli_write_text(const char *path, const char *text, tsr_error *err);
 

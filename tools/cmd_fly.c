@@ -553,6 +553,9 @@ static int run(int argc, char **argv)
     }
     if (a.headless && !frames_given)
         a.frames = 120;
+    const char *outputs[2] = {a.stats, a.video}; /* checked before the flight, not after it */
+    if (!cli_outputs_writable("fly", 2, outputs))
+        return CLI_FAIL;
     tsr_heightfield *hf = cli_load_heightfield("fly", a.in, &ho);
     if (!hf)
         return CLI_FAIL;

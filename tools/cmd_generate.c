@@ -16,14 +16,19 @@ static void help(FILE *f)
                "  --height H         height in samples (default: --size)\n"
                "  --seed S           random seed, 0..4294967295 (default 1)\n"
                "  --relief M         height range in metres (default 1200)\n"
-               "  -h, --help         this help\n");
+               "  --quiet            print nothing on success (no summary, no progress bar)\n"
+               "  -h, --help         this help\n\n"
+               "The noise runs on every processor, the erosion on one (about 35 s for 4097 x 4097 on\n"
+               "a small machine, 4 to 5 times as long for each doubling of the side); the terrain is\n"
+               "the same on any machine. Where stderr is a terminal, a progress bar shows after a\n"
+               "second.\n");
 }
 
 static int run(int argc, char **argv)
 {
     const char *out = NULL;
     uint32_t w = 1025, h = 1025, seed = 1;
-    bool w_set = false, h_set = false;
+    bool w_set = false, h_set = false, quiet = false;
     double relief = 1200;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -34,6 +39,8 @@ static int run(int argc, char **argv)
         bool has_value = i + 1 < argc;
         if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && has_value)
             out = argv[++i];
+        else if (!strcmp(a, "--quiet"))
+            quiet = true;
         else if (!strcmp(a, "--size") && has_value) {
             uint32_t s;
             if (!cli_parse_u32(argv[++i], TSR_HEIGHTFIELD_MIN_SIDE, 65536, &s)) {
@@ -79,24 +86,33 @@ static int run(int argc, char **argv)
                   (unsigned long long)TSR_HEIGHTFIELD_MAX_SAMPLES);
         return CLI_USAGE;
     }
+    tsr_error err = {0};
+    tsr_status cs = tsr_heightfield_save_check(out, &err); /* before the work, not after it */
+    if (cs != TSR_OK) {
+        cli_error("generate", "%s", err.message);
+        return cs == TSR_ERR_IO ? CLI_FAIL : CLI_USAGE;
+    }
     tsr_heightfield *hf = tsr_heightfield_create(w, h, NULL);
     if (!hf) {
         cli_error("generate", "out of memory for %ux%u samples", w, h);
         return CLI_FAIL;
     }
     double t0 = cli_now();
-    tsr_generate_options go = {.seed = seed, .relief = relief};
+    cli_progress pr;
+    cli_progress_start(&pr, "generate", !quiet);
+    tsr_generate_options go = {.seed = seed, .relief = relief, .progress = cli_progress_cb, .progress_user = &pr};
     tsr_terrain_generate(hf, &go);
+    cli_progress_end(&pr);
     double t1 = cli_now();
-    tsr_error err = {0};
     tsr_save_info info;
     if (tsr_heightfield_save(hf, out, &info, &err) != TSR_OK) {
         cli_error("generate", "%s", err.message);
         tsr_heightfield_destroy(hf);
         return CLI_FAIL;
     }
-    fprintf(stderr, "tessera generate: wrote %s (%ux%u, seed %u, relief %g m; generated in %.2f s)\n", out, w, h,
-            seed, relief, t1 - t0);
+    if (!quiet)
+        fprintf(stderr, "tessera generate: wrote %s (%ux%u, seed %u, relief %g m; generated in %.2f s)\n", out, w, h,
+                seed, relief, t1 - t0);
     tsr_heightfield_destroy(hf);
     return CLI_OK;
 }

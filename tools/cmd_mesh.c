@@ -69,37 +69,6 @@ static void help(FILE *f)
             "  -h, --help            this help\n");
 }
 
-/* ---- progress bar: on stderr when it is a terminal, after a second ---- */
-
-typedef struct progress {
-    bool on;
-    double t0, last;
-    int shown;
-} progress;
-
-static void progress_cb(void *user, double f)
-{
-    progress *p = user;
-    double now = cli_now();
-    if (!p->on || now - p->t0 < 1.0 || now - p->last < 0.1)
-        return;
-    p->last = now;
-    int width = 40, fill = (int)(f * width + 0.5);
-    char bar[48];
-    for (int i = 0; i < width; i++)
-        bar[i] = i < fill ? '#' : '.';
-    bar[width] = '\0';
-    fprintf(stderr, "\rtessera mesh: [%s] %3d%%", bar, (int)(f * 100 + 0.5));
-    fflush(stderr);
-    p->shown = 1;
-}
-
-static void progress_end(progress *p)
-{
-    if (p->shown)
-        fprintf(stderr, "\r%60s\r", "");
-}
-
 /* Peak resident memory of this process, from /proc (0 when unknown). */
 static double peak_bytes(void)
 {
@@ -337,6 +306,19 @@ static int run(int argc, char **argv)
                           "--method delaunay or quadtree");
         return CLI_USAGE;
     }
+    /* Outputs are checked before the work, not after it. */
+    const char *images[2] = {normal_map, hillshade};
+    for (int k = 0; k < 2; k++) {
+        tsr_error ierr = {0};
+        tsr_status is = images[k] ? tsr_image_save_check(images[k], &ierr) : TSR_OK;
+        if (is != TSR_OK) {
+            cli_error("mesh", "%s %s", k ? "--hillshade:" : "--normal-map:", ierr.message);
+            return is == TSR_ERR_IO ? CLI_FAIL : CLI_USAGE;
+        }
+    }
+    const char *outputs[2] = {out, stats};
+    if (!cli_outputs_writable("mesh", 2, outputs))
+        return CLI_FAIL;
     double t0 = cli_now();
     tsr_heightfield *hf = cli_load_heightfield("mesh", in, &o);
     if (!hf)
@@ -357,8 +339,10 @@ static int run(int argc, char **argv)
     }
     uint32_t mx = has_window ? win[0] : 0, my = has_window ? win[1] : 0, mw = has_window ? win[2] : W,
              mh = has_window ? win[3] : H;
-    progress pr = {!quiet && isatty(2), t0, 0, 0};
-    to.progress = progress_cb;
+    cli_progress pr;
+    cli_progress_start(&pr, "mesh", !quiet);
+    pr.t0 = t0;
+    to.progress = cli_progress_cb;
     to.progress_user = &pr;
     tsr_heightfield_stats st;
     tsr_heightfield_stats_compute(hf, &st);
@@ -403,7 +387,7 @@ static int run(int argc, char **argv)
         tsr_mesh_free(&mesh);
         tsr_mesh_init(&mesh, to.normals ? TSR_MESH_NORMALS : 0, NULL);
     }
-    progress_end(&pr);
+    cli_progress_end(&pr);
     double base_z = 0;
     if (rc == CLI_OK && has_base) {
         double zmin = INFINITY;

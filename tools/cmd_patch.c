@@ -166,6 +166,9 @@ static int run(int argc, char **argv)
         cli_error("patch", "give either --max-error or --pixel-error with --camera, not both");
         return CLI_USAGE;
     }
+    const char *outputs[2] = {out, stats}; /* checked before the work, not after it */
+    if (!cli_outputs_writable("patch", 2, outputs))
+        return CLI_FAIL;
     double t0 = cli_now();
     cli_patch_model pm;
     if (!cli_patch_model_load("patch", in, scheme, &pm))

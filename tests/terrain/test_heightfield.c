@@ -289,6 +289,43 @@ TEST(generator_is_deterministic_and_terrain_like)
     tsr_heightfield_destroy(c);
 }
 
+typedef struct progress_log {
+    int calls;
+    double last;
+    bool backwards, outside;
+} progress_log;
+
+static void log_progress(void *user, double f)
+{
+    progress_log *l = user;
+    l->backwards |= f < l->last;
+    l->outside |= !(f >= 0 && f <= 1);
+    l->last = f;
+    l->calls++;
+}
+
+/* The noise runs in bands on threads: any thread count gives the same
+ * bits. Progress goes from 0 to 1 without stepping back. */
+TEST(generator_same_on_any_thread_count_with_progress)
+{
+    uint32_t w = 203, h = 150; /* bands of 16 rows: a short last one */
+    tsr_heightfield *a = tsr_heightfield_create(w, h, NULL), *b = tsr_heightfield_create(w, h, NULL);
+    progress_log la = {0, 0, false, false}, lb = {0, 0, false, false};
+    tsr_generate_options o = {.seed = 3, .threads = 1, .progress = log_progress, .progress_user = &la};
+    tsr_terrain_generate(a, &o);
+    o.threads = 5;
+    o.progress_user = &lb;
+    tsr_terrain_generate(b, &o);
+    CHECK(memcmp(tsr_heightfield_cdata(a), tsr_heightfield_cdata(b), (size_t)w * h * sizeof(float)) == 0);
+    const progress_log *logs[2] = {&la, &lb};
+    for (int k = 0; k < 2; k++) {
+        CHECK_MSG(logs[k]->calls >= 10, "%d progress calls", logs[k]->calls);
+        CHECK(!logs[k]->backwards && !logs[k]->outside && logs[k]->last == 1);
+    }
+    tsr_heightfield_destroy(a);
+    tsr_heightfield_destroy(b);
+}
+
 TEST(grid_mesh_is_valid_and_exact)
 {
     tsr_heightfield *hf = make_field(23, 17);
@@ -344,5 +381,5 @@ TEST(nodata_becomes_hole)
 
 TEST_MAIN(T(save_and_load_float_formats), T(png16_keeps_scale_and_offset), T(pgm_16bit_written_by_hand), T(raw_types),
           T(nan_height_is_nodata_and_inf_height_is_refused), T(size_limits), T(data_terrain_rgb_real_tile),
-          T(data_real_float_tiffs), T(generator_is_deterministic_and_terrain_like), T(grid_mesh_is_valid_and_exact),
-          T(nodata_becomes_hole))
+          T(data_real_float_tiffs), T(generator_is_deterministic_and_terrain_like),
+          T(generator_same_on_any_thread_count_with_progress), T(grid_mesh_is_valid_and_exact), T(nodata_becomes_hole))

@@ -58,6 +58,27 @@ unwritable_output)
     mkdir "$dir/ro" && chmod 500 "$dir/ro"
     expect_error 1 "ro/x\.glb: cannot write" -- "$tessera" mesh "$dir/g.png" -o "$dir/ro/x.glb"
   fi ;;
+outputs_checked_first)
+  # Every output is checked before the work: an unwritable --stats (or
+  # image, or video) fails the command with nothing written, not after the
+  # mesh is made and saved (expect_error checks no file appears).
+  "$tessera" generate --size 16 -o "$dir/g.png" --quiet || fail "generate failed"
+  expect_error 1 "/no/such/dir/s\.json: cannot write" -- "$tessera" mesh "$dir/g.png" -o "$dir/x.ply" --stats /no/such/dir/s.json
+  expect_error 1 "--hillshade: /no/such/dir/h\.png: cannot write" -- "$tessera" mesh "$dir/g.png" -o "$dir/x.ply" --hillshade /no/such/dir/h.png
+  expect_error 2 "--normal-map: .*n\.xyz: no image writer" -- "$tessera" mesh "$dir/g.png" -o "$dir/x.ply" --normal-map "$dir/n.xyz"
+  expect_error 2 "g2\.xyz: unknown heightfield format" -- "$tessera" generate --size 16 -o "$dir/g2.xyz"
+  expect_error 1 "/no/such/dir/f\.json: cannot write" -- "$tessera" fly "$dir/g.png" --headless --frames 1 --stats /no/such/dir/f.json
+  printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n' > "$dir/quad.obj"
+  expect_error 1 "/no/such/dir/p\.json: cannot write" -- "$tessera" patch "$dir/quad.obj" -o "$dir/p.obj" --stats /no/such/dir/p.json
+  expect_error 1 "/no/such/dir/b\.json: cannot write" -- "$tessera" bench patch --quick --json /no/such/dir/b.json
+  # and the good runs make their outputs; --quiet prints nothing
+  "$tessera" mesh "$dir/g.png" -o "$dir/x.ply" --stats "$dir/s.json" --hillshade "$dir/h.png" --quiet 2>"$cap/stderr" \
+    || fail "mesh with all outputs failed: $(cat "$cap/stderr")"
+  [ -s "$dir/x.ply" ] && [ -s "$dir/s.json" ] && [ -s "$dir/h.png" ] || fail "an output is missing"
+  [ ! -s "$cap/stderr" ] || fail "mesh --quiet printed: $(cat "$cap/stderr")"
+  "$tessera" generate --size 16 -o "$dir/q.png" --quiet 2>"$cap/stderr" || fail "generate --quiet failed"
+  [ -s "$dir/q.png" ] && [ ! -s "$cap/stderr" ] || fail "generate --quiet: no file, or it printed: $(cat "$cap/stderr")"
+  echo "ok [$case]: good runs" ;;
 random_bytes_every_format)
   for ext in tif tiff exr pgm jpg; do
     cp "$dir/random.png" "$dir/random.$ext"
