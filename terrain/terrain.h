@@ -217,6 +217,8 @@ typedef struct tsr_tin_options {
 
 typedef struct tsr_tin_report {
     double target_error;      /* the tolerance refinement worked to (world units) */
+    double bound;             /* the max error asked for, else the default (0.1 % of the window's
+                                 height range) when no budget is given either; 0 with a budget alone */
     double border_error;      /* the border simplification's tolerance */
     double estimated_error;   /* the mesher's own estimate of the max error (not measured) */
     uint32_t border_vertices; /* vertices fixed on the border, no-data boundaries and block seams (per block) */

@@ -1794,6 +1794,7 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
     double target = o.max_error > 0 ? o.max_error : budget ? 0 : deflt;
     double btol = o.border_error > 0 ? o.border_error : o.max_error > 0 ? o.max_error : deflt;
     rep->target_error = target;
+    rep->bound = target;
     rep->border_error = btol;
     tsr_status st;
     if (hs.valid == 0)

@@ -369,7 +369,7 @@ static int run(int argc, char **argv)
             break;
         }
         if (bound == 0 && !to.max_triangles && !to.max_vertices && to.method != TSR_TIN_GRID)
-            bound = rep.target_error; /* the default bound */
+            bound = rep.bound; /* the default bound */
         if (bound == 0 || er.max_vertical <= bound || to.method == TSR_TIN_GRID)
             break;
         if (attempt == 3) {

@@ -41,6 +41,19 @@ for m in delaunay quadtree; do
   done
 done
 
+# no --max-error: the default bound, 0.1 % of the height range (the stats'
+# input min and max, times --dz), the same for every method, reported as
+# the bound asked for, and held
+for m in delaunay quadtree; do
+  "$tessera" mesh "$dir/t.png" --dz 2 --method $m -o "$dir/m.ply" --stats "$dir/s.json" --quiet || fail "mesh $m default"
+  want=$(awk -v lo="$(json_num "$dir/s.json" min)" -v hi="$(json_num "$dir/s.json" max)" 'BEGIN { print (hi - lo) * 2e-3 }')
+  req=$(json_num "$dir/s.json" requested_max_error) got=$(json_num "$dir/s.json" max_error)
+  awk -v a="$req" -v b="$want" 'BEGIN { exit !(a - b < 1e-9 * b && b - a < 1e-9 * b) }' ||
+    fail "$m: default bound reported as '$req', not 0.1 % of the range x dz = $want"
+  le "$got" "$want" || fail "$m: measured max error $got > the default bound $want"
+  echo "ok $m default bound $req held (measured $got)"
+done
+
 # --no-flip: plain greedy Delaunay, within the bound too, with more
 # triangles than the default data-dependent flips; delaunay only
 for e in 0.5 5; do
