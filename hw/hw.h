@@ -74,6 +74,16 @@ typedef struct tsr_hw_frame {
  * parent's edge or diagonal) by the weight `morph`; edge vertices never
  * move, so morphing opens no crack.
  *
+ * Watertight borders. A vertex on the border is placed by one of the
+ * drawn tiles that have it (found through `neighbour`, below): the
+ * coarsest, then the one of the lowest draw number, with that tile's
+ * stored sample, origin and spacing in the formula above. So every tile
+ * puts a shared vertex at the same float position, to the bit, though
+ * each quantises its own 16-bit samples (offset and scale per tile) and
+ * rounds its own origin: without that, the rasteriser left pinholes along
+ * borders (0-7 a frame at 1280 x 720 on the demo terrain). Tiles drawn
+ * without neighbours place their border vertices themselves.
+ *
  * Normals. Vertex (i, j) is shaded with normalize(-dz/dx, -dz/dy, 1) from
  * central differences of the stored heights at (i +- r, j) and (i, j +- r),
  * with r = 1 inside the tile. At the border r is the coarsest spacing of

@@ -14,7 +14,7 @@ uint word_of(uint k, uint bits, uint first)
 }
 
 // Sample k from its word; true when it is not no-data.
-bool decode(uint word, uint k, uint bits, uint first, float z_base, float z_step, out float h)
+bool decode(uint word, uint k, uint bits, uint first, float z_base, float z_step, out precise float h)
 {
     if ((bits & 1u) != 0u) {
         uint code = ((k + first) & 1u) != 0u ? word >> 16u : word & 0xFFFFu;
@@ -105,22 +105,78 @@ int edge_ratio(uint e, int along)
 // first of those two that is drawn (across its edge at the corner, or that
 // tile itself where the corner lies inside its edge). Every tile at the
 // corner finds the same tiles, so all take the same step.
-int corner_ratio(int ci, int cj)
+// The draw across corner (ci, cj) (1 + its number, 0: none), found
+// through a (across the vertical edge there) or else b (the horizontal
+// one): across that tile's edge at the corner, or that tile itself where
+// the corner lies inside its edge.
+uint diagonal(int ci, int cj, uint a, uint b, vec2 v)
 {
     uint eh = cj == 0 ? 0u : 2u, ev = ci == 0 ? 3u : 1u;
-    uint a = neighbour(ev, cj), b = neighbour(eh, ci), d = 0u;
-    vec2 v = world(ci, cj);
     ivec2 k;
     if (a != 0u && lattice_of(a - 1u, v, k)) {
         int m = int(pc.tiles.t[a - 1u].n);
         bool on = eh == 0u ? k.y == 0 : k.y == m;
-        d = on ? pc.tiles.t[a - 1u].nb[2u * eh + (2 * k.x > m ? 1u : 0u)] : a;
-    } else if (b != 0u && lattice_of(b - 1u, v, k)) {
+        return on ? pc.tiles.t[a - 1u].nb[2u * eh + (2 * k.x > m ? 1u : 0u)] : a;
+    }
+    if (b != 0u && lattice_of(b - 1u, v, k)) {
         int m = int(pc.tiles.t[b - 1u].n);
         bool on = ev == 3u ? k.x == 0 : k.x == m;
-        d = on ? pc.tiles.t[b - 1u].nb[2u * ev + (2 * k.y > m ? 1u : 0u)] : b;
+        return on ? pc.tiles.t[b - 1u].nb[2u * ev + (2 * k.y > m ? 1u : 0u)] : b;
     }
+    return 0u;
+}
+
+int corner_ratio(int ci, int cj)
+{
+    uint eh = cj == 0 ? 0u : 2u, ev = ci == 0 ? 3u : 1u;
+    uint a = neighbour(ev, cj), b = neighbour(eh, ci);
+    uint d = diagonal(ci, cj, a, b, world(ci, cj));
     return int(max(max(coarser(a), coarser(b)), coarser(d)) + 0.5);
+}
+
+// Whether draw `rec` (1 + its number; 0: none) has point v (as world())
+// among its vertices and outranks the best so far: the coarsest, then
+// the lowest draw number.
+void consider(uint rec, vec2 v, inout uint best, inout ivec2 bk)
+{
+    ivec2 k;
+    if (rec == 0u || !lattice_of(rec - 1u, v, k))
+        return;
+    rec -= 1u;
+    float s = pc.tiles.t[rec].spacing.x, bs = pc.tiles.t[best].spacing.x;
+    if (s > bs || (s == bs && rec < best)) {
+        best = rec;
+        bk = k;
+    }
+}
+
+// The draw whose stored sample places border vertex (i, j) (hw.h,
+// "Watertight borders"), and the vertex's (i, j) in it: of the drawn tiles
+// that have the vertex, the coarsest, then the lowest draw number. At a
+// vertex inside an edge, this tile and the draws across that half edge (at
+// its middle, both halves: two finer tiles meet there); at a corner, the
+// draws across its two edges and the one across the corner. Every tile at
+// the vertex finds the same ones (one per quadrant around the vertex), so
+// all put it at the same position, to the bit.
+uint canonical(int i, int j, out ivec2 k)
+{
+    int n = int(pc.n);
+    uint best = pc.draw_no;
+    k = ivec2(i, j);
+    vec2 v = world(i, j);
+    bool on_i = i == 0 || i == n, on_j = j == 0 || j == n;
+    if (on_i && on_j) {
+        uint eh = j == 0 ? 0u : 2u, ev = i == 0 ? 3u : 1u;
+        uint a = neighbour(ev, j), b = neighbour(eh, i);
+        consider(a, v, best, k);
+        consider(b, v, best, k);
+        consider(diagonal(i, j, a, b, v), v, best, k);
+    } else {
+        uint e = j == 0 ? 0u : i == n ? 1u : j == n ? 2u : 3u;
+        consider(pc.tiles.t[pc.draw_no].nb[2u * e], v, best, k);
+        consider(pc.tiles.t[pc.draw_no].nb[2u * e + 1u], v, best, k);
+    }
+    return best;
 }
 
 // dz per world unit along (di, dj) at (i, j), from the heights r steps
@@ -145,15 +201,34 @@ void main()
     uint idx = uint(gl_VertexIndex);
     int n = int(pc.n);
     int i = int(idx % (pc.n + 1u)), j = int(idx / (pc.n + 1u));
+    bool on_i = i == 0 || i == n, on_j = j == 0 || j == n;
     float h;
-    bool ok = fetch(i, j, h);
+    bool ok;
+    // A border vertex is placed by one of the tiles that share it, the same
+    // for all of them (canonical()): from its record, its stored sample and
+    // its origin and spacing, by the same instructions, so every tile puts
+    // the vertex at the same float position and no pinhole opens between
+    // them (their samples may be quantised differently, and their origins
+    // are rounded apart). Inside the tile, the tile's own.
+    precise vec2 xy;
+    if (on_i || on_j) {
+        ivec2 kc;
+        uint c = canonical(i, j, kc);
+        uint m = pc.tiles.t[c].n, bits = pc.tiles.t[c].bits, first = pc.tiles.t[c].first;
+        uint q = uint(kc.y) * (m + 1u) + uint(kc.x);
+        ok = decode(pc.tiles.t[c].samples.w[word_of(q, bits, first)], q, bits, first, pc.tiles.t[c].z_base,
+                    pc.tiles.t[c].z_step, h);
+        xy = pc.tiles.t[c].origin + vec2(kc) * pc.tiles.t[c].spacing;
+    } else {
+        ok = fetch(i, j, h);
+        xy = world(i, j);
+    }
     if (!ok)
         h = pc.z_base;
 
     // Normal from central differences (hw.h): across an edge with the
     // neighbour's samples, at the coarser spacing of the two, so that the
     // tiles sharing a vertex shade it alike.
-    bool on_i = i == 0 || i == n, on_j = j == 0 || j == n;
     int r = on_i && on_j ? corner_ratio(i, j)
           : on_j         ? edge_ratio(j == 0 ? 0u : 2u, i)
           : on_i         ? edge_ratio(i == 0 ? 3u : 1u, j)
@@ -200,7 +275,7 @@ void main()
         nrm = mix(nrm, target, pc.morph);
     }
 
-    vec3 p = vec3(min(pc.origin + vec2(float(i), float(j)) * pc.spacing, pc.limit), h);
+    vec3 p = vec3(min(xy, pc.limit), h);
     v_pos = p;
     v_normal = nrm;
     v_local = vec2(float(i), float(j));
