@@ -81,8 +81,11 @@ typedef struct tsr_hw_frame {
  * puts a shared vertex at the same float position, to the bit, though
  * each quantises its own 16-bit samples (offset and scale per tile) and
  * rounds its own origin: without that, the rasteriser left pinholes along
- * borders (0-7 a frame at 1280 x 720 on the demo terrain). Tiles drawn
- * without neighbours place their border vertices themselves.
+ * borders (0-7 a frame at 1280 x 720 on the demo terrain). This holds
+ * when the links are symmetric (a tile names each drawn tile across its
+ * edges, as that one names it) and tiles that share vertices have the
+ * same `limit`; tiles drawn without neighbours place their border
+ * vertices themselves.
  *
  * Normals. Vertex (i, j) is shaded with normalize(-dz/dx, -dz/dy, 1) from
  * central differences of the stored heights at (i +- r, j) and (i, j +- r),

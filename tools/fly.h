@@ -18,7 +18,8 @@ typedef struct fly_options {
     double fog_distance;  /* 0: a third of the terrain's diagonal; < 0: none */
     bool show_normals;    /* draw the shading normals as colours (TSR_HW_FRAME_NORMALS) */
     bool one_sided_normals; /* pass no neighbours: border normals from each tile's own samples
-                             * (the seams of earlier versions; for comparison) */
+                             * (the seams of earlier versions; for comparison); border vertices
+                             * are then placed by each tile itself, and pinholes may open */
 } fly_options;
 
 typedef struct fly_frame_stats {

@@ -219,12 +219,14 @@ void main()
         ok = decode(pc.tiles.t[c].samples.w[word_of(q, bits, first)], q, bits, first, pc.tiles.t[c].z_base,
                     pc.tiles.t[c].z_step, h);
         xy = pc.tiles.t[c].origin + vec2(kc) * pc.tiles.t[c].spacing;
+        if (!ok)
+            h = pc.tiles.t[c].z_base; /* (no-data: its triangles are discarded anyway) */
     } else {
         ok = fetch(i, j, h);
         xy = world(i, j);
+        if (!ok)
+            h = pc.z_base;
     }
-    if (!ok)
-        h = pc.z_base;
 
     // Normal from central differences (hw.h): across an edge with the
     // neighbour's samples, at the coarser spacing of the two, so that the
