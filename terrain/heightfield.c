@@ -40,6 +40,23 @@ tsr_heightfield *tsr_heightfield_create(uint32_t width, uint32_t height, const t
     return hf;
 }
 
+/* A heightfield whose samples are `data` (tsr_alloc'd with alloc; owned
+ * from now on), or NULL when out of memory (data not freed). */
+static tsr_heightfield *adopt(uint32_t width, uint32_t height, float *data, const tsr_allocator *alloc)
+{
+    tsr_heightfield *hf = tsr_alloc(alloc, sizeof *hf);
+    if (!hf)
+        return NULL;
+    memset(hf, 0, sizeof *hf);
+    if (alloc)
+        hf->alloc = *alloc;
+    hf->width = width;
+    hf->height = height;
+    hf->dx = hf->dy = hf->dz = 1;
+    hf->data = data;
+    return hf;
+}
+
 void tsr_heightfield_destroy(tsr_heightfield *hf)
 {
     if (!hf)
@@ -213,6 +230,21 @@ static tsr_status load_image(const char *path, const tsr_load_options *o, tsr_he
                              path, info.width, info.height);
     }
     size_t n = (size_t)info.width * info.height, nch = info.channels;
+    if (nch == 1 && o->decode != TSR_DECODE_TERRAIN_RGB) {
+        /* one channel: the pixels become the samples where they are (a
+         * copy would double the peak: 2 GB more for a 16k float TIFF) */
+        tsr_heightfield *hf = adopt(info.width, info.height, px, alloc);
+        if (!hf) {
+            tsr_free(alloc, px);
+            return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
+        }
+        if (info.has_scale)
+            for (size_t i = 0; i < n; i++)
+                px[i] = (float)(px[i] * info.scale + info.offset);
+        snprintf(hf->source_format, sizeof hf->source_format, "%s %s", info.format, info.type);
+        *out = hf;
+        return TSR_OK;
+    }
     tsr_heightfield *hf = tsr_heightfield_create(info.width, info.height, alloc);
     if (!hf) {
         tsr_free(alloc, px);
