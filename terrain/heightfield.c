@@ -16,30 +16,6 @@ static bool size_ok(uint64_t w, uint64_t h)
            h <= TSR_HEIGHTFIELD_MAX_SIDE && w * h <= TSR_HEIGHTFIELD_MAX_SAMPLES;
 }
 
-tsr_heightfield *tsr_heightfield_create(uint32_t width, uint32_t height, const tsr_allocator *alloc)
-{
-    if (!size_ok(width, height))
-        return NULL;
-    tsr_heightfield *hf = tsr_alloc(alloc, sizeof *hf);
-    if (!hf)
-        return NULL;
-    memset(hf, 0, sizeof *hf);
-    if (alloc)
-        hf->alloc = *alloc;
-    hf->width = width;
-    hf->height = height;
-    hf->dx = hf->dy = hf->dz = 1;
-    size_t n = (size_t)width * height;
-    hf->data = tsr_alloc(alloc, n * sizeof(float));
-    if (!hf->data) {
-        tsr_free(alloc, hf);
-        return NULL;
-    }
-    memset(hf->data, 0, n * sizeof(float));
-    snprintf(hf->source_format, sizeof hf->source_format, "memory");
-    return hf;
-}
-
 /* A heightfield whose samples are `data` (tsr_alloc'd with alloc; owned
  * from now on), or NULL when out of memory (data not freed). */
 static tsr_heightfield *adopt(uint32_t width, uint32_t height, float *data, const tsr_allocator *alloc)
@@ -54,6 +30,22 @@ static tsr_heightfield *adopt(uint32_t width, uint32_t height, float *data, cons
     hf->height = height;
     hf->dx = hf->dy = hf->dz = 1;
     hf->data = data;
+    return hf;
+}
+
+tsr_heightfield *tsr_heightfield_create(uint32_t width, uint32_t height, const tsr_allocator *alloc)
+{
+    if (!size_ok(width, height))
+        return NULL;
+    size_t n = (size_t)width * height;
+    float *data = tsr_alloc(alloc, n * sizeof(float));
+    tsr_heightfield *hf = data ? adopt(width, height, data, alloc) : NULL;
+    if (!hf) {
+        tsr_free(alloc, data);
+        return NULL;
+    }
+    memset(hf->data, 0, n * sizeof(float));
+    snprintf(hf->source_format, sizeof hf->source_format, "memory");
     return hf;
 }
 
