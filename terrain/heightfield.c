@@ -64,6 +64,7 @@ uint32_t tsr_heightfield_height(const tsr_heightfield *hf) { return hf->height; 
 float *tsr_heightfield_data(tsr_heightfield *hf) { return hf->data; }
 const float *tsr_heightfield_cdata(const tsr_heightfield *hf) { return hf->data; }
 const char *tsr_heightfield_source_format(const tsr_heightfield *hf) { return hf->source_format; }
+const tsr_georef *tsr_heightfield_georef(const tsr_heightfield *hf) { return hf->has_georef ? &hf->georef : NULL; }
 
 void tsr_heightfield_set_spacing(tsr_heightfield *hf, double dx, double dy, double dz)
 {
@@ -208,14 +209,63 @@ static tsr_status load_raw(const char *path, const tsr_load_options *o, tsr_heig
     return TSR_OK;
 }
 
+static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_heightfield **out,
+                               const tsr_allocator *alloc, float *px, const tsr_image_info *ip, tsr_error *err);
+
+/* A GIS raster OpenImageIO could not open, through GDAL; *nodata_done
+ * when the file's no-data samples are NaN already. */
+static tsr_status load_gis(const char *path, const tsr_load_options *o, tsr_heightfield **out,
+                           const tsr_allocator *alloc, bool *nodata_done, tsr_error *err)
+{
+    float *px = NULL;
+    uint32_t w, h;
+    char format[64];
+    tsr_georef g;
+    tsr_status s = tsr_gdal_read(path, alloc, TSR_HEIGHTFIELD_MAX_SAMPLES, o->has_nodata, &px, &w, &h, format, &g,
+                                 err);
+    if (s != TSR_OK)
+        return s;
+    tsr_heightfield *hf = adopt(w, h, px, alloc);
+    if (!hf) {
+        tsr_free(alloc, px);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
+    }
+    snprintf(hf->source_format, sizeof hf->source_format, "%s", format);
+    hf->georef = g;
+    hf->has_georef = g.has_transform || g.crs != TSR_CRS_NONE || g.has_nodata;
+    *nodata_done = !o->has_nodata;
+    *out = hf;
+    return TSR_OK;
+}
+
 static tsr_status load_image(const char *path, const tsr_load_options *o, tsr_heightfield **out,
-                             const tsr_allocator *alloc, tsr_error *err)
+                             const tsr_allocator *alloc, bool *nodata_done, tsr_error *err)
 {
     float *px = NULL;
     tsr_image_info info;
     tsr_status s = tsr_image_read(path, alloc, TSR_HEIGHTFIELD_MAX_SAMPLES, &px, &info, err);
+    if (s == TSR_ERR_FORMAT && !info.format[0] && o->decode == TSR_DECODE_NONE) {
+        /* no image reader took it: a GIS raster? If GDAL knows it no
+         * better, OpenImageIO's message stands */
+        tsr_error gerr = {0};
+        tsr_status gs = load_gis(path, o, out, alloc, nodata_done, &gerr);
+        if (gs == TSR_ERR_FORMAT)
+            return s;
+        *err = gerr;
+        return gs;
+    }
     if (s != TSR_OK)
         return s;
+    tsr_status hs = finish_image(path, o, out, alloc, px, &info, err);
+    if (hs == TSR_OK && !strcmp(info.format, "tiff"))
+        (*out)->has_georef = tsr_gdal_georef(path, info.width, info.height, &(*out)->georef);
+    return hs;
+}
+
+static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_heightfield **out,
+                               const tsr_allocator *alloc, float *px, const tsr_image_info *ip, tsr_error *err)
+{
+    tsr_image_info info = *ip;
     if (info.width < TSR_HEIGHTFIELD_MIN_SIDE || info.height < TSR_HEIGHTFIELD_MIN_SIDE) {
         tsr_free(alloc, px);
         return tsr_error_set(err, TSR_ERR_TOO_SMALL, "%s: image is %ux%u; a heightfield needs at least 2x2 samples",
@@ -290,21 +340,28 @@ tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts, 
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "no input file given");
     tsr_heightfield *hf = NULL;
     tsr_status s;
+    bool nodata_done = false;
     if (o->raw_type != TSR_RAW_NONE)
         s = load_raw(path, o, &hf, alloc, err);
     else if (o->decode == TSR_DECODE_NONE && tsr_pnm_is_grey(path))
         s = tsr_pnm_read(path, alloc, &hf, err);
     else
-        s = load_image(path, o, &hf, alloc, err);
+        s = load_image(path, o, &hf, alloc, &nodata_done, err);
     if (s != TSR_OK)
         return s;
+    /* the no-data value asked for, else the file's own (a GeoTIFF's
+     * GDAL_NODATA), compared as the float32 the samples are */
+    bool file_nd = !o->has_nodata && !nodata_done && hf->has_georef && hf->georef.has_nodata;
+    double ndd = o->has_nodata ? o->nodata : file_nd ? hf->georef.nodata : NAN;
+    bool has_nd = !isnan(ndd) && fabs(ndd) <= FLT_MAX;
+    float nd = has_nd ? (float)ndd : 0;
     size_t n = (size_t)hf->width * hf->height;
     uint64_t valid = 0;
     for (size_t i = 0; i < n; i++) {
         float v = hf->data[i];
         /* the float extremes are what GIS tools write for no-data when the
          * file names none; no terrain is 3.4e38 high */
-        if ((o->has_nodata && (double)v == o->nodata) || v == FLT_MAX || v == -FLT_MAX)
+        if ((has_nd && v == nd) || v == FLT_MAX || v == -FLT_MAX)
             hf->data[i] = v = NAN;
         if (isinf(v)) {
             uint32_t c = (uint32_t)(i % hf->width), r = (uint32_t)(i / hf->width);
@@ -314,9 +371,12 @@ tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts, 
         valid += !isnan(v);
     }
     if (valid == 0) {
+        bool file_value = (file_nd || nodata_done) && hf->has_georef && hf->georef.has_nodata;
         tsr_heightfield_destroy(hf);
         return tsr_error_set(err, TSR_ERR_VALUE, "%s: every sample is no-data (NaN%s)", path,
-                             o->has_nodata ? " or the no-data value" : "");
+                             o->has_nodata ? " or the no-data value"
+                             : file_value  ? " or the file's no-data value"
+                                           : "");
     }
     *out = hf;
     return TSR_OK;

@@ -59,13 +59,55 @@ tsr_raw_type tsr_raw_type_parse(const char *s);
 /* Loads a heightfield. Formats: PNG (8/16-bit grey, or RGB(A) with
  * decode), TIFF and GeoTIFF (8/16-bit integer, float32), OpenEXR, PGM, and
  * anything else OpenImageIO reads as one channel; raw samples when
- * opts->raw_type is set. Rejects sizes outside the limits above, infinite
- * heights, and files with no valid (non-NaN) sample. Samples equal to
+ * opts->raw_type is set; and, through GDAL, the GIS rasters OpenImageIO
+ * does not read (band 1, its scale and offset applied): SRTM .hgt, Esri
+ * ASCII grids (.asc), ESRI .bil/.flt (EHdr), Erdas .img, USGS .dem, VTP
+ * .bt and XYZ grids. A GeoTIFF's georeferencing and no-data value
+ * (GDAL_NODATA) are read through GDAL too (tsr_heightfield_georef).
+ * Rejects sizes outside the limits above, infinite heights, and files
+ * with no valid (non-NaN) sample. No-data: samples equal to
+ * opts->nodata when given, else to the file's own no-data value; also
  * +-3.4028235e38 (FLT_MAX, what GIS tools write for no-data when the file
- * names none) are no-data, as are those equal to opts->nodata. On success *out owns
- * the samples; on failure *out is NULL and err names path and problem. */
+ * names none). Values are compared as float32 (the samples' type). On
+ * success *out owns the samples; on failure *out is NULL and err names
+ * path and problem. */
 tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts,
                                 const tsr_allocator *alloc, tsr_heightfield **out, tsr_error *err);
+
+/* ---- Georeferencing ---------------------------------------------------- */
+
+typedef enum tsr_crs_kind {
+    TSR_CRS_NONE = 0,   /* the file names no coordinate system */
+    TSR_CRS_PROJECTED,  /* map coordinates in a linear unit (UTM, national grids, Web Mercator) */
+    TSR_CRS_GEOGRAPHIC, /* longitude and latitude */
+    TSR_CRS_OTHER       /* named, but neither (a local or geocentric system) */
+} tsr_crs_kind;
+
+/* Where a GIS file says its samples lie, as GDAL reads it (GeoTIFF tags,
+ * the headers of the other GIS formats). */
+typedef struct tsr_georef {
+    bool has_transform; /* a north-up grid: the centre of sample (c, r) is at */
+    double origin[2];   /*   (origin[0] + c pixel[0], origin[1] + r pixel[1]) */
+    double pixel[2];    /*   in CRS units; pixel[1] < 0 when row 0 is north */
+    tsr_crs_kind crs;
+    char crs_name[96];  /* e.g. "WGS 84 / UTM zone 33N"; "" when none */
+    char z_unit[24];    /* the heights' unit where the file names one ("metre", "ft"); "" */
+    bool has_nodata;    /* the file's no-data value */
+    double nodata;
+    /* Ground spacing of the samples in metres at the raster's middle: one
+     * pixel step in x and in y taken to longitude and latitude and
+     * measured on the CRS's ellipsoid, so a projection's own scale (Web
+     * Mercator's 1 / cos(latitude)) is taken out; with no CRS, |pixel| in
+     * the file's unknown unit. */
+    bool has_spacing;
+    bool spacing_approx;   /* it differs by over 0.1 % at the first sample */
+    bool spacing_unitless; /* no CRS: the unit is unknown */
+    double spacing[2];
+} tsr_georef;
+
+/* The georeferencing of the file hf was loaded from; NULL when it named
+ * none (or hf was not loaded from a file). */
+const tsr_georef *tsr_heightfield_georef(const tsr_heightfield *hf);
 
 /* A width × height heightfield of zeros with dx = dy = dz = 1; NULL when
  * out of memory or outside the size limits. */

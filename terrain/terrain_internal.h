@@ -14,6 +14,8 @@ struct tsr_heightfield {
     float *data;
     char source_format[64];
     tsr_allocator alloc;
+    bool has_georef;
+    tsr_georef georef;
 };
 
 /* What the image bridge found in a file. */
@@ -39,6 +41,25 @@ tsr_status tsr_image_read(const char *path, const tsr_allocator *alloc, uint64_t
 tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
                            const float *values, bool as_u16, double scale, double offset, tsr_error *err);
 
+
+/* GIS rasters through GDAL (gdal_io.c). Only the drivers named in
+ * terrain.h are registered, once, and GDAL writes no side files (.aux.xml)
+ * and prints nothing: its messages become err's.
+ *
+ * The georeferencing GDAL finds in path for a w x h raster; false, with *g
+ * zeroed, where it finds none (or cannot open the file). */
+bool tsr_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g);
+
+/* Reads band 1 of a raster OpenImageIO could not open: float32 samples
+ * with the band's scale and offset applied, the band's no-data samples
+ * NaN unless keep_nodata (they are then left as they are, for the caller's
+ * own value), into *pixels (w * h from alloc), the format ("srtmhgt
+ * int16") into format, the georeferencing into *g. TSR_ERR_FORMAT when no
+ * registered driver recognises the file; sizes over max_samples or the
+ * side limits are refused before allocating. */
+tsr_status tsr_gdal_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, bool keep_nodata,
+                         float **pixels, uint32_t *w, uint32_t *h, char format[64], tsr_georef *g,
+                         tsr_error *err);
 
 /* The unit normal at sample (c, r) from central differences of the
  * heights (one-sided at borders and next to no-data), in world units. */

@@ -2,6 +2,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
 
+#include <cjson/cJSON.h>
+
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -120,6 +122,64 @@ int cli_heightfield_option(const char *cmd, int argc, char **argv, int *i, cli_h
     return 1;
 }
 
+bool cli_spacing(const tsr_heightfield *hf, const cli_heightfield_options *o, double *dx, double *dy)
+{
+    const tsr_georef *g = tsr_heightfield_georef(hf);
+    bool file = o->dx <= 0 && o->dy <= 0 && g && g->has_spacing;
+    *dx = o->dx > 0 ? o->dx : file ? g->spacing[0] : 1;
+    *dy = o->dy > 0 ? o->dy : o->dx > 0 ? o->dx : file ? g->spacing[1] : 1;
+    return file;
+}
+
+void cli_georef_describe(const tsr_heightfield *hf, const cli_heightfield_options *o, char *buf, size_t cap)
+{
+    const tsr_georef *g = tsr_heightfield_georef(hf);
+    double dx, dy;
+    bool file = cli_spacing(hf, o, &dx, &dy);
+    const char *how = !file                 ? (o->dx > 0 || o->dy > 0 ? "as given" : "default")
+                      : g->spacing_unitless ? "from the file, in its unknown unit"
+                      : g->spacing_approx   ? "ground metres at the file's middle; it varies across"
+                                            : "ground metres, from the file";
+    int n = snprintf(buf, cap, "%.9g x %.9g (%s)", dx, dy, how);
+    if (g && g->crs_name[0] && n >= 0 && (size_t)n < cap)
+        snprintf(buf + n, cap - (size_t)n, "; %s", g->crs_name);
+}
+
+static void add_pair(cJSON *o, const char *key, double a, double b)
+{
+    cJSON *arr = cJSON_AddArrayToObject(o, key);
+    cJSON_AddItemToArray(arr, cJSON_CreateNumber(a));
+    cJSON_AddItemToArray(arr, cJSON_CreateNumber(b));
+}
+
+void cli_georef_json(cJSON *j, const tsr_heightfield *hf, const cli_heightfield_options *o)
+{
+    static const char *kinds[] = {"none", "projected", "geographic", "other"};
+    const tsr_georef *g = tsr_heightfield_georef(hf);
+    double dx, dy;
+    bool file = cli_spacing(hf, o, &dx, &dy);
+    add_pair(j, "spacing", dx, dy);
+    cJSON_AddStringToObject(j, "spacing_from", file ? "file" : o->dx > 0 || o->dy > 0 ? "options" : "default");
+    if (!g)
+        return;
+    cJSON *gj = cJSON_AddObjectToObject(j, "georef");
+    cJSON_AddStringToObject(gj, "crs", g->crs_name);
+    cJSON_AddStringToObject(gj, "crs_kind", kinds[g->crs]);
+    if (g->has_transform) {
+        add_pair(gj, "origin", g->origin[0], g->origin[1]);
+        add_pair(gj, "pixel", g->pixel[0], g->pixel[1]);
+    }
+    if (g->has_spacing) {
+        add_pair(gj, "ground_spacing", g->spacing[0], g->spacing[1]);
+        cJSON_AddBoolToObject(gj, "ground_spacing_varies", g->spacing_approx);
+        cJSON_AddBoolToObject(gj, "ground_spacing_unitless", g->spacing_unitless);
+    }
+    if (g->has_nodata)
+        cJSON_AddNumberToObject(gj, "nodata_value", g->nodata);
+    if (g->z_unit[0])
+        cJSON_AddStringToObject(gj, "z_unit", g->z_unit);
+}
+
 tsr_heightfield *cli_load_heightfield(const char *cmd, const char *path, const cli_heightfield_options *o)
 {
     tsr_heightfield *hf = NULL;
@@ -142,7 +202,8 @@ tsr_heightfield *cli_load_heightfield(const char *cmd, const char *path, const c
         cli_error(cmd, "%s", err.message);
         return NULL;
     }
-    double dx = o->dx > 0 ? o->dx : 1, dy = o->dy > 0 ? o->dy : dx, dz = o->dz > 0 ? o->dz : 1;
+    double dx, dy, dz = o->dz > 0 ? o->dz : 1;
+    cli_spacing(hf, o, &dx, &dy);
     tsr_heightfield_set_spacing(hf, dx, dy, dz);
     return hf;
 }

@@ -40,8 +40,10 @@ typedef struct cli_heightfield_options {
     "  --decode terrain-rgb  decode an RGB(A) Terrain-RGB tile:\n"                                 \
     "                        h = (R*65536 + G*256 + B) * 0.1 - 10000\n"                            \
     "  --raw W H TYPE        headerless little-endian samples, TYPE u16, i16 or f32\n"              \
-    "  --nodata V            samples equal to V are no-data (holes)\n"                             \
-    "  --dx S, --dy S        sample spacing in x and y (default 1; --dy defaults to --dx)\n"       \
+    "  --nodata V            samples equal to V are no-data (holes); default: the file's own\n"     \
+    "                        (GeoTIFF GDAL_NODATA, a GIS format's header)\n"                       \
+    "  --dx S, --dy S        sample spacing in x and y (default: a GIS file's own, in metres,\n"   \
+    "                        else 1; --dy defaults to --dx)\n"                                     \
     "  --dz S                height scale: z = h * S (default 1)\n"
 
 /* If argv[*i] is one of those options, consumes it and its values
@@ -49,8 +51,23 @@ typedef struct cli_heightfield_options {
  * and returns -1 on a bad value. */
 int cli_heightfield_option(const char *cmd, int argc, char **argv, int *i, cli_heightfield_options *o);
 
-/* Loads the heightfield with the options and applies spacing; prints the
- * error and returns NULL on failure. */
+/* The spacing the options give hf: --dx/--dy where given (--dy defaults
+ * to --dx), else the georeferenced file's ground spacing, else 1; true
+ * when it came from the file. */
+bool cli_spacing(const tsr_heightfield *hf, const cli_heightfield_options *o, double *dx, double *dy);
+
+/* "DX x DY (where it came from); CRS name", for summaries. */
+void cli_georef_describe(const tsr_heightfield *hf, const cli_heightfield_options *o, char *buf, size_t cap);
+
+/* Adds "spacing" [dx, dy], "spacing_from" (file, options or default) and,
+ * for a georeferenced file, "georef" {crs, crs_kind, origin, pixel,
+ * ground_spacing, ground_spacing_varies, ground_spacing_unitless,
+ * nodata_value, z_unit} (those the file has) to the JSON object j. */
+struct cJSON;
+void cli_georef_json(struct cJSON *j, const tsr_heightfield *hf, const cli_heightfield_options *o);
+
+/* Loads the heightfield with the options and applies spacing (cli_spacing);
+ * prints the error and returns NULL on failure. */
 tsr_heightfield *cli_load_heightfield(const char *cmd, const char *path, const cli_heightfield_options *o);
 
 /* True when argv[*i] is -h or --help. */

@@ -52,6 +52,9 @@ static int run(int argc, char **argv)
     tsr_heightfield_stats st;
     tsr_heightfield_stats_compute(hf, &st);
     uint32_t w = tsr_heightfield_width(hf), h = tsr_heightfield_height(hf);
+    const tsr_georef *g = tsr_heightfield_georef(hf);
+    char spacing[256];
+    cli_georef_describe(hf, &o, spacing, sizeof spacing);
     if (json) {
         cJSON *j = cJSON_CreateObject();
         cJSON_AddStringToObject(j, "file", path);
@@ -63,15 +66,24 @@ static int run(int argc, char **argv)
         cJSON_AddNumberToObject(j, "max", st.max);
         cJSON_AddNumberToObject(j, "mean", st.mean);
         cJSON_AddNumberToObject(j, "nodata", (double)st.nodata);
+        cli_georef_json(j, hf, &o);
         char *s = cJSON_Print(j);
         printf("%s\n", s);
         free(s);
         cJSON_Delete(j);
     } else {
         printf("file:    %s\nformat:  %s\nsize:    %u x %u (%llu samples)\nmin:     %.9g\nmax:     %.9g\n"
-               "mean:    %.9g\nnodata:  %llu\n",
+               "mean:    %.9g\nnodata:  %llu",
                path, tsr_heightfield_source_format(hf), w, h, (unsigned long long)w * h, st.min, st.max, st.mean,
                (unsigned long long)st.nodata);
+        if (g && g->has_nodata)
+            printf(" (the file's no-data value: %.9g%s)", g->nodata, o.load.has_nodata ? ", replaced by --nodata" : "");
+        printf("\nspacing: %s\n", spacing);
+        if (g && g->has_transform)
+            printf("origin:  %.12g, %.12g (sample 0, 0; pixel %.9g x %.9g)\n", g->origin[0], g->origin[1],
+                   g->pixel[0], g->pixel[1]);
+        if (g && g->z_unit[0])
+            printf("heights: %s\n", g->z_unit);
     }
     tsr_heightfield_destroy(hf);
     return CLI_OK;

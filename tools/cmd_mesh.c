@@ -109,8 +109,8 @@ static const char *method_name(tsr_tin_method m)
 }
 
 static int write_stats(const char *path, const tsr_mesh *mesh, const tsr_error_report *er, double secs,
-                       const tsr_tin_options *to, const tsr_heightfield *hf, const tsr_heightfield_stats *st,
-                       double max_error, const tsr_tin_report *rep)
+                       const tsr_tin_options *to, const tsr_heightfield *hf, const cli_heightfield_options *o,
+                       const tsr_heightfield_stats *st, double max_error, const tsr_tin_report *rep)
 {
     cJSON *j = cJSON_CreateObject();
     cJSON_AddNumberToObject(j, "vertices", mesh->vertex_count);
@@ -139,6 +139,7 @@ static int write_stats(const char *path, const tsr_mesh *mesh, const tsr_error_r
     cJSON_AddNumberToObject(inp, "min", st->min);
     cJSON_AddNumberToObject(inp, "max", st->max);
     cJSON_AddNumberToObject(inp, "nodata", (double)st->nodata);
+    cli_georef_json(inp, hf, o);
     if (to->window_w) {
         cJSON *w = cJSON_AddObjectToObject(j, "window");
         cJSON_AddNumberToObject(w, "x", to->window_x);
@@ -413,7 +414,7 @@ static int run(int argc, char **argv)
     }
     double secs = cli_now() - t0;
     if (rc == CLI_OK && stats)
-        rc = write_stats(stats, &mesh, &er, secs, &to, hf, &st, bound, &rep);
+        rc = write_stats(stats, &mesh, &er, secs, &to, hf, &o, &st, bound, &rep);
     if (rc == CLI_OK && !quiet) {
         fprintf(stderr, "tessera mesh: wrote %s (%s, %s, %u vertices, %u triangles", out,
                 tsr_mesh_format_name(tsr_mesh_format_from_path(out)), method_name(to.method), mesh.vertex_count,
@@ -424,6 +425,12 @@ static int run(int argc, char **argv)
         if (bound > 0)
             fprintf(stderr, " (bound %g)", bound);
         fprintf(stderr, ", rms %g%s in %.2f s\n", er.rms_vertical, rep.budget_reached ? ", budget reached" : "", secs);
+        double dx, dy;
+        if (cli_spacing(hf, &o, &dx, &dy)) {
+            char sp[256];
+            cli_georef_describe(hf, &o, sp, sizeof sp);
+            fprintf(stderr, "tessera mesh: spacing %s (--dx, --dy set another)\n", sp);
+        }
         if (er.uncovered)
             fprintf(stderr,
                     "tessera mesh: note: %llu valid samples have no cell of four valid samples and are left out\n",

@@ -15,6 +15,7 @@ PKGS=(
   glslc
   xvfb xauth
   libcjson-dev
+  libgdal-dev
   libmeshoptimizer-dev
   assimp-utils
   nodejs npm

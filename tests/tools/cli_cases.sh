@@ -88,6 +88,28 @@ random_bytes_every_format)
   expect_error 1 "short\.pgm: truncated PGM" -- "$tessera" info "$dir/short.pgm"
   printf 'P5\n3 x\n255\n' > "$dir/badhead.pgm"
   expect_error 1 "badhead\.pgm: PGM header" -- "$tessera" info "$dir/badhead.pgm" ;;
+gis_grids)
+  # GIS rasters through GDAL: an Esri ASCII grid gives its cell size as the
+  # spacing and its NODATA_value as holes; --dx overrides the spacing
+  printf 'ncols 5\nnrows 4\nxllcorner 1000\nyllcorner 2000\ncellsize 10\nNODATA_value -9999\n' > "$dir/dem.asc"
+  printf '1 2 3 4 5\n6 7 -9999 9 10\n11 12 13 14 15\n16 17 18 19 20\n' >> "$dir/dem.asc"
+  "$tessera" info "$dir/dem.asc" > "$dir/info.txt" || fail "info failed"
+  grep -q '^nodata:  1 (the file.s no-data value: -9999)' "$dir/info.txt" || fail "nodata: $(cat "$dir/info.txt")"
+  grep -q '^spacing: 10 x 10 (from the file, in its unknown unit)' "$dir/info.txt" || fail "spacing: $(cat "$dir/info.txt")"
+  "$tessera" mesh "$dir/dem.asc" -o "$dir/dem.obj" --method grid --stats "$dir/s.json" --quiet || fail "mesh failed"
+  grep -q '"spacing_from":[[:space:]]*"file"' "$dir/s.json" || fail "stats: $(cat "$dir/s.json")"
+  # 20 samples less the hole, columns 10 apart: x from 0 to 40
+  [ "$(grep -c '^v ' "$dir/dem.obj")" -eq 19 ] || fail "vertices: $(grep -c '^v ' "$dir/dem.obj")"
+  [ "$(awk '/^v /{if ($2 > m) m = $2} END {print m}' "$dir/dem.obj")" = 40 ] || fail "x extent"
+  "$tessera" mesh "$dir/dem.asc" -o "$dir/dem.obj" --method grid --dx 2 --quiet || fail "mesh --dx failed"
+  [ "$(awk '/^v /{if ($2 > m) m = $2} END {print m}' "$dir/dem.obj")" = 8 ] || fail "x extent with --dx 2"
+  rm "$dir/dem.obj" "$dir/s.json" "$dir/info.txt"
+  printf 'ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value 5\n5 5\n5 5\n' > "$dir/void.asc"
+  expect_error 1 "void\.asc: every sample is no-data \(NaN or the file's no-data value\)" -- "$tessera" info "$dir/void.asc"
+  printf 'ncols 5\nnrows 4\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n' > "$dir/short.asc"
+  expect_error 1 "short\.asc: " -- "$tessera" mesh "$dir/short.asc" -o "$out"
+  cp "$dir/random.png" "$dir/N45E007.hgt"
+  expect_error 1 "N45E007\.hgt: not an image" -- "$tessera" mesh "$dir/N45E007.hgt" -o "$out" ;;
 raw_wrong_size)
   expect_error 1 "nan\.f32: raw f32 5x4 needs 80 bytes but the file has 64" -- "$tessera" info "$dir/nan.f32" --raw 5 4 f32 ;;
 bad_options)

@@ -1,0 +1,266 @@
+/* gdal_io.c: GIS rasters through GDAL's C API: the georeferencing and
+ * no-data value of the GeoTIFFs OpenImageIO reads (it skips those tags),
+ * and whole heightfields in the GIS formats it does not read. */
+#include "terrain_internal.h"
+
+#include <ctype.h>
+#include <float.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <gdal.h>
+#include <gdal_frmts.h>
+#include <ogr_srs_api.h>
+
+static pthread_once_t registered = PTHREAD_ONCE_INIT;
+
+static void register_drivers(void)
+{
+    /* no .aux.xml written beside an input, a bounded block cache (the
+     * whole raster is read once, straight into the samples) */
+    CPLSetConfigOption("GDAL_PAM_ENABLED", "NO");
+    GDALSetCacheMax64((GIntBig)64 << 20);
+    GDALRegister_GTiff();
+    GDALRegister_SRTMHGT();
+    GDALRegister_AAIGrid();
+    GDALRegister_EHdr();
+    GDALRegister_HFA();
+    GDALRegister_USGSDEM();
+    GDALRegister_BT();
+    GDALRegister_XYZ();
+}
+
+/* Opens path read-only with GDAL's messages held back (the caller pops
+ * the handler); NULL when no registered driver takes it. */
+static GDALDatasetH open_quiet(const char *path)
+{
+    pthread_once(&registered, register_drivers);
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    CPLErrorReset();
+    return GDALOpenEx(path, GDAL_OF_RASTER | GDAL_OF_READONLY, NULL, NULL, NULL);
+}
+
+static void lower_copy(char *dst, size_t cap, const char *a, const char *b)
+{
+    snprintf(dst, cap, "%s%s%s", a, b ? " " : "", b ? b : "");
+    for (char *p = dst; *p; p++)
+        *p = (char)tolower((unsigned char)*p);
+}
+
+/* Metres per radian of longitude and of latitude at latitude phi on the
+ * ellipsoid of semi-major axis a and flattening f: the radii of curvature
+ * in the prime vertical (N cos phi) and in the meridian (M). */
+static void metres_per_radian(double a, double f, double phi, double *lon, double *lat)
+{
+    double e2 = f * (2 - f), s = sin(phi), w = 1 - e2 * s * s;
+    *lon = a / sqrt(w) * cos(phi);
+    *lat = a * (1 - e2) / (w * sqrt(w));
+}
+
+/* Ground lengths, in metres, of one pixel step in x and in y from the
+ * point (x, y) of the CRS: the three points taken to longitude and
+ * latitude (through GDAL's transformation where the CRS is projected) and
+ * measured on the ellipsoid's local radii, so the projection's own scale
+ * (Web Mercator's 1 / cos(latitude), say) is taken out. */
+typedef struct ground {
+    OGRCoordinateTransformationH ct; /* NULL: the CRS is geographic */
+    double rad, a, f;                /* radians per angular unit; ellipsoid */
+} ground;
+
+static bool ground_step(const ground *gr, double x, double y, double px, double py, double out[2])
+{
+    double X[3] = {x, x + px, x}, Y[3] = {y, y, y + py}, Z[3] = {0, 0, 0};
+    int ok[3] = {1, 1, 1};
+    if (gr->ct && !OCTTransformEx(gr->ct, 3, X, Y, Z, ok))
+        return false;
+    for (int k = 0; k < 3; k++)
+        if (!ok[k] || !isfinite(X[k]) || !isfinite(Y[k]) || fabs(Y[k] * gr->rad) >= 0.5 * acos(-1.0))
+            return false;
+    double lon, lat;
+    metres_per_radian(gr->a, gr->f, Y[0] * gr->rad, &lon, &lat);
+    for (int k = 1; k < 3; k++) {
+        double dl = remainder((X[k] - X[0]) * gr->rad, 2 * acos(-1.0)), dp = (Y[k] - Y[0]) * gr->rad;
+        out[k - 1] = hypot(dl * lon, dp * lat);
+    }
+    return out[0] > 0 && out[1] > 0;
+}
+
+/* The ground spacing at the raster's middle, approximate where it differs
+ * by more than 0.1 % at a corner (a geographic raster, or a projection's
+ * scale changing across it). */
+static void ground_spacing(OGRSpatialReferenceH s, uint32_t w, uint32_t h, tsr_georef *g)
+{
+    ground gr = {NULL, 0, 0, 0};
+    OGRSpatialReferenceH geog = NULL;
+    OGRErr e1 = OGRERR_NONE, e2 = OGRERR_NONE;
+    double invf;
+    if (g->crs == TSR_CRS_PROJECTED) {
+        geog = OSRCloneGeogCS(s);
+        if (!geog)
+            return;
+        OSRSetAxisMappingStrategy(geog, OAMS_TRADITIONAL_GIS_ORDER);
+        gr.ct = OCTNewCoordinateTransformation(s, geog);
+        gr.rad = OSRGetAngularUnits(geog, NULL);
+    } else {
+        gr.rad = OSRGetAngularUnits(s, NULL);
+    }
+    gr.a = OSRGetSemiMajor(s, &e1);
+    invf = OSRGetInvFlattening(s, &e2);
+    gr.f = invf > 0 ? 1 / invf : 0;
+    double mid[2], corner[2];
+    if ((g->crs == TSR_CRS_GEOGRAPHIC || gr.ct) && e1 == OGRERR_NONE && e2 == OGRERR_NONE && gr.rad > 0 &&
+        gr.a > 0 && ground_step(&gr, g->origin[0] + 0.5 * (w - 1.0) * g->pixel[0],
+                                g->origin[1] + 0.5 * (h - 1.0) * g->pixel[1], g->pixel[0], g->pixel[1], mid)) {
+        g->spacing[0] = mid[0];
+        g->spacing[1] = mid[1];
+        g->has_spacing = true;
+        g->spacing_approx = !ground_step(&gr, g->origin[0], g->origin[1], g->pixel[0], g->pixel[1], corner) ||
+                            fabs(corner[0] / mid[0] - 1) > 1e-3 || fabs(corner[1] / mid[1] - 1) > 1e-3;
+    }
+    if (gr.ct)
+        OCTDestroyCoordinateTransformation(gr.ct);
+    if (geog)
+        OSRRelease(geog);
+}
+
+static void fill_georef(GDALDatasetH d, uint32_t w, uint32_t h, tsr_georef *g)
+{
+    memset(g, 0, sizeof *g);
+    double gt[6];
+    if (GDALGetGeoTransform(d, gt) == CE_None && gt[2] == 0 && gt[4] == 0 && gt[1] != 0 && gt[5] != 0 &&
+        isfinite(gt[0]) && isfinite(gt[1]) && isfinite(gt[3]) && isfinite(gt[5])) {
+        g->has_transform = true;
+        g->pixel[0] = gt[1];
+        g->pixel[1] = gt[5];
+        /* GDAL's transform gives the corner of pixel (0, 0); Tessera's
+         * samples sit at pixel centres */
+        g->origin[0] = gt[0] + 0.5 * gt[1];
+        g->origin[1] = gt[3] + 0.5 * gt[5];
+    }
+    OGRSpatialReferenceH s = GDALGetSpatialRef(d);
+    if (s) {
+        const char *name = OSRGetName(s);
+        snprintf(g->crs_name, sizeof g->crs_name, "%s", name ? name : "unnamed");
+        g->crs = OSRIsProjected(s) ? TSR_CRS_PROJECTED : OSRIsGeographic(s) ? TSR_CRS_GEOGRAPHIC : TSR_CRS_OTHER;
+    }
+    if (GDALGetRasterCount(d) >= 1) {
+        GDALRasterBandH b = GDALGetRasterBand(d, 1);
+        int has = 0;
+        double nd = GDALGetRasterNoDataValue(b, &has);
+        g->has_nodata = has != 0;
+        g->nodata = has ? nd : 0;
+        const char *u = GDALGetRasterUnitType(b);
+        snprintf(g->z_unit, sizeof g->z_unit, "%s", u ? u : "");
+    }
+    if (!g->has_transform)
+        return;
+    if (g->crs == TSR_CRS_PROJECTED || g->crs == TSR_CRS_GEOGRAPHIC) {
+        ground_spacing(s, w, h, g);
+    } else if (g->crs == TSR_CRS_NONE) {
+        g->spacing[0] = fabs(g->pixel[0]);
+        g->spacing[1] = fabs(g->pixel[1]);
+        g->has_spacing = true;
+        g->spacing_unitless = true;
+    }
+}
+
+bool tsr_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g)
+{
+    memset(g, 0, sizeof *g);
+    GDALDatasetH d = open_quiet(path);
+    if (d) {
+        if ((uint32_t)GDALGetRasterXSize(d) == w && (uint32_t)GDALGetRasterYSize(d) == h)
+            fill_georef(d, w, h, g);
+        GDALClose(d);
+    }
+    CPLPopErrorHandler();
+    return g->has_transform || g->crs != TSR_CRS_NONE || g->has_nodata;
+}
+
+static const char *gdal_message(const char *fallback)
+{
+    const char *m = CPLGetLastErrorMsg();
+    return m && *m ? m : fallback;
+}
+
+static tsr_status read_dataset(GDALDatasetH d, const char *path, const tsr_allocator *alloc, uint64_t max_samples,
+                               bool keep_nodata, float **pixels, uint32_t *w, uint32_t *h, char format[64],
+                               tsr_georef *g, tsr_error *err)
+{
+    int xs = GDALGetRasterXSize(d), ys = GDALGetRasterYSize(d);
+    if (GDALGetRasterCount(d) < 1 || xs <= 0 || ys <= 0)
+        return tsr_error_set(err, TSR_ERR_FORMAT, "%s: the file holds no raster band", path);
+    GDALRasterBandH b = GDALGetRasterBand(d, 1);
+    GDALDataType t = GDALGetRasterDataType(b);
+    lower_copy(format, 64, GDALGetDriverShortName(GDALGetDatasetDriver(d)), GDALGetDataTypeName(t));
+    if (GDALDataTypeIsComplex(t))
+        return tsr_error_set(err, TSR_ERR_UNSUPPORTED, "%s: complex samples (%s) are not heights", path,
+                             GDALGetDataTypeName(t));
+    uint64_t W = (uint64_t)xs, H = (uint64_t)ys;
+    if (W < TSR_HEIGHTFIELD_MIN_SIDE || H < TSR_HEIGHTFIELD_MIN_SIDE)
+        return tsr_error_set(err, TSR_ERR_TOO_SMALL, "%s: raster is %llux%llu; a heightfield needs at least 2x2 samples",
+                             path, (unsigned long long)W, (unsigned long long)H);
+    if (W > TSR_HEIGHTFIELD_MAX_SIDE || H > TSR_HEIGHTFIELD_MAX_SIDE || W * H > max_samples)
+        return tsr_error_set(err, TSR_ERR_TOO_LARGE,
+                             "%s: raster is %llux%llu; Tessera accepts at most %u per side and %llu samples", path,
+                             (unsigned long long)W, (unsigned long long)H, TSR_HEIGHTFIELD_MAX_SIDE,
+                             (unsigned long long)max_samples);
+    size_t n = (size_t)(W * H);
+    float *px = tsr_alloc(alloc, n * sizeof *px);
+    if (!px)
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %llux%llu samples", path,
+                             (unsigned long long)W, (unsigned long long)H);
+    /* in bands of rows, so a bad row is named */
+    for (int y0 = 0; y0 < ys; y0 += 256) {
+        int rows = ys - y0 < 256 ? ys - y0 : 256;
+        if (GDALRasterIO(b, GF_Read, 0, y0, xs, rows, px + (size_t)y0 * (size_t)xs, xs, rows, GDT_Float32, 0, 0) !=
+            CE_None) {
+            tsr_free(alloc, px);
+            return tsr_error_set(err, TSR_ERR_TRUNCATED, "%s: truncated or corrupt samples at row %d (%s)", path, y0,
+                                 gdal_message("read failed"));
+        }
+    }
+    fill_georef(d, (uint32_t)W, (uint32_t)H, g);
+    int has_scale = 0, has_offset = 0;
+    double scale = GDALGetRasterScale(b, &has_scale), offset = GDALGetRasterOffset(b, &has_offset);
+    if (!has_scale || !isfinite(scale) || scale == 0)
+        scale = 1;
+    if (!has_offset || !isfinite(offset))
+        offset = 0;
+    bool nd = g->has_nodata && !keep_nodata && !isnan(g->nodata) && fabs(g->nodata) <= FLT_MAX;
+    float ndv = nd ? (float)g->nodata : 0;
+    for (size_t i = 0; i < n; i++) {
+        if (nd && px[i] == ndv)
+            px[i] = NAN;
+        else if (scale != 1 || offset != 0)
+            px[i] = (float)(px[i] * scale + offset);
+    }
+    *pixels = px;
+    *w = (uint32_t)W;
+    *h = (uint32_t)H;
+    return TSR_OK;
+}
+
+tsr_status tsr_gdal_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, bool keep_nodata,
+                         float **pixels, uint32_t *w, uint32_t *h, char format[64], tsr_georef *g, tsr_error *err)
+{
+    *pixels = NULL;
+    *w = *h = 0;
+    format[0] = '\0';
+    memset(g, 0, sizeof *g);
+    GDALDatasetH d = open_quiet(path);
+    tsr_status s;
+    if (!d) {
+        s = tsr_error_set(err, TSR_ERR_FORMAT, "%s: not a GIS raster Tessera can read (%s)", path,
+                          gdal_message("unknown format"));
+    } else {
+        s = read_dataset(d, path, alloc, max_samples, keep_nodata, pixels, w, h, format, g, err);
+        GDALClose(d);
+    }
+    CPLPopErrorHandler();
+    return s;
+}
