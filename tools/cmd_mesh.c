@@ -19,8 +19,8 @@ static void help(FILE *f)
             "Converts a heightfield into a triangle mesh whose vertical error is bounded: after building,\n"
             "every valid sample is measured against the mesh, and the measured max error never exceeds\n"
             "--max-error. OUT's extension picks the format: .obj, .ply (binary), .stl (binary) or .glb\n"
-            "(glTF 2.0, +y up). Sample (c, r) becomes the vertex (c*dx, r*dy, h*dz); no-data samples\n"
-            "become holes, never zeros.\n\n"
+            "(glTF 2.0, +y up). Sample (c, r) becomes the vertex (c*dx, r*dy, h*dz) (--north-up:\n"
+            "(c*dx, -r*dy, h*dz)); no-data samples become holes, never zeros.\n\n"
             "options:\n"
             "  -o, --output OUT      mesh file to write (required)\n"
             "  --max-error E         the bound on the vertical error, in output z units\n"
@@ -60,6 +60,9 @@ static void help(FILE *f)
             "                        kept at full resolution)\n"
             "  --base DEPTH          a closed solid for 3D printing: walls down to a flat bottom\n"
             "                        DEPTH below the lowest point\n"
+            "  --north-up            y = -r*dy: +y is the image's up (north in a north-up GIS raster),\n"
+            "                        so x east, y north, z up is right-handed and the terrain is not\n"
+            "                        mirrored in a z-up viewer (the default's y runs down the rows)\n"
             "  --normals             per-vertex normals from the heightfield's gradients\n"
             "  --normal-map FILE     a normal map image at the heightfield's resolution (.png, .tif)\n"
             "  --hillshade FILE      a hillshade image at the heightfield's resolution (.png, .tif)\n"
@@ -67,6 +70,25 @@ static void help(FILE *f)
             "                        peak_bytes, method and the input's size, range and no-data count\n"
             "  --quiet               print nothing on success (no summary, no progress bar)\n" CLI_HEIGHTFIELD_HELP
             "  -h, --help            this help\n");
+}
+
+/* --north-up: y = -r dy instead of r dy, so +y is the image's up (north
+ * in a north-up raster) and (x, y, z) a right-handed east-north-up frame;
+ * the reflection reverses every triangle, so each is turned back to face
+ * as before (a solid stays closed and outward-facing). */
+static void mirror_rows(tsr_mesh *m)
+{
+    for (uint32_t i = 0; i < m->vertex_count; i++) {
+        float *p = m->positions + 3 * (size_t)i;
+        p[1] = p[1] == 0 ? 0.0f : -p[1];
+        if (m->normals)
+            m->normals[3 * (size_t)i + 1] = -m->normals[3 * (size_t)i + 1];
+    }
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        uint32_t *v = m->indices + 3 * (size_t)t, k = v[1];
+        v[1] = v[2];
+        v[2] = k;
+    }
 }
 
 /* Peak resident memory of this process, from /proc (0 when unknown). */
@@ -177,7 +199,7 @@ static int run(int argc, char **argv)
     const char *in = NULL, *out = NULL, *stats = NULL, *normal_map = NULL, *hillshade = NULL;
     tsr_tin_options to = {0};
     double max_error = 0, base = 0;
-    bool quiet = false, has_base = false, has_window = false, no_flip_given = false;
+    bool quiet = false, has_base = false, has_window = false, no_flip_given = false, north_up = false;
     uint32_t win[4] = {0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -262,6 +284,8 @@ static int run(int argc, char **argv)
             to.no_flip = !strcmp(a, "--no-flip");
             no_flip_given = to.no_flip;
         }
+        else if (!strcmp(a, "--north-up"))
+            north_up = true;
         else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = true;
         else if (a[0] == '-' && a[1] != '\0') {
@@ -408,6 +432,8 @@ static int run(int argc, char **argv)
         cli_error("mesh", "%s", err.message);
         rc = CLI_FAIL;
     }
+    if (rc == CLI_OK && north_up)
+        mirror_rows(&mesh);
     if (rc == CLI_OK && tsr_mesh_write(&mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
         cli_error("mesh", "%s", err.message);
         rc = CLI_FAIL;

@@ -156,3 +156,32 @@ if [ -f "$modules/gltf-validator/package.json" ]; then
   echo "ok glb validated"
 fi
 echo "ok solid, images"
+
+# --north-up: every vertex (x, y, z) becomes (x, -y, z) with its normal's y
+# negated, every triangle still faces up (+z, by the cross product of its
+# edges), and a solid stays closed with its volume positive (outward)
+for up in "" --north-up; do
+  # shellcheck disable=SC2086
+  "$tessera" mesh "$dir/t.png" --dx 10 --dy 7 --max-error 3 --normals -o "$dir/up$up.obj" $up --quiet || fail "mesh $up"
+  # shellcheck disable=SC2086
+  "$tessera" mesh "$dir/t.png" --dx 10 --max-error 3 --base 50 -o "$dir/solid$up.obj" $up --quiet || fail "solid $up"
+done
+awk '$1 == "v" {print $2, -$3, $4} $1 == "vn" {print "n", $2, -$3, $4}' "$dir/up.obj" > "$dir/up.mirror"
+awk '$1 == "v" {print $2, $3 + 0, $4} $1 == "vn" {print "n", $2, $3, $4}' "$dir/up--north-up.obj" > "$dir/north.list"
+awk '{ for (i = 1; i <= NF; i++) $i = $i + 0 } 1' "$dir/up.mirror" > "$dir/up.mirror2"
+awk '{ for (i = 1; i <= NF; i++) $i = $i + 0 } 1' "$dir/north.list" > "$dir/north.list2"
+cmp -s "$dir/up.mirror2" "$dir/north.list2" || fail "--north-up: vertices are not the mirror of the default's"
+facing='$1 == "v" {x[++n] = $2; y[n] = $3; z[n] = $4}
+  $1 == "f" {split($2, a, "/"); split($3, b, "/"); split($4, c, "/");
+    ux = x[b[1]] - x[a[1]]; uy = y[b[1]] - y[a[1]]; uz = z[b[1]] - z[a[1]];
+    vx = x[c[1]] - x[a[1]]; vy = y[c[1]] - y[a[1]]; vz = z[c[1]] - z[a[1]];
+    nz = ux * vy - uy * vx; if (nz <= 0) down++; faces++;
+    vol += x[a[1]] * (y[b[1]] * z[c[1]] - z[b[1]] * y[c[1]]) - y[a[1]] * (x[b[1]] * z[c[1]] - z[b[1]] * x[c[1]]) + z[a[1]] * (x[b[1]] * y[c[1]] - y[b[1]] * x[c[1]])}
+  END {print faces + 0, down + 0, vol / 6}'
+for up in "" --north-up; do
+  read -r faces down vol < <(awk "$facing" "$dir/up$up.obj")
+  [ "$faces" -gt 0 ] && [ "$down" -eq 0 ] || fail "mesh $up: $down of $faces triangles do not face up"
+  read -r faces down vol < <(awk "$facing" "$dir/solid$up.obj")
+  awk -v v="$vol" 'BEGIN { exit !(v > 0) }' || fail "solid $up: signed volume $vol (inward-facing)"
+  echo "ok ${up:-default} orientation: $faces solid triangles, volume $vol"
+done
