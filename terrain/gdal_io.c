@@ -130,6 +130,7 @@ static void ground_spacing(OGRSpatialReferenceH s, uint32_t w, uint32_t h, tsr_g
 static void fill_georef(GDALDatasetH d, uint32_t w, uint32_t h, tsr_georef *g)
 {
     memset(g, 0, sizeof *g);
+    g->z_scale = 1;
     double gt[6];
     if (GDALGetGeoTransform(d, gt) == CE_None && gt[2] == 0 && gt[4] == 0 && gt[1] != 0 && gt[5] != 0 &&
         isfinite(gt[0]) && isfinite(gt[1]) && isfinite(gt[3]) && isfinite(gt[5])) {
@@ -155,6 +156,10 @@ static void fill_georef(GDALDatasetH d, uint32_t w, uint32_t h, tsr_georef *g)
         g->nodata = has ? nd : 0;
         const char *u = GDALGetRasterUnitType(b);
         snprintf(g->z_unit, sizeof g->z_unit, "%s", u ? u : "");
+        int has_scale = 0, has_offset = 0;
+        double scale = GDALGetRasterScale(b, &has_scale), offset = GDALGetRasterOffset(b, &has_offset);
+        g->z_scale = has_scale && isfinite(scale) && scale != 0 ? scale : 1;
+        g->z_offset = has_offset && isfinite(offset) ? offset : 0;
     }
     if (!g->has_transform)
         return;
@@ -168,9 +173,25 @@ static void fill_georef(GDALDatasetH d, uint32_t w, uint32_t h, tsr_georef *g)
     }
 }
 
+void tsr_georef_apply(const tsr_georef *g, bool keep_nodata, float *px, size_t n)
+{
+    bool nd = g->has_nodata && !keep_nodata && !isnan(g->nodata) && fabs(g->nodata) <= FLT_MAX;
+    float ndv = nd ? (float)g->nodata : 0;
+    double scale = g->z_scale, offset = g->z_offset;
+    if (!nd && scale == 1 && offset == 0)
+        return;
+    for (size_t i = 0; i < n; i++) {
+        if (nd && px[i] == ndv)
+            px[i] = NAN;
+        else if (scale != 1 || offset != 0)
+            px[i] = (float)(px[i] * scale + offset);
+    }
+}
+
 bool tsr_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g)
 {
     memset(g, 0, sizeof *g);
+    g->z_scale = 1;
     GDALDatasetH d = open_quiet(path);
     if (d) {
         if ((uint32_t)GDALGetRasterXSize(d) == w && (uint32_t)GDALGetRasterYSize(d) == h)
@@ -178,7 +199,7 @@ bool tsr_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g)
         GDALClose(d);
     }
     CPLPopErrorHandler();
-    return g->has_transform || g->crs != TSR_CRS_NONE || g->has_nodata;
+    return g->has_transform || g->crs != TSR_CRS_NONE || g->has_nodata || g->z_scale != 1 || g->z_offset != 0;
 }
 
 static const char *gdal_message(const char *fallback)
@@ -225,20 +246,7 @@ static tsr_status read_dataset(GDALDatasetH d, const char *path, const tsr_alloc
         }
     }
     fill_georef(d, (uint32_t)W, (uint32_t)H, g);
-    int has_scale = 0, has_offset = 0;
-    double scale = GDALGetRasterScale(b, &has_scale), offset = GDALGetRasterOffset(b, &has_offset);
-    if (!has_scale || !isfinite(scale) || scale == 0)
-        scale = 1;
-    if (!has_offset || !isfinite(offset))
-        offset = 0;
-    bool nd = g->has_nodata && !keep_nodata && !isnan(g->nodata) && fabs(g->nodata) <= FLT_MAX;
-    float ndv = nd ? (float)g->nodata : 0;
-    for (size_t i = 0; i < n; i++) {
-        if (nd && px[i] == ndv)
-            px[i] = NAN;
-        else if (scale != 1 || offset != 0)
-            px[i] = (float)(px[i] * scale + offset);
-    }
+    tsr_georef_apply(g, keep_nodata, px, n);
     *pixels = px;
     *w = (uint32_t)W;
     *h = (uint32_t)H;

@@ -232,7 +232,7 @@ static tsr_status load_gis(const char *path, const tsr_load_options *o, tsr_heig
     }
     snprintf(hf->source_format, sizeof hf->source_format, "%s", format);
     hf->georef = g;
-    hf->has_georef = g.has_transform || g.crs != TSR_CRS_NONE || g.has_nodata;
+    hf->has_georef = g.has_transform || g.crs != TSR_CRS_NONE || g.has_nodata || g.z_scale != 1 || g.z_offset != 0;
     *nodata_done = !o->has_nodata;
     *out = hf;
     return TSR_OK;
@@ -257,8 +257,17 @@ static tsr_status load_image(const char *path, const tsr_load_options *o, tsr_he
     if (s != TSR_OK)
         return s;
     tsr_status hs = finish_image(path, o, out, alloc, px, &info, err);
-    if (hs == TSR_OK && !strcmp(info.format, "tiff"))
-        (*out)->has_georef = tsr_gdal_georef(path, info.width, info.height, &(*out)->georef);
+    if (hs == TSR_OK && !strcmp(info.format, "tiff") && !info.has_scale && o->decode == TSR_DECODE_NONE) {
+        /* a GeoTIFF: its georeferencing, its no-data value and its
+         * heights' scale and offset (GDAL's metadata), which OpenImageIO
+         * skips */
+        tsr_heightfield *hf = *out;
+        hf->has_georef = tsr_gdal_georef(path, info.width, info.height, &hf->georef);
+        if (hf->has_georef) {
+            tsr_georef_apply(&hf->georef, o->has_nodata, hf->data, (size_t)hf->width * hf->height);
+            *nodata_done = !o->has_nodata;
+        }
+    }
     return hs;
 }
 

@@ -92,8 +92,9 @@ typedef struct tsr_georef {
     tsr_crs_kind crs;
     char crs_name[96];  /* e.g. "WGS 84 / UTM zone 33N"; "" when none */
     char z_unit[24];    /* the heights' unit where the file names one ("metre", "ft"); "" */
-    bool has_nodata;    /* the file's no-data value */
+    bool has_nodata;    /* the file's no-data value (compared with the stored samples) */
     double nodata;
+    double z_scale, z_offset; /* height = stored * z_scale + z_offset (already applied); 1, 0 */
     /* Ground spacing of the samples in metres at the raster's middle: one
      * pixel step in x and in y taken to longitude and latitude and
      * measured on the CRS's ellipsoid, so a projection's own scale (Web

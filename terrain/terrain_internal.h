@@ -50,6 +50,10 @@ tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, ui
  * zeroed, where it finds none (or cannot open the file). */
 bool tsr_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g);
 
+/* The file's no-data samples to NaN (unless keep_nodata) and the others
+ * scaled by z_scale, z_offset: stored values to heights. */
+void tsr_georef_apply(const tsr_georef *g, bool keep_nodata, float *px, size_t n);
+
 /* Reads band 1 of a raster OpenImageIO could not open: float32 samples
  * with the band's scale and offset applied, the band's no-data samples
  * NaN unless keep_nodata (they are then left as they are, for the caller's

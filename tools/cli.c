@@ -178,6 +178,10 @@ void cli_georef_json(cJSON *j, const tsr_heightfield *hf, const cli_heightfield_
         cJSON_AddNumberToObject(gj, "nodata_value", g->nodata);
     if (g->z_unit[0])
         cJSON_AddStringToObject(gj, "z_unit", g->z_unit);
+    if (g->z_scale != 1 || g->z_offset != 0) {
+        cJSON_AddNumberToObject(gj, "z_scale", g->z_scale);
+        cJSON_AddNumberToObject(gj, "z_offset", g->z_offset);
+    }
 }
 
 tsr_heightfield *cli_load_heightfield(const char *cmd, const char *path, const cli_heightfield_options *o)

@@ -62,7 +62,8 @@ void cli_georef_describe(const tsr_heightfield *hf, const cli_heightfield_option
 /* Adds "spacing" [dx, dy], "spacing_from" (file, options or default) and,
  * for a georeferenced file, "georef" {crs, crs_kind, origin, pixel,
  * ground_spacing, ground_spacing_varies, ground_spacing_unitless,
- * nodata_value, z_unit} (those the file has) to the JSON object j. */
+ * nodata_value, z_unit, z_scale, z_offset} (those the file has) to the JSON
+ * object j. */
 struct cJSON;
 void cli_georef_json(struct cJSON *j, const tsr_heightfield *hf, const cli_heightfield_options *o);
 

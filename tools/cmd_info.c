@@ -82,8 +82,13 @@ static int run(int argc, char **argv)
         if (g && g->has_transform)
             printf("origin:  %.12g, %.12g (sample 0, 0; pixel %.9g x %.9g)\n", g->origin[0], g->origin[1],
                    g->pixel[0], g->pixel[1]);
-        if (g && g->z_unit[0])
-            printf("heights: %s\n", g->z_unit);
+        if (g && (g->z_unit[0] || g->z_scale != 1 || g->z_offset != 0)) {
+            printf("heights: %s", g->z_unit[0] ? g->z_unit : "");
+            if (g->z_scale != 1 || g->z_offset != 0)
+                printf("%sstored value * %.9g + %.9g (the file's scale and offset)", g->z_unit[0] ? "; " : "",
+                       g->z_scale, g->z_offset);
+            printf("\n");
+        }
     }
     tsr_heightfield_destroy(hf);
     return CLI_OK;

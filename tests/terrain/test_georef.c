@@ -108,6 +108,39 @@ TEST(geotiff_utm_georef_and_nodata)
     tsr_heightfield_destroy(hf);
 }
 
+TEST(geotiff_int16_scale_offset_and_nodata)
+{
+    /* heights stored as int16 tenths of a metre above -100, -32768 for
+     * no-data, the scale and offset in GDAL's metadata: OpenImageIO reads
+     * the integers, the loader applies the file's scale */
+    const char *dir = check_temp_dir();
+    const char *p = tmp_path(dir, "scaled.tif");
+    const int W = 9, H = 7;
+    int16_t v[9 * 7];
+    for (int i = 0; i < W * H; i++)
+        v[i] = i % 5 == 2 ? (int16_t)-32768 : (int16_t)(i * 37 - 900);
+    GDALRegister_GTiff();
+    GDALDatasetH d = GDALCreate(GDALGetDriverByName("GTiff"), p, W, H, 1, GDT_Int16, NULL);
+    CHECK(d != NULL);
+    GDALRasterBandH b = GDALGetRasterBand(d, 1);
+    GDALSetRasterNoDataValue(b, -32768);
+    GDALSetRasterScale(b, 0.1);
+    GDALSetRasterOffset(b, -100);
+    CHECK(GDALRasterIO(b, GF_Write, 0, 0, W, H, v, W, H, GDT_Int16, 0, 0) == CE_None);
+    GDALClose(d);
+    tsr_heightfield *hf = NULL;
+    tsr_error err = {0};
+    CHECK_MSG(tsr_heightfield_load(p, NULL, NULL, &hf, &err) == TSR_OK, "%s", err.message);
+    const float *s = tsr_heightfield_cdata(hf);
+    size_t good = 0;
+    for (int i = 0; i < W * H; i++)
+        good += i % 5 == 2 ? isnan(s[i]) : s[i] == (float)(v[i] * 0.1 - 100);
+    CHECK_MSG(good == (size_t)(W * H), "%zu of %d samples as expected", good, W * H);
+    const tsr_georef *g = tsr_heightfield_georef(hf);
+    CHECK(g && g->z_scale == 0.1 && g->z_offset == -100 && g->has_nodata && !g->has_transform);
+    tsr_heightfield_destroy(hf);
+}
+
 static void put_be16(unsigned char *b, int16_t v)
 {
     uint16_t u = (uint16_t)v;
@@ -267,5 +300,5 @@ TEST(data_real_geotiffs)
     }
 }
 
-TEST_MAIN(T(geotiff_utm_georef_and_nodata), T(srtm_hgt_written_by_hand), T(esri_ascii_grid_written_by_hand),
+TEST_MAIN(T(geotiff_utm_georef_and_nodata), T(geotiff_int16_scale_offset_and_nodata), T(srtm_hgt_written_by_hand), T(esri_ascii_grid_written_by_hand),
           T(data_real_geotiffs))
