@@ -1,7 +1,8 @@
 /* gdal_io.c: GIS rasters through GDAL's C API: the georeferencing and
  * no-data value of the GeoTIFFs OpenImageIO reads (it skips those tags),
- * and whole heightfields in the GIS formats it does not read. */
-#include "terrain_internal.h"
+ * and whole heightfields in the GIS formats it does not read. Part of the
+ * I/O module (io_module.h), with the module's one exported symbol. */
+#include "terrain/io_module.h"
 
 #include <ctype.h>
 #include <float.h>
@@ -173,22 +174,7 @@ static void fill_georef(GDALDatasetH d, uint32_t w, uint32_t h, tsr_georef *g)
     }
 }
 
-void tsr_georef_apply(const tsr_georef *g, bool keep_nodata, float *px, size_t n)
-{
-    bool nd = g->has_nodata && !keep_nodata && !isnan(g->nodata) && fabs(g->nodata) <= FLT_MAX;
-    float ndv = nd ? (float)g->nodata : 0;
-    double scale = g->z_scale, offset = g->z_offset;
-    if (!nd && scale == 1 && offset == 0)
-        return;
-    for (size_t i = 0; i < n; i++) {
-        if (nd && px[i] == ndv)
-            px[i] = NAN;
-        else if (scale != 1 || offset != 0)
-            px[i] = (float)(px[i] * scale + offset);
-    }
-}
-
-bool tsr_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g)
+bool tsr_io_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g)
 {
     memset(g, 0, sizeof *g);
     g->z_scale = 1;
@@ -209,8 +195,8 @@ static const char *gdal_message(const char *fallback)
 }
 
 static tsr_status read_dataset(GDALDatasetH d, const char *path, const tsr_allocator *alloc, uint64_t max_samples,
-                               bool keep_nodata, float **pixels, uint32_t *w, uint32_t *h, char format[64],
-                               tsr_georef *g, tsr_error *err)
+                               float **pixels, uint32_t *w, uint32_t *h, char format[64], tsr_georef *g,
+                               tsr_error *err)
 {
     int xs = GDALGetRasterXSize(d), ys = GDALGetRasterYSize(d);
     if (GDALGetRasterCount(d) < 1 || xs <= 0 || ys <= 0)
@@ -246,15 +232,14 @@ static tsr_status read_dataset(GDALDatasetH d, const char *path, const tsr_alloc
         }
     }
     fill_georef(d, (uint32_t)W, (uint32_t)H, g);
-    tsr_georef_apply(g, keep_nodata, px, n);
     *pixels = px;
     *w = (uint32_t)W;
     *h = (uint32_t)H;
     return TSR_OK;
 }
 
-tsr_status tsr_gdal_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, bool keep_nodata,
-                         float **pixels, uint32_t *w, uint32_t *h, char format[64], tsr_georef *g, tsr_error *err)
+tsr_status tsr_io_gdal_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, float **pixels,
+                            uint32_t *w, uint32_t *h, char format[64], tsr_georef *g, tsr_error *err)
 {
     *pixels = NULL;
     *w = *h = 0;
@@ -266,9 +251,19 @@ tsr_status tsr_gdal_read(const char *path, const tsr_allocator *alloc, uint64_t 
         s = tsr_error_set(err, TSR_ERR_FORMAT, "%s: not a GIS raster Tessera can read (%s)", path,
                           gdal_message("unknown format"));
     } else {
-        s = read_dataset(d, path, alloc, max_samples, keep_nodata, pixels, w, h, format, g, err);
+        s = read_dataset(d, path, alloc, max_samples, pixels, w, h, format, g, err);
         GDALClose(d);
     }
     CPLPopErrorHandler();
     return s;
+}
+
+__attribute__((visibility("default"))) const tsr_io_api *tsr_io_module_api(void);
+
+const tsr_io_api *tsr_io_module_api(void)
+{
+    static const tsr_io_api api = {TSR_IO_MODULE_VERSION, sizeof(tsr_io_api), tsr_io_image_read, tsr_io_image_write,
+                                   tsr_io_image_save_check, tsr_io_image_save_u8, tsr_io_gdal_georef,
+                                   tsr_io_gdal_read};
+    return &api;
 }

@@ -212,6 +212,21 @@ static tsr_status load_raw(const char *path, const tsr_load_options *o, tsr_heig
 static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_heightfield **out,
                                const tsr_allocator *alloc, float *px, const tsr_image_info *ip, tsr_error *err);
 
+void tsr_georef_apply(const tsr_georef *g, bool keep_nodata, float *px, size_t n)
+{
+    bool nd = g->has_nodata && !keep_nodata && !isnan(g->nodata) && fabs(g->nodata) <= FLT_MAX;
+    float ndv = nd ? (float)g->nodata : 0;
+    double scale = g->z_scale, offset = g->z_offset;
+    if (!nd && scale == 1 && offset == 0)
+        return;
+    for (size_t i = 0; i < n; i++) {
+        if (nd && px[i] == ndv)
+            px[i] = NAN;
+        else if (scale != 1 || offset != 0)
+            px[i] = (float)(px[i] * scale + offset);
+    }
+}
+
 /* A GIS raster OpenImageIO could not open, through GDAL; *nodata_done
  * when the file's no-data samples are NaN already. */
 static tsr_status load_gis(const char *path, const tsr_load_options *o, tsr_heightfield **out,
@@ -221,10 +236,10 @@ static tsr_status load_gis(const char *path, const tsr_load_options *o, tsr_heig
     uint32_t w, h;
     char format[64];
     tsr_georef g;
-    tsr_status s = tsr_gdal_read(path, alloc, TSR_HEIGHTFIELD_MAX_SAMPLES, o->has_nodata, &px, &w, &h, format, &g,
-                                 err);
+    tsr_status s = tsr_gdal_read(path, alloc, TSR_HEIGHTFIELD_MAX_SAMPLES, &px, &w, &h, format, &g, err);
     if (s != TSR_OK)
         return s;
+    tsr_georef_apply(&g, o->has_nodata, px, (size_t)w * h);
     tsr_heightfield *hf = adopt(w, h, px, alloc);
     if (!hf) {
         tsr_free(alloc, px);

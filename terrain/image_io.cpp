@@ -1,7 +1,8 @@
-// image_io.cpp: the one bridge from Tessera's C to OpenImageIO's C++ API.
+// image_io.cpp: the one bridge from Tessera's C to OpenImageIO's C++ API,
+// part of the I/O module (io_module.h).
 // Reads in strips of scanlines so a large image never needs its native
 // copy and its float copy in memory at once.
-#include "terrain_internal.h"
+#include "terrain/io_module.h"
 
 #include <OpenImageIO/imageio.h>
 
@@ -32,7 +33,7 @@ static std::string one_line(std::string s)
 
 static const char *attr_name = "Tessera:HeightScaleOffset";
 
-extern "C" tsr_status tsr_image_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples,
+tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples,
                                      float **pixels, tsr_image_info *info, tsr_error *err)
 {
     *pixels = nullptr;
@@ -143,7 +144,7 @@ extern "C" tsr_status tsr_image_read(const char *path, const tsr_allocator *allo
     return TSR_OK;
 }
 
-extern "C" tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
+tsr_status tsr_io_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
                                       const float *values, bool as_u16, double scale, double offset,
                                       tsr_error *err)
 {
@@ -212,7 +213,7 @@ static ImageOutput::unique_ptr image_writer(const char *path, tsr_error *err)
     return out;
 }
 
-extern "C" tsr_status tsr_image_save_check(const char *path, tsr_error *err)
+tsr_status tsr_io_image_save_check(const char *path, tsr_error *err)
 {
     if (!path || !*path)
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "no image path");
@@ -221,7 +222,7 @@ extern "C" tsr_status tsr_image_save_check(const char *path, tsr_error *err)
     return tsr_atomic_probe(path, err);
 }
 
-extern "C" tsr_status tsr_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
+tsr_status tsr_io_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
                                         const uint8_t *pixels, tsr_error *err)
 {
     if (!path || !*path || !pixels || width == 0 || height == 0 || channels == 0 || channels > 4)

@@ -31,7 +31,10 @@ typedef struct tsr_image_info {
  * own units (uint8 0..255, uint16 0..65535, int16 -32768..32767, floats as
  * they are) into *pixels (width*height*channels, from alloc). Refuses
  * images over max_samples pixels or with more than 4 channels before
- * allocating anything. Implemented in C++ over OpenImageIO (image_io.cpp). */
+ * allocating anything. Implemented in C++ over OpenImageIO (image_io.cpp),
+ * in the I/O module that io_loader.c opens on first use (io_module.h):
+ * when the module cannot be loaded, these fail with TSR_ERR_UNSUPPORTED and
+ * a message naming where it was looked for. */
 tsr_status tsr_image_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, float **pixels,
                           tsr_image_info *info, tsr_error *err);
 
@@ -42,28 +45,27 @@ tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, ui
                            const float *values, bool as_u16, double scale, double offset, tsr_error *err);
 
 
-/* GIS rasters through GDAL (gdal_io.c). Only the drivers named in
- * terrain.h are registered, once, and GDAL writes no side files (.aux.xml)
- * and prints nothing: its messages become err's.
+/* GIS rasters through GDAL (gdal_io.c, in the I/O module like
+ * tsr_image_read). Only the drivers named in terrain.h are registered,
+ * once, and GDAL writes no side files (.aux.xml) and prints nothing: its
+ * messages become err's.
  *
  * The georeferencing GDAL finds in path for a w x h raster; false, with *g
- * zeroed, where it finds none (or cannot open the file). */
+ * zeroed (z_scale 1), where it finds none (or cannot open the file). */
 bool tsr_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g);
+
+/* Reads band 1 of a raster OpenImageIO could not open: its stored values
+ * as float32 (no-data and scale not applied: tsr_georef_apply) into
+ * *pixels (w * h from alloc), the format ("srtmhgt int16") into format,
+ * the georeferencing into *g. TSR_ERR_FORMAT when no registered driver
+ * recognises the file; sizes over max_samples or the side limits are
+ * refused before allocating. */
+tsr_status tsr_gdal_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, float **pixels,
+                         uint32_t *w, uint32_t *h, char format[64], tsr_georef *g, tsr_error *err);
 
 /* The file's no-data samples to NaN (unless keep_nodata) and the others
  * scaled by z_scale, z_offset: stored values to heights. */
 void tsr_georef_apply(const tsr_georef *g, bool keep_nodata, float *px, size_t n);
-
-/* Reads band 1 of a raster OpenImageIO could not open: float32 samples
- * with the band's scale and offset applied, the band's no-data samples
- * NaN unless keep_nodata (they are then left as they are, for the caller's
- * own value), into *pixels (w * h from alloc), the format ("srtmhgt
- * int16") into format, the georeferencing into *g. TSR_ERR_FORMAT when no
- * registered driver recognises the file; sizes over max_samples or the
- * side limits are refused before allocating. */
-tsr_status tsr_gdal_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, bool keep_nodata,
-                         float **pixels, uint32_t *w, uint32_t *h, char format[64], tsr_georef *g,
-                         tsr_error *err);
 
 /* The unit normal at sample (c, r) from central differences of the
  * heights (one-sided at borders and next to no-data), in world units. */
