@@ -2275,9 +2275,73 @@ static tsr_status add_lattice_point(builder *b, tsr_keymap *seen, lpoint q, cons
     return TSR_OK;
 }
 
+/* A trim loop's polyline in (u, v), as the triangulation has it. */
+typedef struct tloop {
+    size_t base;  /* its points: xy[2 base ...] */
+    uint32_t n;
+    bool hole;
+    double area;  /* |signed area| */
+    double lo[2], hi[2];
+} tloop;
+
+static void loop_add(tloop *l, const double *p, uint32_t n, size_t base, bool hole)
+{
+    double area = 0;
+    l->base = base;
+    l->n = n;
+    l->hole = hole;
+    l->lo[0] = l->lo[1] = INFINITY;
+    l->hi[0] = l->hi[1] = -INFINITY;
+    for (uint32_t k = 0; k < n; k++) {
+        const double *a = p + 2 * k, *b = p + 2 * ((k + 1) % n);
+        area += a[0] * b[1] - a[1] * b[0];
+        for (int d = 0; d < 2; d++) {
+            l->lo[d] = dmin(l->lo[d], a[d]);
+            l->hi[d] = dmax(l->hi[d], a[d]);
+        }
+    }
+    l->area = 0.5 * fabs(area);
+}
+
+/* Whether c lies inside the closed polyline (crossing number). */
+static bool loop_inside(const tloop *l, const double *xy, const double c[2])
+{
+    if (c[0] < l->lo[0] || c[0] > l->hi[0] || c[1] < l->lo[1] || c[1] > l->hi[1])
+        return false;
+    const double *p = xy + 2 * l->base;
+    bool in = false;
+    for (uint32_t k = 0; k < l->n; k++) {
+        const double *a = p + 2 * k, *b = p + 2 * ((k + 1) % l->n);
+        if ((a[1] > c[1]) != (b[1] > c[1]) && c[0] < a[0] + (c[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]))
+            in = !in;
+    }
+    return in;
+}
+
+/* Whether the trimmed domain holds the point c (the centroid of a
+ * triangle, which lies on one side of every loop, the loops being edges):
+ * the innermost loop around it (the smallest) decides, an outer loop (OBJ
+ * `trim`) keeping and a hole removing; where no loop is around it, it is
+ * kept unless the patch has an outer loop. So holes remove their inside
+ * whether or not an outer loop is given, a hole given twice or two
+ * overlapping holes remove their union, a hole reaching past the outer
+ * loop adds nothing outside it, and an island (an outer loop inside a
+ * hole) is kept. */
+static bool trim_keeps(const tloop *loops, uint32_t n, const double *xy, const double c[2])
+{
+    const tloop *best = NULL;
+    bool outer = false;
+    for (uint32_t k = 0; k < n; k++) {
+        outer |= !loops[k].hole;
+        if ((!best || loops[k].area < best->area) && loop_inside(&loops[k], xy, c))
+            best = &loops[k];
+    }
+    return best ? !best->hole : !outer;
+}
+
 /* Trimmed source: lattice points of its pieces' leaves plus the sampled
- * trim loops, triangulated in (u, v) with the loops as constraints
- * (even-odd), lifted. */
+ * trim loops, triangulated in (u, v) with the loops as constraints, the
+ * triangles the loops keep (trim_keeps) lifted. */
 static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr_error *err)
 {
     const tsr_pmodel *m = b->m;
@@ -2345,7 +2409,11 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
     }
     /* the trim loops */
     const tsr_patch_set *set = m->set;
-    for (uint32_t l = set->first_loop[s->patch]; l < set->first_loop[s->patch + 1] && st == TSR_OK; l++) {
+    uint32_t l0 = set->first_loop[s->patch], nloops = set->first_loop[s->patch + 1] - l0, nkept = 0;
+    tloop *loops = tsr_alloc(a, (nloops ? nloops : 1) * sizeof *loops);
+    if (!loops)
+        st = TSR_ERR_NOMEM;
+    for (uint32_t l = l0; l < l0 + nloops && st == TSR_OK; l++) {
         uint32_t cnt = 0;
         if (tsr_trim_loop_sample(set, l, trim_tol_uv, NULL, 0, &cnt) != TSR_OK || cnt < 3)
             continue;
@@ -2411,13 +2479,17 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
             nseg++;
         }
         tsr_free(a, pts);
+        if (st == TSR_OK)
+            loop_add(&loops[nkept++], xy + 2 * base, cnt, base, set->loops[l].hole);
     }
 #undef GROW
     tsr_triangulation tr = {0};
     if (st == TSR_OK) {
+        /* the whole domain, every loop's polyline an edge; the region is
+         * chosen below, triangle by triangle (trim_keeps) */
         tsr_pslg in = {xy, (uint32_t)np, seg, (uint32_t)nseg, NULL, 0};
         tsr_tri_options to = {0};
-        to.region = nseg ? TSR_REGION_EVEN_ODD : TSR_REGION_HULL;
+        to.region = TSR_REGION_HULL;
         tsr_error e2 = {0};
         st = tsr_triangulate(&in, &to, &tr, a, &e2);
         if (st != TSR_OK)
@@ -2442,6 +2514,11 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
         for (uint32_t t = 0; t < tr.nt && st == TSR_OK; t++) {
             uint32_t v[3];
             double uv[6];
+            const uint32_t *tv = tr.tri + 3 * t;
+            double cen[2] = {(tr.xy[2 * tv[0]] + tr.xy[2 * tv[1]] + tr.xy[2 * tv[2]]) / 3,
+                             (tr.xy[2 * tv[0] + 1] + tr.xy[2 * tv[1] + 1] + tr.xy[2 * tv[2] + 1]) / 3};
+            if (!trim_keeps(loops, nkept, xy, cen))
+                continue;
             for (int k = 0; k < 3 && st == TSR_OK; k++) {
                 uint32_t o = tr.tri[3 * t + (mirrored && k ? 3 - k : k)];
                 uv[2 * k] = tr.xy[2 * o];
@@ -2471,6 +2548,7 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
     }
     tsr_free(a, mv);
     tsr_triangulation_free(&tr);
+    tsr_free(a, loops);
     tsr_free(a, xy);
     tsr_free(a, key);
     tsr_free(a, seg);

@@ -93,9 +93,15 @@
  * loops, sampled so that the loop lies within
  * max_error of the true curve on the surface (for a camera: within the
  * pixel error at the camera's nearest distance), are triangulated in the
- * source's (u, v) by tsr_triangulate with the loops as constraints and
- * the part outside removed, then lifted. Their error is measured, not
- * bounded; edges across trim curves are not matched with neighbours.
+ * source's (u, v) by tsr_triangulate with the loops as constraints, and
+ * the triangles of the trimmed region lifted: the innermost loop around a
+ * triangle decides, an outer loop (OBJ `trim`) keeping it and a hole
+ * (`hole`) removing it, and a triangle inside no loop is kept unless the
+ * patch has an outer loop (so holes alone cut into the whole domain, a
+ * repeated or overlapping hole removes the union, a hole reaching past the
+ * outer loop adds nothing outside it, and islands inside holes stay).
+ * Their error is measured, not bounded; edges across trim curves are not
+ * matched with neighbours.
  */
 #ifndef TSR_PTESS_H
 #define TSR_PTESS_H

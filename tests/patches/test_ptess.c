@@ -1468,6 +1468,128 @@ TEST(trimmed_linked_conform)
     free(b.s);
 }
 
+/* Trim loops on a flat square patch, 100 x 100 (u, v in 0..1), against
+ * the exact areas of what they keep: holes without an outer loop, a hole
+ * given twice, two overlapping holes (their union goes: the lens counted
+ * once), an island (an outer loop inside a hole), a hole reaching past the
+ * outer loop (nothing outside the outer loop). Circles are exact rational
+ * quadratics; the mesh's polygons lie inside each circle by at most the
+ * tolerance, so the area may differ by the loops' length times it. */
+typedef struct trim_obj {
+    sbuf b;
+    int vp, curves;
+} trim_obj;
+
+/* A circle of centre (cx, cy), radius r in (u, v): its curve number. */
+static int trim_circle(trim_obj *t, double cx, double cy, double r)
+{
+    static const double dir[9][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
+    for (int k = 0; k < 9; k++)
+        sb_printf(&t->b, "vp %.17g %.17g %.17g\n", cx + r * dir[k][0], cy + r * dir[k][1], k % 2 ? H2 : 1.0);
+    sb_printf(&t->b, "cstype rat bspline\ndeg 2\ncurv2");
+    for (int k = 1; k <= 9; k++)
+        sb_printf(&t->b, " %d", t->vp + k);
+    sb_printf(&t->b, "\nparm u 0 0 0 1 1 2 2 3 3 4 4 4\nend\n");
+    t->vp += 9;
+    return ++t->curves;
+}
+
+/* The axis-aligned square [a, b]^2 in (u, v): its curve number. */
+static int trim_square(trim_obj *t, double a, double b)
+{
+    sb_printf(&t->b, "vp %g %g\nvp %g %g\nvp %g %g\nvp %g %g\nvp %g %g\n", a, a, b, a, b, b, a, b, a, a);
+    sb_printf(&t->b, "cstype bspline\ndeg 1\ncurv2 %d %d %d %d %d\nparm u 0 0 1 2 3 4 4\nend\n", t->vp + 1, t->vp + 2,
+              t->vp + 3, t->vp + 4, t->vp + 5);
+    t->vp += 5;
+    return ++t->curves;
+}
+
+TEST(trim_loops_keep_exact_areas)
+{
+    const double R2 = 400 * PI; /* a circle of radius 0.2: 20 model units */
+    /* two circles of radius 20, centres 20 apart: their lens */
+    const double lens = 2 * 400 * acos(0.5) - 10 * sqrt(1600 - 400);
+    struct {
+        const char *name;
+        double area, perimeter, xmin; /* what it keeps; the loops' length; no vertex left of xmin */
+    } want[] = {
+        {"hole only", 10000 - R2, 2 * PI * 20, 0},
+        {"hole twice", 6400 - R2, 320 + 2 * PI * 20, 10},
+        {"overlapping holes", 6400 - (2 * R2 - lens), 320 + 4 * PI * 20, 10},
+        {"island in a hole", 10000 - 900 * PI + 100 * PI, 400 + 2 * PI * 40, 0},
+        {"hole past the outer loop", 6400 - R2 / 2, 320 + 2 * PI * 20, 10},
+    };
+    for (int c = 0; c < 5; c++) {
+        trim_obj t = {0};
+        sb_printf(&t.b, "v 0 0 0\nv 100 0 0\nv 0 100 0\nv 100 100 0\n");
+        char body[256] = "";
+        int k1, k2;
+        switch (c) {
+        case 0:
+            k1 = trim_circle(&t, 0.5, 0.5, 0.2);
+            snprintf(body, sizeof body, "hole 0 4 %d\n", k1);
+            break;
+        case 1:
+            k1 = trim_square(&t, 0.1, 0.9);
+            k2 = trim_circle(&t, 0.5, 0.5, 0.2);
+            snprintf(body, sizeof body, "trim 0 4 %d\nhole 0 4 %d\nhole 0 4 %d\n", k1, k2, k2);
+            break;
+        case 2:
+            k1 = trim_square(&t, 0.1, 0.9);
+            k2 = trim_circle(&t, 0.4, 0.5, 0.2);
+            trim_circle(&t, 0.6, 0.5, 0.2);
+            snprintf(body, sizeof body, "trim 0 4 %d\nhole 0 4 %d\nhole 0 4 %d\n", k1, k2, k2 + 1);
+            break;
+        case 3:
+            k1 = trim_square(&t, 0, 1);
+            k2 = trim_circle(&t, 0.5, 0.5, 0.3);
+            trim_circle(&t, 0.5, 0.5, 0.1);
+            snprintf(body, sizeof body, "trim 0 4 %d\nhole 0 4 %d\ntrim 0 4 %d\n", k1, k2, k2 + 1);
+            break;
+        default:
+            k1 = trim_square(&t, 0.1, 0.9);
+            k2 = trim_circle(&t, 0.1, 0.5, 0.2);
+            snprintf(body, sizeof body, "trim 0 4 %d\nhole 0 4 %d\n", k1, k2);
+            break;
+        }
+        sb_printf(&t.b, "cstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\n%send\n", body);
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        bool parsed = parse_set(&t.b, want[c].name, &set);
+        if (parsed && make_model(&set, &m)) {
+            for (double E = 0.1; E >= 0.009; E /= 10) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                tsr_ptess_result r;
+                if (!run_ptess(m, &o, &r))
+                    continue;
+                double area = 0, xmin = INFINITY;
+                const float *P = r.mesh.positions;
+                for (uint32_t f = 0; f < r.mesh.triangle_count; f++) {
+                    const uint32_t *v = r.mesh.indices + 3 * f;
+                    const float *a = P + 3 * v[0], *b = P + 3 * v[1], *d = P + 3 * v[2];
+                    area += 0.5 * fabs(((double)b[0] - a[0]) * ((double)d[1] - a[1]) -
+                                       ((double)b[1] - a[1]) * ((double)d[0] - a[0]));
+                }
+                for (uint32_t i = 0; i < r.mesh.vertex_count; i++)
+                    xmin = fmin(xmin, P[3 * i]);
+                double slack = want[c].perimeter * E + 1e-3;
+                CHECK_MSG(fabs(area - want[c].area) <= slack, "%s, E %g: area %.4f, exact %.4f (slack %.4f)",
+                          want[c].name, E, area, want[c].area, slack);
+                CHECK_MSG(xmin >= want[c].xmin - 1e-4, "%s: a vertex at x %g, left of %g", want[c].name, xmin,
+                          want[c].xmin);
+                tsr_validation v = validate(&r.mesh);
+                CHECK_MSG(v.nonmanifold_edges == 0, "%s: %u non-manifold edges", want[c].name, v.nonmanifold_edges);
+                tsr_ptess_result_free(&r);
+            }
+        }
+        tsr_pmodel_destroy(m);
+        if (parsed)
+            tsr_patch_set_free(&set);
+        free(t.b.s);
+    }
+}
+
 /* The long quarter cylinder (rational, along x from 0 to VL) and a camera
  * looking along it from near its start: parsed into *set; false (after a
  * failed CHECK) when it does not parse. */
@@ -2561,7 +2683,7 @@ TEST(data_osd_corner_estimate)
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
-          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform),
+          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
           T(data_osd_corner_estimate),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
