@@ -173,6 +173,28 @@ static int run(int argc, char **argv)
     cli_patch_model pm;
     if (!cli_patch_model_load("patch", in, scheme, &pm))
         return CLI_FAIL;
+    /* The mesh is float32: a bound below a few of its steps at the
+     * model's largest coordinate can be neither written nor measured, and
+     * chasing it only grows the mesh until memory runs out. */
+    tsr_pmodel_info minfo;
+    tsr_pmodel_get_info(pm.model, &minfo);
+    double maxabs = 0;
+    for (int k = 0; k < 3; k++)
+        maxabs = fmax(maxabs, fmax(fabs(minfo.lo[k]), fabs(minfo.hi[k])));
+    float fmax_abs = (float)maxabs;
+    double step = (double)nextafterf(fmax_abs, INFINITY) - (double)fmax_abs, floor_err = 4 * step;
+    if (max_error > 0 && max_error < floor_err) {
+        cli_error("patch", "%s: --max-error %g is below what the float32 mesh can hold: coordinates up to %g are "
+                  "stored in steps of %.3g; give at least %.3g",
+                  in, max_error, maxabs, step, floor_err);
+        cli_patch_model_free(&pm);
+        return CLI_USAGE;
+    }
+    if (cam_arg && v.pixel_error < 0.01) {
+        cli_error("patch", "--pixel-error %g: below 0.01 px, finer than a rasteriser places vertices", v.pixel_error);
+        cli_patch_model_free(&pm);
+        return CLI_USAGE;
+    }
     tsr_camera cam;
     tsr_ptess_options opt = {0};
     opt.tile_n = tile;
@@ -188,8 +210,16 @@ static int run(int argc, char **argv)
             return CLI_USAGE;
         }
         opt.camera = &cam;
-    } else
+    } else {
         opt.max_error = max_error > 0 ? max_error : 1e-3 * pm.diag;
+        if (opt.max_error < floor_err) {
+            if (!quiet)
+                fprintf(stderr, "tessera patch: %s: note: the default bound %.3g is below what the float32 mesh "
+                        "holds this far from the origin (coordinates up to %g); using %.3g\n",
+                        in, opt.max_error, maxabs, floor_err);
+            opt.max_error = floor_err;
+        }
+    }
     tsr_ptess_result r;
     tsr_ptess_measure_result meas;
     uint32_t tightened = 0;

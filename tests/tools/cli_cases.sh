@@ -110,6 +110,19 @@ gis_grids)
   expect_error 1 "short\.asc: " -- "$tessera" mesh "$dir/short.asc" -o "$out"
   cp "$dir/random.png" "$dir/N45E007.hgt"
   expect_error 1 "N45E007\.hgt: not an image" -- "$tessera" mesh "$dir/N45E007.hgt" -o "$out" ;;
+patch_bound_floor)
+  # a bound finer than float32 steps at the model's coordinates is refused
+  # up front (it could be neither written nor measured, only grow the mesh)
+  printf 'v 1000000 0 0\nv 1000100 0 0\nv 1000000 100 0\nv 1000100 100 5\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nend\n' > "$dir/far.obj"
+  expect_error 2 "far\.obj: --max-error 0\.001 is below what the float32 mesh can hold: .*steps of 0\.0625" -- \
+    "$tessera" patch "$dir/far.obj" -o "$dir/far.ply" --max-error 0.001
+  expect_error 2 "--pixel-error 0\.001: below 0\.01 px" -- \
+    "$tessera" patch "$dir/far.obj" -o "$dir/far.ply" --pixel-error 0.001 --camera 1000050,-300,200,1000050,50,0
+  # and the default bound, below that floor there, is raised to it with a note
+  "$tessera" patch "$dir/far.obj" -o "$dir/far.ply" 2> "$cap/stderr" || fail "default bound: $(cat "$cap/stderr")"
+  grep -q "note: the default bound .* is below what the float32 mesh holds" "$cap/stderr" || fail "no note: $(cat "$cap/stderr")"
+  rm "$dir/far.ply"
+  echo "ok [$case]: default raised" ;;
 raw_wrong_size)
   expect_error 1 "nan\.f32: raw f32 5x4 needs 80 bytes but the file has 64" -- "$tessera" info "$dir/nan.f32" --raw 5 4 f32 ;;
 bad_options)
