@@ -2255,9 +2255,17 @@ static tsr_status add_lattice_point(builder *b, tsr_keymap *seen, lpoint q, cons
     uint32_t *slot = tsr_keymap_slot(seen, lkey(cq), &found, b->a);
     if (!slot)
         return TSR_ERR_NOMEM;
-    if (found)
+    double uv[2];
+    piece_uv(p, s, t, uv);
+    /* a point already there is not added again, but another (u, v) image
+     * of it is: across a seam of the source (a closed surface's two linked
+     * edges) or along a collapsed edge (a pole), both sides keep their
+     * border points, welded through the key, so the triangulated domain
+     * reaches the whole border */
+    if (found && (*xy)[2 * *slot] == uv[0] && (*xy)[2 * *slot + 1] == uv[1])
         return TSR_OK;
-    *slot = (uint32_t)*np;
+    if (!found)
+        *slot = (uint32_t)*np;
     if (*np + 1 > *cap) {
         double *nx = tsr_realloc(b->a, *xy, 2 * *cap * 2 * sizeof *nx);
         if (!nx)
@@ -2269,7 +2277,8 @@ static tsr_status add_lattice_point(builder *b, tsr_keymap *seen, lpoint q, cons
         *key = nk;
         *cap *= 2;
     }
-    piece_uv(p, s, t, *xy + 2 * *np);
+    (*xy)[2 * *np] = uv[0];
+    (*xy)[2 * *np + 1] = uv[1];
     (*key)[*np] = lkey(cq) + 1;
     (*np)++;
     return TSR_OK;
@@ -2277,17 +2286,17 @@ static tsr_status add_lattice_point(builder *b, tsr_keymap *seen, lpoint q, cons
 
 /* A trim loop's polyline in (u, v), as the triangulation has it. */
 typedef struct tloop {
-    size_t base;  /* its points: xy[2 base ...] */
+    double *p;    /* its n points (owned) */
     uint32_t n;
     bool hole;
     double area;  /* |signed area| */
     double lo[2], hi[2];
 } tloop;
 
-static void loop_add(tloop *l, const double *p, uint32_t n, size_t base, bool hole)
+static void loop_add(tloop *l, double *p, uint32_t n, bool hole)
 {
     double area = 0;
-    l->base = base;
+    l->p = p;
     l->n = n;
     l->hole = hole;
     l->lo[0] = l->lo[1] = INFINITY;
@@ -2304,11 +2313,11 @@ static void loop_add(tloop *l, const double *p, uint32_t n, size_t base, bool ho
 }
 
 /* Whether c lies inside the closed polyline (crossing number). */
-static bool loop_inside(const tloop *l, const double *xy, const double c[2])
+static bool loop_inside(const tloop *l, const double c[2])
 {
     if (c[0] < l->lo[0] || c[0] > l->hi[0] || c[1] < l->lo[1] || c[1] > l->hi[1])
         return false;
-    const double *p = xy + 2 * l->base;
+    const double *p = l->p;
     bool in = false;
     for (uint32_t k = 0; k < l->n; k++) {
         const double *a = p + 2 * k, *b = p + 2 * ((k + 1) % l->n);
@@ -2327,13 +2336,13 @@ static bool loop_inside(const tloop *l, const double *xy, const double c[2])
  * overlapping holes remove their union, a hole reaching past the outer
  * loop adds nothing outside it, and an island (an outer loop inside a
  * hole) is kept. */
-static bool trim_keeps(const tloop *loops, uint32_t n, const double *xy, const double c[2])
+static bool trim_keeps(const tloop *loops, uint32_t n, const double c[2])
 {
     const tloop *best = NULL;
     bool outer = false;
     for (uint32_t k = 0; k < n; k++) {
         outer |= !loops[k].hole;
-        if ((!best || loops[k].area < best->area) && loop_inside(&loops[k], xy, c))
+        if ((!best || loops[k].area < best->area) && loop_inside(&loops[k], c))
             best = &loops[k];
     }
     return best ? !best->hole : !outer;
@@ -2454,33 +2463,62 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
             pts = more;
             cnt = n2;
         }
-        size_t base = np;
+        /* Clamped to the domain, points within a hair of its border
+         * snapped onto it. Runs of the loop along the border (both ends on
+         * one side: CAD files trim every face by its own boundary) add no
+         * points or segments: the border is the hull already, sampled by
+         * the lattice and the linked neighbours' points, and extra points
+         * there would open T-junctions with the neighbour. The loop's whole
+         * polyline still decides which triangles are kept (trim_keeps). */
+        double snap_u = 1e-9 * (s->domain[1] - s->domain[0]), snap_v = 1e-9 * (s->domain[3] - s->domain[2]);
+        uint8_t *side = tsr_alloc(a, cnt);
+        if (!side) {
+            tsr_free(a, pts);
+            st = TSR_ERR_NOMEM;
+            break;
+        }
+        for (uint32_t k = 0; k < cnt; k++) {
+            double *u = pts + 2 * k, *v = u + 1;
+            *u = *u < s->domain[0] + snap_u ? s->domain[0] : *u > s->domain[1] - snap_u ? s->domain[1] : *u;
+            *v = *v < s->domain[2] + snap_v ? s->domain[2] : *v > s->domain[3] - snap_v ? s->domain[3] : *v;
+            side[k] = (uint8_t)((*u == s->domain[0]) | (*u == s->domain[1]) << 1 | (*v == s->domain[2]) << 2 |
+                                (*v == s->domain[3]) << 3);
+        }
+        size_t first = np;
         for (uint32_t k = 0; k < cnt && st == TSR_OK; k++) {
+            uint32_t k1 = (k + 1) % cnt, k0 = (k + cnt - 1) % cnt;
+            bool run_out = (side[k] & side[k1]) != 0, run_in = (side[k0] & side[k]) != 0;
+            if (run_in && run_out)
+                continue; /* inside a run along the border */
             GROW(xy, np, cap, 2)
             GROW(key, np, cap, 1)
             if (st != TSR_OK)
                 break;
             if (np + 1 > cap)
                 cap *= 2;
-            double u = pts[2 * k], v = pts[2 * k + 1];
-            u = u < s->domain[0] ? s->domain[0] : u > s->domain[1] ? s->domain[1] : u;
-            v = v < s->domain[2] ? s->domain[2] : v > s->domain[3] ? s->domain[3] : v;
-            xy[2 * np] = u;
-            xy[2 * np + 1] = v;
+            xy[2 * np] = pts[2 * k];
+            xy[2 * np + 1] = pts[2 * k + 1];
             key[np] = 0;
             np++;
+            if (run_out)
+                continue;
+            /* a segment to the next point, which is kept too (its
+             * incoming segment is this one, not on the border): its index
+             * is the next one, or the loop's first kept point */
             GROW(seg, nseg, segcap, 2)
             if (st != TSR_OK)
                 break;
             if (nseg + 1 > segcap)
                 segcap *= 2;
-            seg[2 * nseg] = (uint32_t)(base + k);
-            seg[2 * nseg + 1] = (uint32_t)(base + (k + 1) % cnt);
+            seg[2 * nseg] = (uint32_t)(np - 1);
+            seg[2 * nseg + 1] = k1 == 0 ? (uint32_t)first : (uint32_t)np;
             nseg++;
         }
-        tsr_free(a, pts);
+        tsr_free(a, side);
         if (st == TSR_OK)
-            loop_add(&loops[nkept++], xy + 2 * base, cnt, base, set->loops[l].hole);
+            loop_add(&loops[nkept++], pts, cnt, set->loops[l].hole);
+        else
+            tsr_free(a, pts);
     }
 #undef GROW
     tsr_triangulation tr = {0};
@@ -2517,7 +2555,7 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
             const uint32_t *tv = tr.tri + 3 * t;
             double cen[2] = {(tr.xy[2 * tv[0]] + tr.xy[2 * tv[1]] + tr.xy[2 * tv[2]]) / 3,
                              (tr.xy[2 * tv[0] + 1] + tr.xy[2 * tv[1] + 1] + tr.xy[2 * tv[2] + 1]) / 3};
-            if (!trim_keeps(loops, nkept, xy, cen))
+            if (!trim_keeps(loops, nkept, cen))
                 continue;
             for (int k = 0; k < 3 && st == TSR_OK; k++) {
                 uint32_t o = tr.tri[3 * t + (mirrored && k ? 3 - k : k)];
@@ -2541,6 +2579,10 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
                 }
                 v[k] = mv[o];
             }
+            /* two corners welded into one vertex (along a collapsed edge,
+             * or across the seam): no triangle */
+            if (st == TSR_OK && (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]))
+                continue;
             if (st == TSR_OK && !add_tri(b, src, v, uv))
                 st = TSR_ERR_NOMEM;
         }
@@ -2548,6 +2590,8 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
     }
     tsr_free(a, mv);
     tsr_triangulation_free(&tr);
+    for (uint32_t k = 0; k < nkept; k++)
+        tsr_free(a, loops[k].p);
     tsr_free(a, loops);
     tsr_free(a, xy);
     tsr_free(a, key);

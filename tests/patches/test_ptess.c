@@ -1590,6 +1590,120 @@ TEST(trim_loops_keep_exact_areas)
     }
 }
 
+/* CAD files trim every face by its own boundary. Two bicubic B-splines
+ * with interior knots (several Bezier pieces each) share the edge x = 30,
+ * each trimmed by a loop along its whole domain boundary: the seam must
+ * weld as it does untrimmed (no open edge off the outer rectangle, no
+ * T-junction, no zero-area triangle; it had 186 open edges along the seam
+ * and 55 zero-area triangles). And a rational sphere (collapsed poles, a
+ * seam) trimmed by its domain is closed like the untrimmed one (it had 384
+ * open edges and 256 zero-area triangles at the poles). */
+static void domain_trim(sbuf *b, int vp0, int curve)
+{
+    (void)curve;
+    sb_printf(b, "vp 0 0\nvp 1 0\nvp 1 1\nvp 0 1\nvp 0 0\ncstype bspline\ndeg 1\ncurv2 %d %d %d %d %d\n"
+                 "parm u 0 0 1 2 3 4 4\nend\n",
+              vp0 + 1, vp0 + 2, vp0 + 3, vp0 + 4, vp0 + 5);
+}
+
+TEST(domain_trimmed_surfaces_weld)
+{
+    for (int trimmed = 0; trimmed < 2; trimmed++) {
+        sbuf b = {0};
+        for (int side = 0; side < 2; side++) {
+            if (trimmed)
+                domain_trim(&b, 5 * side, side + 1);
+            for (int j = 0; j < 6; j++)
+                for (int i = 0; i < 6; i++) {
+                    double x = 30.0 * side + 6.0 * i, y = 6.0 * j;
+                    sb_printf(&b, "v %.17g %.17g %.17g\n", x, y, 3 * sin(x * 0.07) * cos(y * 0.09));
+                }
+            sb_printf(&b, "cstype bspline\ndeg 3 3\nsurf 0 1 0 1");
+            for (int k = 1; k <= 36; k++)
+                sb_printf(&b, " %d", 36 * side + k);
+            sb_printf(&b, "\nparm u 0 0 0 0 0.4 0.7 1 1 1 1\nparm v 0 0 0 0 0.3 0.6 1 1 1 1\n");
+            if (trimmed)
+                sb_printf(&b, "trim 0 4 %d\n", side + 1);
+            sb_printf(&b, "end\n");
+        }
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        bool parsed = parse_set(&b, trimmed ? "pair_trimmed.obj" : "pair.obj", &set);
+        if (parsed && make_model(&set, &m)) {
+            for (double E = 0.1; E >= 0.0009; E /= 10) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                tsr_ptess_result r;
+                if (!run_ptess(m, &o, &r))
+                    continue;
+                tsr_validation v = validate(&r.mesh);
+                uint32_t inner = 0; /* open edges not on the outer rectangle */
+                tsr_halfedges he;
+                CHECK(tsr_halfedges_build(&he, &r.mesh, NULL) == TSR_OK);
+                for (uint32_t h = 0; h < he.count; h++) {
+                    if (he.twin[h] != TSR_NO_TWIN)
+                        continue;
+                    const float *p = r.mesh.positions + 3 * (size_t)r.mesh.indices[h],
+                                *q = r.mesh.positions + 3 * (size_t)r.mesh.indices[3 * (h / 3) + (h % 3 + 1) % 3];
+                    bool rim = (p[0] == q[0] && (p[0] == 0 || p[0] == 60)) || (p[1] == q[1] && (p[1] == 0 || p[1] == 30));
+                    inner += !rim;
+                }
+                tsr_halfedges_free(&he);
+                CHECK_MSG(inner == 0 && v.t_junctions == 0 && v.degenerate_triangles == 0 && v.nonmanifold_edges == 0,
+                          "%s E %g: %u open edges inside, %u T-junctions, %u degenerate, %u non-manifold",
+                          trimmed ? "trimmed" : "untrimmed", E, inner, v.t_junctions, v.degenerate_triangles,
+                          v.nonmanifold_edges);
+                tsr_ptess_result_free(&r);
+            }
+        }
+        tsr_pmodel_destroy(m);
+        if (parsed)
+            tsr_patch_set_free(&set);
+        free(b.s);
+    }
+    /* the sphere: 9 x 5 rational control points, u around (0..4), v from
+     * pole to pole (0..2), trimmed by its domain */
+    for (int trimmed = 0; trimmed < 2; trimmed++) {
+        sbuf b = {0};
+        static const double C[9][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
+        static const double M[5][2] = {{0, -1}, {1, -1}, {1, 0}, {1, 1}, {0, 1}};
+        if (trimmed)
+            sb_printf(&b, "vp 0 0\nvp 4 0\nvp 4 2\nvp 0 2\nvp 0 0\ncstype bspline\ndeg 1\ncurv2 1 2 3 4 5\n"
+                          "parm u 0 0 1 2 3 4 4\nend\n");
+        for (int j = 0; j < 5; j++)
+            for (int i = 0; i < 9; i++)
+                sb_printf(&b, "v %.17g %.17g %.17g %.17g\n", 20 * C[i][0] * M[j][0], 20 * C[i][1] * M[j][0],
+                          20 * M[j][1], (i % 2 ? H2 : 1.0) * (j % 2 ? H2 : 1.0));
+        sb_printf(&b, "cstype rat bspline\ndeg 2 2\nsurf 0 4 0 2");
+        for (int k = 1; k <= 45; k++)
+            sb_printf(&b, " %d", k);
+        sb_printf(&b, "\nparm u 0 0 0 1 1 2 2 3 3 4 4 4\nparm v 0 0 0 1 1 2 2 2\n%send\n", trimmed ? "trim 0 4 1\n" : "");
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        bool parsed = parse_set(&b, trimmed ? "sphere_trimmed.obj" : "sphere.obj", &set);
+        if (parsed && make_model(&set, &m)) {
+            for (double E = 0.3; E >= 0.0029; E /= 10) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                tsr_ptess_result r;
+                if (!run_ptess(m, &o, &r))
+                    continue;
+                tsr_validation v = validate(&r.mesh);
+                CHECK_MSG(v.boundary_edges == 0 && v.degenerate_triangles == 0 && v.nonmanifold_edges == 0 &&
+                              v.misoriented_edges == 0,
+                          "%s sphere E %g: %u open edges, %u degenerate, %u non-manifold, %u misoriented",
+                          trimmed ? "trimmed" : "untrimmed", E, v.boundary_edges, v.degenerate_triangles,
+                          v.nonmanifold_edges, v.misoriented_edges);
+                tsr_ptess_result_free(&r);
+            }
+        }
+        tsr_pmodel_destroy(m);
+        if (parsed)
+            tsr_patch_set_free(&set);
+        free(b.s);
+    }
+}
+
 /* The long quarter cylinder (rational, along x from 0 to VL) and a camera
  * looking along it from near its start: parsed into *set; false (after a
  * failed CHECK) when it does not parse. */
@@ -2683,7 +2797,7 @@ TEST(data_osd_corner_estimate)
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
-          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas),
+          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(domain_trimmed_surfaces_weld),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
           T(data_osd_corner_estimate),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
