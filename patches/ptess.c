@@ -275,9 +275,9 @@ static bool edge_collapsed(const piece *p, int e, double tol)
     return true;
 }
 
-static tsr_status link_set_edges(tsr_pmodel *m)
+static tsr_status link_set_edges(tsr_pmodel *m, double link_tol)
 {
-    double tol = 1e-9 * model_diag(m);
+    double tol = link_tol > 0 ? link_tol : TSR_PMODEL_LINK_TOL * model_diag(m);
     const tsr_allocator *a = ma(m);
     /* collapsed edges first; they take no links */
     for (uint32_t p = 0; p < m->npieces; p++)
@@ -341,6 +341,14 @@ static tsr_status link_set_edges(tsr_pmodel *m)
 
 tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err)
 {
+    return tsr_pmodel_from_set_tol(set, 0, alloc, out, err);
+}
+
+tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, const tsr_allocator *alloc,
+                                   tsr_pmodel **out, tsr_error *err)
+{
+    if (!(link_tol > 0) || !isfinite(link_tol))
+        link_tol = 0;
     if (!out)
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "patch model: no output");
     *out = NULL;
@@ -433,7 +441,7 @@ tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *al
         next += c;
     }
     tsr_free(a, tmp);
-    tsr_status st = link_set_edges(m);
+    tsr_status st = link_set_edges(m, link_tol);
     if (st == TSR_OK)
         st = orient(m);
     if (st != TSR_OK) {

@@ -118,8 +118,19 @@ typedef struct tsr_pmodel tsr_pmodel;
 /* Builds the model of a patch set (which must outlive the model: trim
  * loops are read from it). TSR_ERR_ARGUMENT for NULL pointers,
  * TSR_ERR_EMPTY for a set without patches, TSR_ERR_TOO_LARGE beyond
- * 2^24 pieces, TSR_ERR_NOMEM. */
+ * 2^24 pieces, TSR_ERR_NOMEM. Two patch edges are linked (sampled alike,
+ * their vertices welded) when their boundary control points coincide
+ * within TSR_PMODEL_LINK_TOL of the model's box diagonal, and an edge
+ * whose control points all lie that close together is collapsed. */
+#define TSR_PMODEL_LINK_TOL 1e-6
 tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err);
+/* The same with another distance for linking and collapsing, in model
+ * units (CAD files leave gaps of 1e-6 to 1e-3 between faces that meet);
+ * link_tol <= 0 or NaN: the default. A vertex shared by linked edges takes
+ * one side's surface point, so the other side's error may grow by up to
+ * the gap: the measurement sees it. */
+tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, const tsr_allocator *alloc,
+                                   tsr_pmodel **out, tsr_error *err);
 
 /* Builds the model of a subdivision surface (which must outlive the
  * model): one source per patch (face, sub) of every face with a limit

@@ -332,6 +332,7 @@ static void help_patches(FILE *f)
         "                        most half their tolerance, up to N times (default 6; 0: never), as ptess.h\n"
         "                        prescribes; Bezier pieces are never retried, their bound is a proof\n"
         "  --scheme S            catmark or bilinear: the subdivision scheme of a polygon OBJ\n"
+        CLI_WELD_HELP
         "  --assume-linked       take every patch edge as linked: nothing counts as a seam and every\n"
         "                        T-junction fails (what a crack between joined patches would give)\n"
         "  --json                print the results as JSON\n"
@@ -783,6 +784,7 @@ static int run_patches(int argc, char **argv)
     uint32_t ncams = 8, seed = 1, tile = 4, max_level = 0, per_side = 64, retries = 6;
     double max_error = 0;
     const char *scheme = NULL;
+    double weld = 0;
     bool json = false, assume_linked = false;
     char **cam_args = calloc((size_t)argc + 1, sizeof *cam_args);
     int ncam_args = 0, rc = CLI_OK;
@@ -805,7 +807,12 @@ static int run_patches(int argc, char **argv)
             assume_linked = true;
         else if (!strcmp(a, "--camera") && has_value)
             cam_args[ncam_args++] = argv[++i];
-        else if (!strcmp(a, "--scheme") && has_value) {
+        else if (!strcmp(a, "--weld") && has_value) {
+            if (!cli_parse_double(argv[++i], &weld) || !(weld > 0)) {
+                cli_error("check", "--weld %s: must be a positive distance", argv[i]);
+                rc = CLI_USAGE;
+            }
+        } else if (!strcmp(a, "--scheme") && has_value) {
             const char *sc = argv[++i];
             if (strcmp(sc, "catmark") && strcmp(sc, "bilinear")) {
                 cli_error("check", "--scheme %s: use catmark or bilinear", sc);
@@ -854,7 +861,7 @@ static int run_patches(int argc, char **argv)
     }
     cli_patch_model p;
     memset(&p, 0, sizeof p);
-    if (rc == CLI_OK && !cli_patch_model_load("check", in, scheme, &p))
+    if (rc == CLI_OK && !cli_patch_model_load_weld("check", in, scheme, weld, &p))
         rc = CLI_FAIL;
     if (rc != CLI_OK) {
         free(cam_args);

@@ -36,6 +36,7 @@ static void help(FILE *f)
             "  --max-level L         quadtree depth per patch, 1..12 (default 10)\n"
             "  --scheme S            catmark or bilinear, for a polygon cage (default: bilinear when the\n"
             "                        file name starts with \"bilinear\", else catmark)\n"
+            CLI_WELD_HELP
             "  --normals             per-vertex normals of the true surface\n"
             "  --no-verify           skip the measurement (and the re-tessellation it may ask for)\n"
             "  --stats FILE.json     patches, pieces, triangles, vertices, measured max_error and\n"
@@ -89,6 +90,7 @@ static int write_stats(const char *path, const char *in, const cli_patch_model *
 static int run(int argc, char **argv)
 {
     const char *in = NULL, *out = NULL, *stats = NULL, *cam_arg = NULL, *scheme = NULL;
+    double weld = 0;
     double max_error = 0;
     view_options v = {60, 1920, 1080, 0, 0};
     uint32_t tile = 4, max_level = 10;
@@ -106,7 +108,12 @@ static int run(int argc, char **argv)
             stats = argv[++i];
         else if (!strcmp(a, "--camera") && has_value)
             cam_arg = argv[++i];
-        else if (!strcmp(a, "--scheme") && has_value) {
+        else if (!strcmp(a, "--weld") && has_value) {
+            if (!cli_parse_double(argv[++i], &weld) || !(weld > 0)) {
+                cli_error("patch", "--weld %s: must be a positive distance", argv[i]);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(a, "--scheme") && has_value) {
             scheme = argv[++i];
             if (strcmp(scheme, "catmark") && strcmp(scheme, "bilinear")) {
                 cli_error("patch", "--scheme %s: use catmark or bilinear", scheme);
@@ -171,7 +178,7 @@ static int run(int argc, char **argv)
         return CLI_FAIL;
     double t0 = cli_now();
     cli_patch_model pm;
-    if (!cli_patch_model_load("patch", in, scheme, &pm))
+    if (!cli_patch_model_load_weld("patch", in, scheme, weld, &pm))
         return CLI_FAIL;
     /* The mesh is float32: a bound below a few of its steps at the
      * model's largest coordinate can be neither written nor measured, and

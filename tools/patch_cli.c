@@ -15,6 +15,12 @@ static void report_load_error(const char *cmd, const char *in, tsr_status st, co
 
 bool cli_patch_model_load(const char *cmd, const char *path, const char *scheme, cli_patch_model *out)
 {
+    return cli_patch_model_load_weld(cmd, path, scheme, 0, out);
+}
+
+bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *scheme, double weld,
+                               cli_patch_model *out)
+{
     memset(out, 0, sizeof *out);
     tsr_error err = {0};
     tsr_patch_format f = tsr_patch_format_from_path(path);
@@ -25,7 +31,7 @@ bool cli_patch_model_load(const char *cmd, const char *path, const char *scheme,
     tsr_status st = tsr_patch_set_load(path, f, NULL, &out->set, &err);
     if (st == TSR_OK) {
         out->kind = f == TSR_PATCH_FORMAT_BPT ? "bpt" : "obj-surfaces";
-        st = tsr_pmodel_from_set(&out->set, NULL, &out->model, &err);
+        st = tsr_pmodel_from_set_tol(&out->set, weld, NULL, &out->model, &err);
     } else if (st == TSR_ERR_EMPTY && f == TSR_PATCH_FORMAT_OBJ) {
         /* no free-form surface: a polygon cage, if it has faces */
         tsr_error cerr = {0};

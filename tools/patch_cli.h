@@ -25,6 +25,16 @@ typedef struct cli_patch_model {
  * loader's message. Prints "tessera CMD: message" naming the file and
  * returns false on failure (nothing to free then). */
 bool cli_patch_model_load(const char *cmd, const char *path, const char *scheme, cli_patch_model *out);
+/* The same with the distance within which patch edges are linked and
+ * welded (tsr_pmodel_from_set_tol; model units, 0: the default). */
+bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *scheme, double weld,
+                               cli_patch_model *out);
+
+/* The --weld option's help, shared by patch and check. */
+#define CLI_WELD_HELP                                                                                  \
+    "  --weld D              link (and weld) free-form patch edges whose boundary control points lie\n" \
+    "                        within D of each other, model units (default 1e-6 of the box diagonal;\n" \
+    "                        CAD files often leave gaps of 1e-6 to 1e-3)\n"
 void cli_patch_model_free(cli_patch_model *m);
 
 /* Tessellates with opt, measures (tsr_ptess_measure, per_side samples per

@@ -1704,6 +1704,61 @@ TEST(domain_trimmed_surfaces_weld)
     }
 }
 
+/* Patch edges a small gap apart (as CAD files leave them): linked and
+ * welded within the link distance (default 1e-6 of the diagonal, or the
+ * one given), open beyond it. Two bicubic patches meet at x = 30, the
+ * second's edge control points raised by gap in z. */
+static uint32_t seam_open_edges(double gap, double link_tol)
+{
+    sbuf b = {0};
+    for (int side = 0; side < 2; side++) {
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 4; i++) {
+                double x = 30.0 * side + 10.0 * i, y = 10.0 * j, z = 2 * sin(x * 0.05) * cos(y * 0.07);
+                sb_printf(&b, "v %.17g %.17g %.17g\n", x, y, z + (side == 1 && i == 0 ? gap : 0));
+            }
+        sb_printf(&b, "cstype bezier\ndeg 3 3\nsurf 0 1 0 1");
+        for (int k = 1; k <= 16; k++)
+            sb_printf(&b, " %d", 16 * side + k);
+        sb_printf(&b, "\nend\n");
+    }
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    uint32_t inner = UINT32_MAX;
+    if (parse_set(&b, "gap.obj", &set)) {
+        tsr_error e = {0};
+        CHECK_MSG(tsr_pmodel_from_set_tol(&set, link_tol, NULL, &m, &e) == TSR_OK, "%s", e.message);
+        tsr_ptess_options o = {0};
+        o.max_error = 0.01;
+        tsr_ptess_result r;
+        if (m && run_ptess(m, &o, &r)) {
+            tsr_halfedges he;
+            CHECK(tsr_halfedges_build(&he, &r.mesh, NULL) == TSR_OK);
+            inner = 0;
+            for (uint32_t h = 0; h < he.count; h++) {
+                const float *p = r.mesh.positions + 3 * (size_t)r.mesh.indices[h],
+                            *q = r.mesh.positions + 3 * (size_t)r.mesh.indices[3 * (h / 3) + (h % 3 + 1) % 3];
+                inner += he.twin[h] == TSR_NO_TWIN && p[0] == q[0] && p[0] > 1 && p[0] < 59;
+            }
+            tsr_halfedges_free(&he);
+            tsr_ptess_result_free(&r);
+        }
+        tsr_pmodel_destroy(m);
+        tsr_patch_set_free(&set);
+    }
+    free(b.s);
+    return inner;
+}
+
+TEST(patch_edges_a_gap_apart_weld_within_the_link_distance)
+{
+    double diag = sqrt(60.0 * 60 + 30 * 30 + 4 * 4); /* about; the gaps below are far from the limits */
+    CHECK_MSG(seam_open_edges(0, 0) == 0, "no gap: %u open seam edges", seam_open_edges(0, 0));
+    CHECK_MSG(seam_open_edges(1e-7 * diag, 0) == 0, "a 1e-7 gap, default link distance: open seam");
+    CHECK_MSG(seam_open_edges(1e-4 * diag, 0) > 0, "a 1e-4 gap was linked by the default 1e-6 distance");
+    CHECK_MSG(seam_open_edges(1e-4 * diag, 1e-3 * diag) == 0, "a 1e-4 gap, link distance 1e-3: open seam");
+}
+
 /* The long quarter cylinder (rational, along x from 0 to VL) and a camera
  * looking along it from near its start: parsed into *set; false (after a
  * failed CHECK) when it does not parse. */
@@ -2797,7 +2852,7 @@ TEST(data_osd_corner_estimate)
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
-          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(domain_trimmed_surfaces_weld),
+          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
           T(data_osd_corner_estimate),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
