@@ -40,14 +40,15 @@ static void help(FILE *f)
             "  --normals             per-vertex normals of the true surface\n"
             "  --no-verify           skip the measurement (and the re-tessellation it may ask for)\n"
             "  --stats FILE.json     patches, pieces, triangles, vertices, measured max_error and\n"
-            "                        rms_error, bound, seconds, and the options used\n"
+            "                        rms_error, bound, seconds, the options used, and the mesh's\n"
+            "                        boundary_edges, t_junctions and degenerate_triangles\n"
             "  --quiet               print nothing on success\n"
             "  -h, --help            this help\n");
 }
 
 static int write_stats(const char *path, const char *in, const cli_patch_model *pm, const tsr_ptess_result *r,
                        const tsr_ptess_measure_result *meas, bool verified, const tsr_ptess_options *opt,
-                       uint32_t tightened, double secs)
+                       uint32_t tightened, double secs, const tsr_validation *val)
 {
     tsr_pmodel_info info;
     tsr_pmodel_get_info(pm->model, &info);
@@ -65,6 +66,11 @@ static int write_stats(const char *path, const char *in, const cli_patch_model *
         cJSON_AddNumberToObject(j, "samples", (double)meas->samples);
         cJSON_AddNumberToObject(j, "uncovered_samples", (double)meas->uncovered);
         cJSON_AddNumberToObject(j, "tightened_patches", tightened);
+    }
+    if (val) {
+        cJSON_AddNumberToObject(j, "boundary_edges", val->boundary_edges);
+        cJSON_AddNumberToObject(j, "t_junctions", val->t_junctions);
+        cJSON_AddNumberToObject(j, "degenerate_triangles", val->degenerate_triangles);
     }
     cJSON_AddStringToObject(j, "error_units", opt->camera ? "pixels" : "model");
     if (opt->camera)
@@ -253,13 +259,23 @@ static int run(int argc, char **argv)
         cli_error("patch", "%s: the tessellation has no triangle", in);
         rc = CLI_FAIL;
     }
+    /* What the measurement does not see: vertices left unwelded where
+     * surfaces meet (edges farther apart than --weld, a different knot
+     * vector along a shared edge, a trim curve across it), T-junctions,
+     * zero-area triangles. Reported, not fatal: the surfaces may simply
+     * not meet there. */
+    tsr_validation val;
+    bool validated = rc == CLI_OK && verify && tsr_mesh_validate(&r.mesh, NULL, &val) == TSR_OK;
+    /* a cage's non-manifold edges are left open by contract (ptess.h), and
+     * another sheet's vertices may lie on them: no T-junction counts there */
+    uint32_t tj = validated && !pm.is_subd ? val.t_junctions : 0, zero = validated ? val.degenerate_triangles : 0;
     if (rc == CLI_OK && tsr_mesh_write(&r.mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
         cli_error("patch", "%s", err.message);
         rc = CLI_FAIL;
     }
     double secs = cli_now() - t0;
     if (rc == CLI_OK && stats)
-        rc = write_stats(stats, in, &pm, &r, &meas, verify, &opt, tightened, secs);
+        rc = write_stats(stats, in, &pm, &r, &meas, verify, &opt, tightened, secs, validated ? &val : NULL);
     if (rc == CLI_OK && !quiet) {
         tsr_pmodel_info info;
         tsr_pmodel_get_info(pm.model, &info);
@@ -273,6 +289,12 @@ static int run(int argc, char **argv)
         else
             fprintf(stderr, "tessera patch: %s: %u patches, %u triangles, %u vertices, not measured, %.2f s\n", in,
                     info.sources, r.mesh.triangle_count, r.mesh.vertex_count, secs);
+        if (tj || zero)
+            fprintf(stderr,
+                    "tessera patch: %s: warning: %u T-junctions and %u zero-area triangles, where surfaces meet "
+                    "without matching edges (farther apart than --weld, another knot vector along the edge, a "
+                    "trim curve across it, a degenerate trim); tessera check patches locates them\n",
+                    in, tj, zero);
     }
     tsr_ptess_result_free(&r);
     cli_patch_model_free(&pm);
