@@ -317,9 +317,11 @@ bool tsr_camera_prepare(tsr_camera *c)
     if (!normalize3(f) || !(c->fovy_deg > 0 && c->fovy_deg < 179) || !(c->width > 0) || !(c->height > 0) ||
         !(c->near_dist > 0))
         return false;
-    double zup[3] = {0, 0, 1}, r[3], u[3];
-    cross3(f, zup, r);
-    if (!normalize3(r) || fabs(f[2]) > 0.99999)
+    /* the screen's up is +z's projection; looking (nearly) straight up or
+     * down, +y's (a plan view with +y up the screen) */
+    double zup[3] = {0, 0, 1}, yup[3] = {0, 1, 0}, r[3], u[3];
+    cross3(f, fabs(f[2]) > 0.99999 ? yup : zup, r);
+    if (!normalize3(r))
         return false;
     cross3(r, f, u);
     memcpy(c->fwd, f, sizeof f);

@@ -160,7 +160,8 @@ typedef struct tsr_camera {
 } tsr_camera;
 
 /* Computes the derived fields; false when the view is degenerate (eye at
- * target, vertical view direction, non-positive sizes or fov). */
+ * target, non-positive sizes or fov). The screen's up is the projection
+ * of +z, or of +y for a view straight up or down (a plan view). */
 bool tsr_camera_prepare(tsr_camera *c);
 
 /* Projects a point: screen position in pixels (x right, y down, origin at

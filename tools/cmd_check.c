@@ -177,8 +177,7 @@ static int run_terrain(int argc, char **argv)
     for (int k = 0; k < n && rc == CLI_OK; k++) {
         if (ncam_args) {
             if (!parse_camera(cam_args[k], &v, &cams[k])) {
-                cli_error("check", "--camera %s: expected EX,EY,EZ,TX,TY,TZ with eye != target, not looking straight "
-                          "up or down", cam_args[k]);
+                cli_error("check", "--camera %s: expected EX,EY,EZ,TX,TY,TZ with eye != target", cam_args[k]);
                 rc = CLI_USAGE;
             }
         } else
@@ -751,7 +750,10 @@ static cJSON *patch_run_json(const patch_run *pr)
         cJSON_AddNumberToObject(c, "tolerance", pr->tol);
         cJSON_AddNumberToObject(c, "bound", pr->bound);
     }
+    /* watertight: no crack where surfaces join (an open surface's rim is
+     * no crack); closed: no open edge at all */
     cJSON_AddBoolToObject(c, "watertight", pr->watertight);
+    cJSON_AddBoolToObject(c, "closed", pr->watertight && pr->bnd.boundary == 0);
     cJSON_AddBoolToObject(c, "conforming", pr->conforming);
     cJSON_AddNumberToObject(c, "triangles", pr->triangles);
     cJSON_AddNumberToObject(c, "vertices", pr->vertices);
@@ -893,10 +895,7 @@ static int run_patches(int argc, char **argv)
         if (!ncam_args)
             random_patch_camera(&info, &rng, &v, &r->cam);
         else if (!parse_camera(cam_args[k], &v, &r->cam)) {
-            cli_error("check",
-                      "--camera %s: expected EX,EY,EZ,TX,TY,TZ with eye != target, not looking straight "
-                      "up or down",
-                      cam_args[k]);
+            cli_error("check", "--camera %s: expected EX,EY,EZ,TX,TY,TZ with eye != target", cam_args[k]);
             rc = CLI_USAGE;
         }
     }

@@ -246,7 +246,7 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
         double s = path.closed ? (double)i / a->frames : a->frames > 1 ? (double)i / (a->frames - 1) : 0;
         tsr_camera cam;
         if (!fly_path_camera(&f, &path, s, clearance, &cam)) {
-            cli_error("fly", "frame %u: the camera is degenerate (looking straight up or down, or target at the eye)",
+            cli_error("fly", "frame %u: the camera is degenerate (target at the eye)",
                       i);
             rc = CLI_FAIL;
             goto done;

@@ -186,6 +186,11 @@ static int run(int argc, char **argv)
     cli_patch_model pm;
     if (!cli_patch_model_load_weld("patch", in, scheme, weld, &pm))
         return CLI_FAIL;
+    if (!(pm.diag > 0)) {
+        cli_error("patch", "%s: the model has no extent: every control point lies at one place", in);
+        cli_patch_model_free(&pm);
+        return CLI_FAIL;
+    }
     /* The mesh is float32: a bound below a few of its steps at the
      * model's largest coordinate can be neither written nor measured, and
      * chasing it only grows the mesh until memory runs out. */
@@ -217,8 +222,7 @@ static int run(int argc, char **argv)
         if (!(v.near_dist > 0))
             v.near_dist = 1e-3 * pm.diag;
         if (!parse_camera(cam_arg, &v, &cam)) {
-            cli_error("patch", "--camera %s: expected EX,EY,EZ,TX,TY,TZ with eye != target, not looking straight "
-                      "up or down", cam_arg);
+            cli_error("patch", "--camera %s: expected EX,EY,EZ,TX,TY,TZ with eye != target", cam_arg);
             cli_patch_model_free(&pm);
             return CLI_USAGE;
         }
@@ -251,8 +255,10 @@ static int run(int argc, char **argv)
     }
     double tol = opt.camera ? v.pixel_error : opt.max_error;
     if (rc == CLI_OK && verify && (meas.max_error > tol || meas.uncovered)) {
-        cli_error("patch", "%s: measured error %.6g is above %.6g%s even after re-tessellating %u patches finer",
-                  in, meas.max_error, tol, meas.uncovered ? " (or the mesh has gaps)" : "", tightened);
+        cli_error("patch", "%s: measured error %.6g is above %.6g%s even after re-tessellating %u patches finer "
+                  "(down to --max-level %u)",
+                  in, meas.max_error, tol, meas.uncovered ? " (or the mesh has gaps)" : "", tightened,
+                  opt.max_level ? opt.max_level : 10);
         rc = CLI_FAIL;
     }
     if (rc == CLI_OK && r.mesh.triangle_count == 0) {

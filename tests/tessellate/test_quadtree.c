@@ -396,5 +396,32 @@ TEST(levels_and_keys)
     CHECK(tsr_qnode_key(c) == (((uint64_t)4 << 56) | 1) && tsr_qnode_key(d) == (((uint64_t)4 << 56) | 2));
 }
 
-TEST_MAIN(T(patterns_conform_for_every_mask), T(height_function_bound_and_watertight),
+/* A camera looking straight down (a plan view) is a camera: +x to the
+ * right of the screen, +y up it; straight up mirrors x. */
+TEST(plan_view_camera)
+{
+    for (int down = 0; down < 2; down++) {
+        tsr_camera c = {0};
+        c.eye[2] = down ? 10 : -10;
+        c.fovy_deg = 60;
+        c.width = 800;
+        c.height = 600;
+        c.near_dist = 0.1;
+        c.pixel_error = 1;
+        CHECK(tsr_camera_prepare(&c));
+        double sx, sy, d, px = 1, py = 1;
+        tsr_camera_project(&c, (double[3]){0, 0, 0}, &sx, &sy, &d);
+        CHECK_NEAR(sx, 400, 1e-9);
+        CHECK_NEAR(sy, 300, 1e-9);
+        CHECK_NEAR(d, 10, 1e-12);
+        tsr_camera_project(&c, (double[3]){px, 0, 0}, &sx, &sy, &d);
+        CHECK(down ? sx > 400 : sx < 400);
+        CHECK_NEAR(sy, 300, 1e-9);
+        tsr_camera_project(&c, (double[3]){0, py, 0}, &sx, &sy, &d);
+        CHECK(sy < 300);
+        CHECK_NEAR(sx, 400, 1e-9);
+    }
+}
+
+TEST_MAIN(T(plan_view_camera), T(patterns_conform_for_every_mask), T(height_function_bound_and_watertight),
           T(torus_patch_bound_and_watertight), T(random_cuts_are_balanced_and_conforming), T(levels_and_keys))
