@@ -1475,6 +1475,28 @@ TEST(trimmed_linked_conform)
  * outer loop (nothing outside the outer loop). Circles are exact rational
  * quadratics; the mesh's polygons lie inside each circle by at most the
  * tolerance, so the area may differ by the loops' length times it. */
+/* Parses text as an OBJ, builds its model, and calls fn with the
+ * tessellation at each bound from hi down to lo, tenfold steps. */
+static void over_bounds(const sbuf *text, const char *name, double hi, double lo,
+                        void (*fn)(void *user, const tsr_ptess_result *r, double E), void *user)
+{
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(text, name, &set))
+        return;
+    if (make_model(&set, &m))
+        for (double E = hi; E >= 0.9 * lo; E /= 10) {
+            tsr_ptess_options o = {0};
+            o.max_error = E;
+            tsr_ptess_result r;
+            if (run_ptess(m, &o, &r))
+                fn(user, &r, E);
+            tsr_ptess_result_free(&r);
+        }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+}
+
 typedef struct trim_obj {
     sbuf b;
     int vp, curves;
@@ -1504,15 +1526,37 @@ static int trim_square(trim_obj *t, double a, double b)
     return ++t->curves;
 }
 
+typedef struct trim_case {
+    const char *name;
+    double area, perimeter, xmin; /* what it keeps; the loops' length; no vertex left of xmin */
+} trim_case;
+
+static void trim_case_check(void *user, const tsr_ptess_result *r, double E)
+{
+    const trim_case *w = user;
+    double area = 0, xmin = INFINITY;
+    const float *P = r->mesh.positions;
+    for (uint32_t f = 0; f < r->mesh.triangle_count; f++) {
+        const uint32_t *v = r->mesh.indices + 3 * f;
+        const float *a = P + 3 * v[0], *b = P + 3 * v[1], *d = P + 3 * v[2];
+        area += 0.5 * fabs(((double)b[0] - a[0]) * ((double)d[1] - a[1]) - ((double)b[1] - a[1]) * ((double)d[0] - a[0]));
+    }
+    for (uint32_t i = 0; i < r->mesh.vertex_count; i++)
+        xmin = fmin(xmin, P[3 * i]);
+    double slack = w->perimeter * E + 1e-3;
+    CHECK_MSG(fabs(area - w->area) <= slack, "%s, E %g: area %.4f, exact %.4f (slack %.4f)", w->name, E, area, w->area,
+              slack);
+    CHECK_MSG(xmin >= w->xmin - 1e-4, "%s: a vertex at x %g, left of %g", w->name, xmin, w->xmin);
+    tsr_validation v = validate(&r->mesh);
+    CHECK_MSG(v.nonmanifold_edges == 0, "%s: %u non-manifold edges", w->name, v.nonmanifold_edges);
+}
+
 TEST(trim_loops_keep_exact_areas)
 {
     const double R2 = 400 * PI; /* a circle of radius 0.2: 20 model units */
     /* two circles of radius 20, centres 20 apart: their lens */
     const double lens = 2 * 400 * acos(0.5) - 10 * sqrt(1600 - 400);
-    struct {
-        const char *name;
-        double area, perimeter, xmin; /* what it keeps; the loops' length; no vertex left of xmin */
-    } want[] = {
+    trim_case want[] = {
         {"hole only", 10000 - R2, 2 * PI * 20, 0},
         {"hole twice", 6400 - R2, 320 + 2 * PI * 20, 10},
         {"overlapping holes", 6400 - (2 * R2 - lens), 320 + 4 * PI * 20, 10},
@@ -1553,39 +1597,7 @@ TEST(trim_loops_keep_exact_areas)
             break;
         }
         sb_printf(&t.b, "cstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\n%send\n", body);
-        tsr_patch_set set;
-        tsr_pmodel *m = NULL;
-        bool parsed = parse_set(&t.b, want[c].name, &set);
-        if (parsed && make_model(&set, &m)) {
-            for (double E = 0.1; E >= 0.009; E /= 10) {
-                tsr_ptess_options o = {0};
-                o.max_error = E;
-                tsr_ptess_result r;
-                if (!run_ptess(m, &o, &r))
-                    continue;
-                double area = 0, xmin = INFINITY;
-                const float *P = r.mesh.positions;
-                for (uint32_t f = 0; f < r.mesh.triangle_count; f++) {
-                    const uint32_t *v = r.mesh.indices + 3 * f;
-                    const float *a = P + 3 * v[0], *b = P + 3 * v[1], *d = P + 3 * v[2];
-                    area += 0.5 * fabs(((double)b[0] - a[0]) * ((double)d[1] - a[1]) -
-                                       ((double)b[1] - a[1]) * ((double)d[0] - a[0]));
-                }
-                for (uint32_t i = 0; i < r.mesh.vertex_count; i++)
-                    xmin = fmin(xmin, P[3 * i]);
-                double slack = want[c].perimeter * E + 1e-3;
-                CHECK_MSG(fabs(area - want[c].area) <= slack, "%s, E %g: area %.4f, exact %.4f (slack %.4f)",
-                          want[c].name, E, area, want[c].area, slack);
-                CHECK_MSG(xmin >= want[c].xmin - 1e-4, "%s: a vertex at x %g, left of %g", want[c].name, xmin,
-                          want[c].xmin);
-                tsr_validation v = validate(&r.mesh);
-                CHECK_MSG(v.nonmanifold_edges == 0, "%s: %u non-manifold edges", want[c].name, v.nonmanifold_edges);
-                tsr_ptess_result_free(&r);
-            }
-        }
-        tsr_pmodel_destroy(m);
-        if (parsed)
-            tsr_patch_set_free(&set);
+        over_bounds(&t.b, want[c].name, 0.1, 0.01, trim_case_check, &want[c]);
         free(t.b.s);
     }
 }
@@ -1604,6 +1616,38 @@ static void domain_trim(sbuf *b, int vp0, int curve)
     sb_printf(b, "vp 0 0\nvp 1 0\nvp 1 1\nvp 0 1\nvp 0 0\ncstype bspline\ndeg 1\ncurv2 %d %d %d %d %d\n"
                  "parm u 0 0 1 2 3 4 4\nend\n",
               vp0 + 1, vp0 + 2, vp0 + 3, vp0 + 4, vp0 + 5);
+}
+
+static void pair_check(void *user, const tsr_ptess_result *r, double E)
+{
+    int trimmed = *(const int *)user;
+    tsr_validation v = validate(&r->mesh);
+    uint32_t inner = 0; /* open edges not on the outer rectangle */
+    tsr_halfedges he;
+    CHECK(tsr_halfedges_build(&he, &r->mesh, NULL) == TSR_OK);
+    for (uint32_t h = 0; h < he.count; h++) {
+        if (he.twin[h] != TSR_NO_TWIN)
+            continue;
+        const float *p = r->mesh.positions + 3 * (size_t)r->mesh.indices[h],
+                    *q = r->mesh.positions + 3 * (size_t)r->mesh.indices[3 * (h / 3) + (h % 3 + 1) % 3];
+        bool rim = (p[0] == q[0] && (p[0] == 0 || p[0] == 60)) || (p[1] == q[1] && (p[1] == 0 || p[1] == 30));
+        inner += !rim;
+    }
+    tsr_halfedges_free(&he);
+    CHECK_MSG(inner == 0 && v.t_junctions == 0 && v.degenerate_triangles == 0 && v.nonmanifold_edges == 0,
+              "%s E %g: %u open edges inside, %u T-junctions, %u degenerate, %u non-manifold",
+              trimmed ? "trimmed" : "untrimmed", E, inner, v.t_junctions, v.degenerate_triangles, v.nonmanifold_edges);
+}
+
+static void sphere_check(void *user, const tsr_ptess_result *r, double E)
+{
+    int trimmed = *(const int *)user;
+    tsr_validation v = validate(&r->mesh);
+    CHECK_MSG(v.boundary_edges == 0 && v.degenerate_triangles == 0 && v.nonmanifold_edges == 0 &&
+                  v.misoriented_edges == 0,
+              "%s sphere E %g: %u open edges, %u degenerate, %u non-manifold, %u misoriented",
+              trimmed ? "trimmed" : "untrimmed", E, v.boundary_edges, v.degenerate_triangles, v.nonmanifold_edges,
+              v.misoriented_edges);
 }
 
 TEST(domain_trimmed_surfaces_weld)
@@ -1626,39 +1670,7 @@ TEST(domain_trimmed_surfaces_weld)
                 sb_printf(&b, "trim 0 4 %d\n", side + 1);
             sb_printf(&b, "end\n");
         }
-        tsr_patch_set set;
-        tsr_pmodel *m = NULL;
-        bool parsed = parse_set(&b, trimmed ? "pair_trimmed.obj" : "pair.obj", &set);
-        if (parsed && make_model(&set, &m)) {
-            for (double E = 0.1; E >= 0.0009; E /= 10) {
-                tsr_ptess_options o = {0};
-                o.max_error = E;
-                tsr_ptess_result r;
-                if (!run_ptess(m, &o, &r))
-                    continue;
-                tsr_validation v = validate(&r.mesh);
-                uint32_t inner = 0; /* open edges not on the outer rectangle */
-                tsr_halfedges he;
-                CHECK(tsr_halfedges_build(&he, &r.mesh, NULL) == TSR_OK);
-                for (uint32_t h = 0; h < he.count; h++) {
-                    if (he.twin[h] != TSR_NO_TWIN)
-                        continue;
-                    const float *p = r.mesh.positions + 3 * (size_t)r.mesh.indices[h],
-                                *q = r.mesh.positions + 3 * (size_t)r.mesh.indices[3 * (h / 3) + (h % 3 + 1) % 3];
-                    bool rim = (p[0] == q[0] && (p[0] == 0 || p[0] == 60)) || (p[1] == q[1] && (p[1] == 0 || p[1] == 30));
-                    inner += !rim;
-                }
-                tsr_halfedges_free(&he);
-                CHECK_MSG(inner == 0 && v.t_junctions == 0 && v.degenerate_triangles == 0 && v.nonmanifold_edges == 0,
-                          "%s E %g: %u open edges inside, %u T-junctions, %u degenerate, %u non-manifold",
-                          trimmed ? "trimmed" : "untrimmed", E, inner, v.t_junctions, v.degenerate_triangles,
-                          v.nonmanifold_edges);
-                tsr_ptess_result_free(&r);
-            }
-        }
-        tsr_pmodel_destroy(m);
-        if (parsed)
-            tsr_patch_set_free(&set);
+        over_bounds(&b, trimmed ? "pair_trimmed.obj" : "pair.obj", 0.1, 0.001, pair_check, &trimmed);
         free(b.s);
     }
     /* the sphere: 9 x 5 rational control points, u around (0..4), v from
@@ -1678,28 +1690,7 @@ TEST(domain_trimmed_surfaces_weld)
         for (int k = 1; k <= 45; k++)
             sb_printf(&b, " %d", k);
         sb_printf(&b, "\nparm u 0 0 0 1 1 2 2 3 3 4 4 4\nparm v 0 0 0 1 1 2 2 2\n%send\n", trimmed ? "trim 0 4 1\n" : "");
-        tsr_patch_set set;
-        tsr_pmodel *m = NULL;
-        bool parsed = parse_set(&b, trimmed ? "sphere_trimmed.obj" : "sphere.obj", &set);
-        if (parsed && make_model(&set, &m)) {
-            for (double E = 0.3; E >= 0.0029; E /= 10) {
-                tsr_ptess_options o = {0};
-                o.max_error = E;
-                tsr_ptess_result r;
-                if (!run_ptess(m, &o, &r))
-                    continue;
-                tsr_validation v = validate(&r.mesh);
-                CHECK_MSG(v.boundary_edges == 0 && v.degenerate_triangles == 0 && v.nonmanifold_edges == 0 &&
-                              v.misoriented_edges == 0,
-                          "%s sphere E %g: %u open edges, %u degenerate, %u non-manifold, %u misoriented",
-                          trimmed ? "trimmed" : "untrimmed", E, v.boundary_edges, v.degenerate_triangles,
-                          v.nonmanifold_edges, v.misoriented_edges);
-                tsr_ptess_result_free(&r);
-            }
-        }
-        tsr_pmodel_destroy(m);
-        if (parsed)
-            tsr_patch_set_free(&set);
+        over_bounds(&b, trimmed ? "sphere_trimmed.obj" : "sphere.obj", 0.3, 0.003, sphere_check, &trimmed);
         free(b.s);
     }
 }
