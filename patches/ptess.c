@@ -88,7 +88,8 @@ struct tsr_pmodel {
     double *values; /* control points and weights of the pieces */
     double lo[3], hi[3];
     uint32_t links, collapsed, mirrored, trimmed;
-    uint32_t flat; /* subd patches without area, left out */
+    uint32_t flat;           /* subd patches without area, left out */
+    uint32_t conform_breaks; /* breakpoints a patch took from a neighbour */
 };
 
 static const tsr_allocator *ma(const tsr_pmodel *m) { return m->alloc.realloc ? &m->alloc : NULL; }
@@ -224,10 +225,20 @@ static double dist3(const double *a, const double *b)
     return sqrt(d0 * d0 + d1 * d1 + d2 * d2);
 }
 
+/* Where the midpoint of an edge's ends lies along a direction no model is
+ * aligned with (axis-aligned grids put hundreds of edges at one x): edges
+ * whose ends agree within tol have keys within tol, so candidates are
+ * looked for in a window of the keys sorted. */
+static double edge_key(const double *a, const double *b)
+{
+    static const double d[3] = {0.7265173980555677, 0.5484317579318064, 0.41399888552313313}; /* unit */
+    return 0.5 * (d[0] * (a[0] + b[0]) + d[1] * (a[1] + b[1]) + d[2] * (a[2] + b[2]));
+}
+
 typedef struct edge_rec {
     uint32_t piece;
     int edge;
-    double key; /* x of the midpoint of the end points */
+    double key; /* edge_key of its ends */
 } edge_rec;
 
 static int cmp_edge_rec(const void *a, const void *b)
@@ -236,26 +247,63 @@ static int cmp_edge_rec(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* Whether edge e of piece p and edge f of piece q coincide (same control
- * rows and weights up to a common factor), and in which direction. */
-static bool edges_match(const piece *p, int e, const piece *q, int f, double tol, bool *rev)
+/* The control row of edge e of piece p as homogeneous points (w x, w y,
+ * w z, w), raised to degree deg (at least the row's own): a row of degree
+ * d becomes one of degree d + 1 with Q_k = k/(d+1) P_(k-1) + (1 - k/(d+1))
+ * P_k, the same curve. */
+static void edge_row(const piece *p, int e, int deg, double h[][4])
 {
     uint32_t n = edge_ctrl_count(&p->bez, e);
-    if (n != edge_ctrl_count(&q->bez, f) || (p->bez.weights == NULL) != (q->bez.weights == NULL))
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t i = edge_ctrl_index(&p->bez, e, k);
+        double w = p->bez.weights ? p->bez.weights[i] : 1;
+        for (int c = 0; c < 3; c++)
+            h[k][c] = w * p->bez.ctrl[3 * i + c];
+        h[k][3] = w;
+    }
+    for (int d = (int)n - 1; d < deg; d++) {
+        memcpy(h[d + 1], h[d], sizeof h[d]);
+        for (int k = d; k >= 1; k--) {
+            double a = (double)k / (d + 1);
+            for (int c = 0; c < 4; c++)
+                h[k][c] = a * h[k - 1][c] + (1 - a) * h[k][c];
+        }
+    }
+}
+
+/* Whether edge e of piece p and edge f of piece q coincide (the same
+ * points, and weights up to a common factor, once the row of lower degree
+ * is raised to the other's degree), and in which direction. */
+static bool edges_match(const piece *p, int e, const piece *q, int f, double tol, bool *rev)
+{
+    int dp = (int)edge_ctrl_count(&p->bez, e) - 1, dq = (int)edge_ctrl_count(&q->bez, f) - 1;
+    int deg = dp > dq ? dp : dq;
+    /* the ends first (raising the degree keeps them) */
+    const double *p0 = p->bez.ctrl + 3 * edge_ctrl_index(&p->bez, e, 0),
+                 *p1 = p->bez.ctrl + 3 * edge_ctrl_index(&p->bez, e, (uint32_t)dp),
+                 *q0 = q->bez.ctrl + 3 * edge_ctrl_index(&q->bez, f, 0),
+                 *q1 = q->bez.ctrl + 3 * edge_ctrl_index(&q->bez, f, (uint32_t)dq);
+    if (!(dist3(p0, q0) <= tol && dist3(p1, q1) <= tol) && !(dist3(p0, q1) <= tol && dist3(p1, q0) <= tol))
         return false;
+    double hp[TSR_PATCH_MAX_DEGREE + 1][4], hq[TSR_PATCH_MAX_DEGREE + 1][4];
+    edge_row(p, e, deg, hp);
+    edge_row(q, f, deg, hq);
     for (int dir = 0; dir < 2; dir++) {
         bool ok = true;
         double ratio = 0;
-        for (uint32_t k = 0; k < n && ok; k++) {
-            uint32_t i = edge_ctrl_index(&p->bez, e, k), j = edge_ctrl_index(&q->bez, f, dir ? n - 1 - k : k);
-            ok = dist3(p->bez.ctrl + 3 * i, q->bez.ctrl + 3 * j) <= tol;
-            if (ok && p->bez.weights) {
-                double r = p->bez.weights[i] / q->bez.weights[j];
-                if (k == 0)
-                    ratio = r;
-                else
-                    ok = fabs(r - ratio) <= 1e-9 * ratio;
+        for (int k = 0; k <= deg && ok; k++) {
+            const double *a = hp[k], *b = hq[dir ? deg - k : k];
+            double pa[3], pb[3];
+            for (int c = 0; c < 3; c++) {
+                pa[c] = a[c] / a[3];
+                pb[c] = b[c] / b[3];
             }
+            ok = dist3(pa, pb) <= tol;
+            double r = a[3] / b[3];
+            if (k == 0)
+                ratio = r;
+            else if (ok)
+                ok = fabs(r - ratio) <= 1e-9 * ratio;
         }
         if (ok) {
             *rev = dir == 1;
@@ -302,7 +350,7 @@ static tsr_status link_set_edges(tsr_pmodel *m, double link_tol)
                 continue;
             const double *a0 = pp->bez.ctrl + 3 * edge_ctrl_index(&pp->bez, e, 0),
                          *a1 = pp->bez.ctrl + 3 * edge_ctrl_index(&pp->bez, e, edge_ctrl_count(&pp->bez, e) - 1);
-            rec[n++] = (edge_rec){p, e, 0.5 * (a0[0] + a1[0])};
+            rec[n++] = (edge_rec){p, e, edge_key(a0, a1)};
         }
     }
     qsort(rec, n, sizeof *rec, cmp_edge_rec);
@@ -339,6 +387,239 @@ static tsr_status link_set_edges(tsr_pmodel *m, double link_tol)
     return TSR_OK;
 }
 
+/* ---- breakpoints shared through patch edges ------------------------------- */
+
+/* The breakpoints of one patch along one axis, ascending: its domain's
+ * ends, its knots inside, and those its neighbours gave it. */
+typedef struct brk {
+    double *b;
+    uint32_t n, cap;
+} brk;
+
+/* A whole edge of a patch: patch i, edge e (0 south v = v0, 1 east u =
+ * u1, 2 north v = v1, 3 west u = u0), its parameter t in [0, 1] running
+ * with u (south, north) or v (east, west) across the domain. */
+typedef struct pedge {
+    uint32_t patch;
+    int edge;
+    double key; /* edge_key of its ends */
+    double end[2][3];
+} pedge;
+
+/* Two whole edges whose ends meet: ends bit 0 forwards, bit 1 reversed;
+ * state 0 not yet compared, 1 one curve forwards, 2 one curve reversed
+ * (t on a is 1 - t on b), -1 not one curve. */
+typedef struct epair {
+    uint32_t a, b; /* into the pedge list */
+    uint8_t ends;
+    int8_t state;
+} epair;
+
+static void edge_at(const tsr_patch *p, const double dom[4], int e, double t, double pos[3])
+{
+    double u = e == 1 ? dom[1] : e == 3 ? dom[0] : dom[0] + t * (dom[1] - dom[0]);
+    double v = e == 0 ? dom[2] : e == 2 ? dom[3] : dom[2] + t * (dom[3] - dom[2]);
+    tsr_patch_eval(p, u, v, pos, NULL, NULL, NULL);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static int cmp_pedge(const void *a, const void *b)
+{
+    double x = ((const pedge *)a)->key, y = ((const pedge *)b)->key;
+    return x < y ? -1 : x > y;
+}
+
+/* Breakpoint k of patch i's axis as a fraction of its domain. */
+static double brk_frac(const brk *br, const double dom[4], int axis, uint32_t k)
+{
+    double lo = dom[2 * axis], hi = dom[2 * axis + 1];
+    return k == 0 ? 0 : k + 1 == br->n ? 1 : (br->b[k] - lo) / (hi - lo);
+}
+
+/* Whether edges x and y (their ends already agree, reversed when rev)
+ * are one curve with proportional parameters: within tol at every
+ * breakpoint of either side and at 7 points inside every span between
+ * them. scratch holds both sides' breakpoints. */
+static bool edges_coincide(const tsr_patch_set *set, const double *doms, const brk *brks, const pedge *x,
+                           const pedge *y, bool rev, double tol, double *scratch)
+{
+    const tsr_patch *pa = &set->patches[x->patch], *pb = &set->patches[y->patch];
+    const double *da = doms + 4 * x->patch, *db = doms + 4 * y->patch;
+    const brk *ba = &brks[2 * x->patch + (x->edge & 1)], *bb = &brks[2 * y->patch + (y->edge & 1)];
+    uint32_t n = 0;
+    for (uint32_t k = 0; k < ba->n; k++)
+        scratch[n++] = brk_frac(ba, da, x->edge & 1, k);
+    for (uint32_t k = 0; k < bb->n; k++) {
+        double t = brk_frac(bb, db, y->edge & 1, k);
+        scratch[n++] = rev ? 1 - t : t;
+    }
+    qsort(scratch, n, sizeof *scratch, cmp_double);
+    for (uint32_t k = 0; k + 1 < n; k++) {
+        if (!(scratch[k + 1] > scratch[k]))
+            continue;
+        for (int m = 0; m < 8; m++) {
+            double t = scratch[k] + (scratch[k + 1] - scratch[k]) * m / 8.0, P[3], Q[3];
+            edge_at(pa, da, x->edge, t, P);
+            edge_at(pb, db, y->edge, rev ? 1 - t : t, Q);
+            if (!(dist3(P, Q) <= tol))
+                return false;
+        }
+    }
+    return true;
+}
+
+/* Inserts fraction t of the domain into br unless a breakpoint lies within
+ * 1e-9 of the domain of it; returns whether it did (-1: out of memory). */
+static int brk_insert(brk *br, const double dom[4], int axis, double t, const tsr_allocator *a)
+{
+    double lo = dom[2 * axis], hi = dom[2 * axis + 1], x = lo + t * (hi - lo), near = 1e-9 * (hi - lo);
+    if (!(x - lo > near && hi - x > near))
+        return 0;
+    uint32_t k = 0;
+    while (k < br->n && br->b[k] < x)
+        k++;
+    if ((k < br->n && br->b[k] - x <= near) || (k > 0 && x - br->b[k - 1] <= near))
+        return 0;
+    if (br->n == br->cap) {
+        uint32_t nc = br->cap * 2;
+        double *nb = tsr_realloc(a, br->b, (size_t)nc * sizeof *nb);
+        if (!nb)
+            return -1;
+        br->b = nb;
+        br->cap = nc;
+    }
+    memmove(br->b + k + 1, br->b + k, (size_t)(br->n - k) * sizeof *br->b);
+    br->b[k] = x;
+    br->n++;
+    return 1;
+}
+
+/* Whether edges x and y have the same breakpoints (as fractions of their
+ * domains; y's reversed when rev). */
+static bool same_breaks(const double *doms, const brk *brks, const pedge *x, const pedge *y, bool rev)
+{
+    const brk *bx = &brks[2 * x->patch + (x->edge & 1)], *by = &brks[2 * y->patch + (y->edge & 1)];
+    if (bx->n != by->n)
+        return false;
+    for (uint32_t k = 0; k < bx->n; k++) {
+        double t = brk_frac(bx, doms + 4 * x->patch, x->edge & 1, k);
+        double r = brk_frac(by, doms + 4 * y->patch, y->edge & 1, rev ? bx->n - 1 - k : k);
+        if (!(fabs(t - (rev ? 1 - r : r)) <= 1e-9))
+            return false;
+    }
+    return true;
+}
+
+/* Gives every pair of coinciding whole patch edges each other's
+ * breakpoints, until none gains one or `budget` were added. Pairs whose
+ * ends meet are compared as curves only once their breakpoints differ
+ * (most never do: the teapot, a grid of Bézier patches). */
+static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, brk *brks, double tol, uint32_t budget,
+                               const tsr_allocator *a, uint32_t *added)
+{
+    *added = 0;
+    uint32_t np = set->num_patches, ne = 0, npairs = 0, cappairs = 16;
+    pedge *ed = tsr_alloc(a, (size_t)np * 4 * sizeof *ed);
+    epair *pairs = tsr_alloc(a, cappairs * sizeof *pairs);
+    tsr_status st = ed && pairs ? TSR_OK : TSR_ERR_NOMEM;
+    for (uint32_t i = 0; i < np && st == TSR_OK; i++)
+        for (int e = 0; e < 4; e++) {
+            pedge *x = &ed[ne];
+            double mid[3];
+            x->patch = i;
+            x->edge = e;
+            edge_at(&set->patches[i], doms + 4 * i, e, 0, x->end[0]);
+            edge_at(&set->patches[i], doms + 4 * i, e, 1, x->end[1]);
+            edge_at(&set->patches[i], doms + 4 * i, e, 0.5, mid);
+            if (dist3(x->end[0], x->end[1]) <= tol && dist3(x->end[0], mid) <= tol)
+                continue; /* collapsed to a point (a pole) */
+            x->key = edge_key(x->end[0], x->end[1]);
+            ne++;
+        }
+    if (st == TSR_OK)
+        qsort(ed, ne, sizeof *ed, cmp_pedge);
+    for (uint32_t i = 0; i < ne && st == TSR_OK; i++)
+        for (uint32_t j = i + 1; j < ne && ed[j].key - ed[i].key <= tol; j++) {
+            const pedge *x = &ed[i], *y = &ed[j];
+            bool fwd = dist3(x->end[0], y->end[0]) <= tol && dist3(x->end[1], y->end[1]) <= tol;
+            bool bwd = dist3(x->end[0], y->end[1]) <= tol && dist3(x->end[1], y->end[0]) <= tol;
+            if (!fwd && !bwd)
+                continue;
+            if (npairs == cappairs) {
+                epair *q = tsr_realloc(a, pairs, (size_t)cappairs * 2 * sizeof *q);
+                if (!q) {
+                    st = TSR_ERR_NOMEM;
+                    break;
+                }
+                pairs = q;
+                cappairs *= 2;
+            }
+            pairs[npairs++] = (epair){i, j, (uint8_t)(fwd | bwd << 1), 0};
+        }
+    /* hand breakpoints across until nothing changes (each side's list is
+     * copied first: both sides may be one list, a patch's seam) */
+    bool changed = true;
+    double *copy = NULL;
+    uint32_t capcopy = 0;
+    while (changed && st == TSR_OK && *added < budget) {
+        changed = false;
+        for (uint32_t k = 0; k < npairs && st == TSR_OK && *added < budget; k++) {
+            epair *pr = &pairs[k];
+            const pedge *x = &ed[pr->a], *y = &ed[pr->b];
+            if (pr->state < 0)
+                continue;
+            uint32_t need = brks[2 * x->patch + (x->edge & 1)].n + brks[2 * y->patch + (y->edge & 1)].n;
+            if (need > capcopy) {
+                double *c = tsr_realloc(a, copy, (size_t)2 * need * sizeof *c);
+                if (!c) {
+                    st = TSR_ERR_NOMEM;
+                    break;
+                }
+                copy = c;
+                capcopy = 2 * need;
+            }
+            if (pr->state == 0) {
+                if ((!(pr->ends & 1) || same_breaks(doms, brks, x, y, false)) &&
+                    (!(pr->ends & 2) || same_breaks(doms, brks, x, y, true)))
+                    continue; /* nothing to hand across, yet */
+                pr->state = -1;
+                for (int r = 0; r < 2 && pr->state < 0; r++)
+                    if ((pr->ends >> r & 1) && edges_coincide(set, doms, brks, x, y, r == 1, tol, copy))
+                        pr->state = (int8_t)(r + 1);
+                if (pr->state < 0)
+                    continue;
+            }
+            bool rev = pr->state == 2;
+            for (int side = 0; side < 2 && st == TSR_OK; side++) {
+                const pedge *from = side ? y : x, *to = side ? x : y;
+                const brk *bf = &brks[2 * from->patch + (from->edge & 1)];
+                brk *bt = &brks[2 * to->patch + (to->edge & 1)];
+                uint32_t n = bf->n;
+                for (uint32_t q = 0; q < n; q++)
+                    copy[q] = brk_frac(bf, doms + 4 * from->patch, from->edge & 1, q);
+                for (uint32_t q = 1; q + 1 < n && *added < budget; q++) {
+                    int r = brk_insert(bt, doms + 4 * to->patch, to->edge & 1, rev ? 1 - copy[q] : copy[q], a);
+                    if (r < 0) {
+                        st = TSR_ERR_NOMEM;
+                        break;
+                    }
+                    *added += (uint32_t)r;
+                    changed |= r > 0;
+                }
+            }
+        }
+    }
+    tsr_free(a, copy);
+    tsr_free(a, ed);
+    tsr_free(a, pairs);
+    return st;
+}
+
 tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err)
 {
     return tsr_pmodel_from_set_tol(set, 0, alloc, out, err);
@@ -361,70 +642,118 @@ tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, co
         return tsr_error_set(err, TSR_ERR_NOMEM, "patch model: out of memory");
     m->set = set;
     const tsr_allocator *a = ma(m);
-    /* count pieces and values */
-    uint64_t npieces = 0, nvalues = 0;
-    for (uint32_t i = 0; i < set->num_patches; i++) {
+    uint32_t np = set->num_patches;
+    double *doms = tsr_alloc(a, (size_t)np * 4 * sizeof *doms);
+    brk *brks = tsr_alloc(a, (size_t)np * 2 * sizeof *brks);
+    if (brks)
+        memset(brks, 0, (size_t)np * 2 * sizeof *brks);
+    tsr_status st = doms && brks ? TSR_OK : TSR_ERR_NOMEM;
+    /* each patch's own breakpoints, and the box of all control points */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    uint64_t nbreaks = 0;
+    for (uint32_t i = 0; i < np && st == TSR_OK; i++) {
+        const tsr_patch *p = &set->patches[i];
         uint32_t c = 0;
-        if (tsr_patch_to_bezier(&set->patches[i], NULL, 0, NULL, NULL, &c) != TSR_OK) {
+        double plo[3], phi[3];
+        if (tsr_patch_to_bezier(p, NULL, 0, NULL, NULL, &c) != TSR_OK || tsr_patch_bounds(p, plo, phi) != TSR_OK) {
+            tsr_free(a, doms);
+            tsr_free(a, brks);
             tsr_pmodel_destroy(m);
             return tsr_error_set(err, TSR_ERR_ARGUMENT, "patch model: patch %u is invalid", i);
         }
-        uint64_t per = (uint64_t)(set->patches[i].degree_u + 1) * (uint64_t)(set->patches[i].degree_v + 1);
-        npieces += c;
-        nvalues += (uint64_t)c * per * 4;
+        box_add(lo, hi, plo);
+        box_add(lo, hi, phi);
+        tsr_patch_domain(p, doms + 4 * i);
+        for (int axis = 0; axis < 2 && st == TSR_OK; axis++) {
+            brk *br = &brks[2 * i + axis];
+            uint32_t n = tsr_patch_spans(p, axis, NULL, 0) + 1;
+            br->cap = n < 4 ? 4 : n;
+            br->b = tsr_alloc(a, (size_t)br->cap * sizeof *br->b);
+            if (!br->b) {
+                st = TSR_ERR_NOMEM;
+                break;
+            }
+            br->n = n;
+            tsr_patch_spans(p, axis, br->b, n);
+            nbreaks += n;
+        }
     }
-    if (npieces >= (1u << 24)) {
+    /* ... and those of the patches they share a whole edge with */
+    if (st == TSR_OK) {
+        double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
+        double tol = link_tol > 0 ? link_tol : TSR_PMODEL_LINK_TOL * diag;
+        uint64_t budget = 4 * nbreaks + 1024;
+        st = share_breaks(set, doms, brks, tol, budget > (1u << 24) ? 1u << 24 : (uint32_t)budget, a,
+                          &m->conform_breaks);
+    }
+    /* count pieces and values */
+    uint64_t npieces = 0, nvalues = 0;
+    for (uint32_t i = 0; i < np && st == TSR_OK; i++) {
+        uint64_t per = (uint64_t)(set->patches[i].degree_u + 1) * (uint64_t)(set->patches[i].degree_v + 1);
+        uint64_t c = (uint64_t)(brks[2 * i].n - 1) * (brks[2 * i + 1].n - 1);
+        npieces += c;
+        nvalues += c * per * 4;
+    }
+    if (st == TSR_OK && npieces >= (1u << 24)) {
+        for (uint32_t i = 0; i < 2 * np; i++)
+            tsr_free(a, brks[i].b);
+        tsr_free(a, doms);
+        tsr_free(a, brks);
         tsr_pmodel_destroy(m);
         return tsr_error_set(err, TSR_ERR_TOO_LARGE, "patch model: %llu Bézier pieces, more than 2^24",
                              (unsigned long long)npieces);
     }
-    m->npieces = (uint32_t)npieces;
-    m->nsources = set->num_patches;
-    m->pieces = tsr_alloc(a, (size_t)npieces * sizeof *m->pieces);
-    m->sources = tsr_alloc(a, (size_t)m->nsources * sizeof *m->sources);
-    m->values = tsr_alloc(a, (size_t)nvalues * sizeof *m->values);
-    tsr_patch *tmp = tsr_alloc(a, (size_t)npieces * sizeof *tmp);
-    if (!m->pieces || !m->sources || !m->values || !tmp) {
-        tsr_free(a, tmp);
-        tsr_pmodel_destroy(m);
-        return tsr_error_set(err, TSR_ERR_NOMEM, "patch model: out of memory");
+    if (st == TSR_OK) {
+        m->npieces = (uint32_t)npieces;
+        m->nsources = np;
+        m->pieces = tsr_alloc(a, (size_t)npieces * sizeof *m->pieces);
+        m->sources = tsr_alloc(a, (size_t)m->nsources * sizeof *m->sources);
+        m->values = tsr_alloc(a, (size_t)nvalues * sizeof *m->values);
+        if (!m->pieces || !m->sources || !m->values)
+            st = TSR_ERR_NOMEM;
     }
-    memset(m->pieces, 0, (size_t)npieces * sizeof *m->pieces);
+    if (st == TSR_OK)
+        memset(m->pieces, 0, (size_t)npieces * sizeof *m->pieces);
     double *v = m->values;
     uint32_t next = 0;
-    for (uint32_t i = 0; i < set->num_patches; i++) {
+    for (uint32_t i = 0; i < np && st == TSR_OK; i++) {
         const tsr_patch *p = &set->patches[i];
-        uint32_t per = (uint32_t)(p->degree_u + 1) * (uint32_t)(p->degree_v + 1), c = 0;
-        tsr_patch_to_bezier(p, NULL, 0, NULL, NULL, &c);
-        double *ctrl = v, *w = p->weights ? v + 3 * (size_t)per * c : NULL;
-        tsr_patch_to_bezier(p, tmp, c, ctrl, w, &c);
-        v += (size_t)per * c * (p->weights ? 4 : 3);
+        const brk *bu = &brks[2 * i], *bv = &brks[2 * i + 1];
+        uint32_t per = (uint32_t)(p->degree_u + 1) * (uint32_t)(p->degree_v + 1);
         psource *s = &m->sources[i];
         memset(s, 0, sizeof *s);
         s->patch = i;
-        tsr_patch_domain(p, s->domain);
+        memcpy(s->domain, doms + 4 * i, sizeof s->domain);
         s->first_piece = next;
-        s->pu = tsr_patch_spans(p, 0, NULL, 0);
-        s->pv = tsr_patch_spans(p, 1, NULL, 0);
+        s->pu = bu->n - 1;
+        s->pv = bv->n - 1;
         s->trimmed = set->first_loop && set->first_loop[i + 1] > set->first_loop[i];
         m->trimmed += s->trimmed;
-        for (uint32_t k = 0; k < c; k++) {
-            piece *pc = &m->pieces[next + k];
-            pc->source = i;
-            pc->kind = KIND_BEZIER;
-            pc->bez = tmp[k];
-            tsr_patch_domain(&tmp[k], pc->rect);
-            pc->bez.u0 = pc->bez.v0 = 0;
-            pc->bez.u1 = pc->bez.v1 = 1;
-            for (int q = 0; q < 3; q++) {
-                pc->lo[q] = INFINITY;
-                pc->hi[q] = -INFINITY;
+        for (uint32_t b = 0; b < s->pv && st == TSR_OK; b++)
+            for (uint32_t a2 = 0; a2 < s->pu; a2++) {
+                piece *pc = &m->pieces[next + b * s->pu + a2];
+                double *ctrl = v, *w = p->weights ? v + 3 * (size_t)per : NULL;
+                v += (size_t)per * (p->weights ? 4 : 3);
+                if (tsr_patch_bezier_piece(p, bu->b[a2], bu->b[a2 + 1], bv->b[b], bv->b[b + 1], ctrl, w, &pc->bez) !=
+                    TSR_OK) {
+                    st = TSR_ERR_ARGUMENT;
+                    break;
+                }
+                pc->source = i;
+                pc->kind = KIND_BEZIER;
+                tsr_patch_domain(&pc->bez, pc->rect);
+                pc->bez.u0 = pc->bez.v0 = 0;
+                pc->bez.u1 = pc->bez.v1 = 1;
+                for (int q = 0; q < 3; q++) {
+                    pc->lo[q] = INFINITY;
+                    pc->hi[q] = -INFINITY;
+                }
+                for (uint32_t j = 0; j < per; j++)
+                    box_add(pc->lo, pc->hi, pc->bez.ctrl + 3 * j);
+                box_add(m->lo, m->hi, pc->lo);
+                box_add(m->lo, m->hi, pc->hi);
             }
-            for (uint32_t j = 0; j < per; j++)
-                box_add(pc->lo, pc->hi, pc->bez.ctrl + 3 * j);
-            box_add(m->lo, m->hi, pc->lo);
-            box_add(m->lo, m->hi, pc->hi);
-        }
         /* links between the pieces of one patch */
         for (uint32_t b = 0; b < s->pv; b++)
             for (uint32_t a2 = 0; a2 < s->pu; a2++) {
@@ -438,15 +767,20 @@ tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, co
                     add_link(m, k + s->pu, 0, k, 2, false, 0, 2, 0, 2);
                 }
             }
-        next += c;
+        next += s->pu * s->pv;
     }
-    tsr_free(a, tmp);
-    tsr_status st = link_set_edges(m, link_tol);
+    for (uint32_t i = 0; brks && i < 2 * np; i++)
+        tsr_free(a, brks[i].b);
+    tsr_free(a, doms);
+    tsr_free(a, brks);
+    if (st == TSR_OK)
+        st = link_set_edges(m, link_tol);
     if (st == TSR_OK)
         st = orient(m);
     if (st != TSR_OK) {
         tsr_pmodel_destroy(m);
-        return tsr_error_set(err, st, "patch model: out of memory");
+        return st == TSR_ERR_NOMEM ? tsr_error_set(err, st, "patch model: out of memory")
+                                   : tsr_error_set(err, st, "patch model: a patch could not be cut into pieces");
     }
     *out = m;
     return TSR_OK;
@@ -656,6 +990,7 @@ void tsr_pmodel_get_info(const tsr_pmodel *m, tsr_pmodel_info *info)
     info->mirrored = m->mirrored;
     info->trimmed_sources = m->trimmed;
     info->flat_patches = m->flat;
+    info->conform_breaks = m->conform_breaks;
     memcpy(info->lo, m->lo, sizeof info->lo);
     memcpy(info->hi, m->hi, sizeof info->hi);
 }

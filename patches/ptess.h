@@ -22,9 +22,21 @@
  * along an edge where they share it:
  *  - pieces of one B-spline patch, by construction;
  *  - pieces of different patches of a set when their boundary rows of
- *    control points (and weights) coincide, forwards or reversed, within
- *    1e-9 of the model's size (the .bpt teapot: body, lid, handle, spout
- *    rings); partial overlaps are not linked;
+ *    control points coincide, forwards or reversed, within
+ *    TSR_PMODEL_LINK_TOL of the model's box diagonal, and their weights
+ *    up to a common factor, the row of lower degree raised to the other's
+ *    degree first (the .bpt teapot: body, lid, handle, spout rings; a
+ *    plane's straight edge of degree 1 against a bicubic fillet's);
+ *    partial overlaps are not linked. So that pieces meet piece to
+ *    piece, the pieces of a patch are cut not only at its own knots but
+ *    at its neighbours': two patch edges (whole sides of the patches'
+ *    domains) that coincide as curves, with their parameters in
+ *    proportion (within the same distance at the ends and at 7 points
+ *    inside every span between the breakpoints of either side, forwards
+ *    or reversed), give each other their breakpoints, repeated until no
+ *    patch gains one (CAD files join faces whose knot vectors differ:
+ *    one side with knots inserted, or of a higher degree);
+ *    tsr_pmodel_info.conform_breaks counts the breakpoints so added;
  *  - subd patches as tsr_subd_patch_neighbours says (a quad edge meeting
  *    an N-gon links each half to one sub-patch).
  * A piece edge whose control points all coincide (within the same
@@ -118,10 +130,12 @@ typedef struct tsr_pmodel tsr_pmodel;
 /* Builds the model of a patch set (which must outlive the model: trim
  * loops are read from it). TSR_ERR_ARGUMENT for NULL pointers,
  * TSR_ERR_EMPTY for a set without patches, TSR_ERR_TOO_LARGE beyond
- * 2^24 pieces, TSR_ERR_NOMEM. Two patch edges are linked (sampled alike,
+ * 2^24 pieces, TSR_ERR_NOMEM. Two piece edges are linked (sampled alike,
  * their vertices welded) when their boundary control points coincide
- * within TSR_PMODEL_LINK_TOL of the model's box diagonal, and an edge
- * whose control points all lie that close together is collapsed. */
+ * within TSR_PMODEL_LINK_TOL of the model's box diagonal (after the
+ * pieces are cut at the breakpoints of the patches sharing an edge:
+ * Links, above), and an edge whose control points all lie that close
+ * together is collapsed. */
 #define TSR_PMODEL_LINK_TOL 1e-6
 tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err);
 /* The same with another distance for linking and collapsing, in model
@@ -153,6 +167,8 @@ typedef struct tsr_pmodel_info {
     uint32_t mirrored;        /* pieces flipped to agree with their neighbours */
     uint32_t trimmed_sources;
     uint32_t flat_patches; /* subd patches left out: their limit has no area */
+    uint32_t conform_breaks; /* breakpoints added to patches of a set where a neighbour
+                                sharing a whole edge has them (Links, above) */
     double lo[3], hi[3];   /* box of the model */
 } tsr_pmodel_info;
 

@@ -40,8 +40,11 @@ static void help(FILE *f)
             "  --normals             per-vertex normals of the true surface\n"
             "  --no-verify           skip the measurement (and the re-tessellation it may ask for)\n"
             "  --stats FILE.json     patches, pieces, triangles, vertices, measured max_error and\n"
-            "                        rms_error, bound, seconds, the options used, and the mesh's\n"
-            "                        boundary_edges, t_junctions and degenerate_triangles\n"
+            "                        rms_error, bound, seconds, the options used, the mesh's\n"
+            "                        boundary_edges, t_junctions and degenerate_triangles, and\n"
+            "                        linked_edges (piece edges sampled alike with a neighbour's)\n"
+            "                        and shared_breakpoints (knots a patch took from a neighbour\n"
+            "                        sharing an edge, so their pieces meet piece to piece)\n"
             "  --quiet               print nothing on success\n"
             "  -h, --help            this help\n");
 }
@@ -57,6 +60,9 @@ static int write_stats(const char *path, const char *in, const cli_patch_model *
     cJSON_AddStringToObject(j, "kind", pm->is_subd ? "subdivision" : "patches");
     cJSON_AddNumberToObject(j, "patches", info.sources);
     cJSON_AddNumberToObject(j, "pieces", info.pieces);
+    cJSON_AddNumberToObject(j, "linked_edges", info.links);
+    if (!pm->is_subd)
+        cJSON_AddNumberToObject(j, "shared_breakpoints", info.conform_breaks);
     cJSON_AddNumberToObject(j, "triangles", r->mesh.triangle_count);
     cJSON_AddNumberToObject(j, "vertices", r->mesh.vertex_count);
     cJSON_AddNumberToObject(j, "tiles", r->leaves);
@@ -298,8 +304,9 @@ static int run(int argc, char **argv)
         if (tj || zero)
             fprintf(stderr,
                     "tessera patch: %s: warning: %u T-junctions and %u zero-area triangles, where surfaces meet "
-                    "without matching edges (farther apart than --weld, another knot vector along the edge, a "
-                    "trim curve across it, a degenerate trim); tessera check patches locates them\n",
+                    "without matching edges (farther apart than --weld, parameterised differently, sharing "
+                    "part of an edge, a trim curve across it, a degenerate trim); tessera check patches locates "
+                    "them\n",
                     in, tj, zero);
     }
     tsr_ptess_result_free(&r);

@@ -1750,6 +1750,174 @@ TEST(patch_edges_a_gap_apart_weld_within_the_link_distance)
     CHECK_MSG(seam_open_edges(1e-4 * diag, 1e-3 * diag) == 0, "a 1e-4 gap, link distance 1e-3: open seam");
 }
 
+/* ---- edges with other knots or degrees ------------------------------------------------ */
+
+/* Boehm's knot insertion of x into a cubic B-spline curve (n points, knots
+ * n + 4): the same curve with n + 1 points and knots n + 5. */
+static void insert_knot(const double *P, const double *U, int n, double x, double *Q, double *V)
+{
+    int k = 3;
+    while (k + 1 < n && U[k + 1] <= x)
+        k++;
+    for (int i = 0; i <= n; i++) {
+        const double *a = P + 3 * (i < n ? i : n - 1), *b = P + 3 * (i > 0 ? i - 1 : 0);
+        double al = i <= k - 3 ? 1 : i > k ? 0 : (x - U[i]) / (U[i + 3] - U[i]);
+        for (int c = 0; c < 3; c++)
+            Q[3 * i + c] = al * a[c] + (1 - al) * b[c];
+    }
+    for (int i = 0, j = 0; i < n + 5; i++)
+        V[i] = i == k + 1 ? x : U[j++];
+}
+
+static void put_bspline(sbuf *b, int *next, const double *P, int nu, int nv, int du, int dv, const double *ku,
+                        const double *kv)
+{
+    for (int k = 0; k < nu * nv; k++)
+        sb_printf(b, "v %.17g %.17g %.17g\n", P[3 * k], P[3 * k + 1], P[3 * k + 2]);
+    sb_printf(b, "cstype %s\ndeg %d %d\nsurf 0 1 0 1", ku ? "bspline" : "bezier", du, dv);
+    for (int k = 0; k < nu * nv; k++)
+        sb_printf(b, " %d", *next + k);
+    *next += nu * nv;
+    if (ku) {
+        sb_printf(b, "\nparm u");
+        for (int k = 0; k < nu + du + 1; k++)
+            sb_printf(b, " %.17g", ku[k]);
+        sb_printf(b, "\nparm v");
+        for (int k = 0; k < nv + dv + 1; k++)
+            sb_printf(b, " %.17g", kv[k]);
+    }
+    sb_printf(b, "\nend\n");
+}
+
+/* Four patches around A, a bicubic B-spline with a knot at u = 0.3: B to
+ * its north with a knot inserted at 0.75 on their common edge, D to its
+ * south running the other way (mirrored) with a knot at 0.45 of its own
+ * parameter (0.55 of A's), C to its east of degree 1 x 4 whose west
+ * column is A's east column raised to degree 4. bump moves the middle
+ * point of B's south row up. */
+static void knot_scene(sbuf *b, double bump)
+{
+    static const double ku[9] = {0, 0, 0, 0, 0.3, 1, 1, 1, 1}, kv[8] = {0, 0, 0, 0, 1, 1, 1, 1};
+    double A[5 * 4 * 3];
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 5; i++) {
+            double g = (ku[i + 1] + ku[i + 2] + ku[i + 3]) / 3, x = 4 * g, y = j;
+            double *p = A + 3 * (j * 5 + i);
+            p[0] = x;
+            p[1] = y;
+            p[2] = 0.4 * sin(1.1 * x + 0.7 * y);
+        }
+    int next = 1;
+    put_bspline(b, &next, A, 5, 4, 3, 3, ku, kv);
+    /* B: its south row is A's north row with 0.75 inserted */
+    double B[6 * 4 * 3], kuB[10];
+    insert_knot(A + 3 * 15, ku, 5, 0.75, B, kuB);
+    B[3 * 2 + 2] += bump;
+    for (int j = 1; j < 4; j++)
+        for (int i = 0; i < 6; i++) {
+            double *p = B + 3 * (j * 6 + i);
+            p[0] = B[3 * i];
+            p[1] = B[3 * i + 1] + j;
+            p[2] = B[3 * i + 2] + 0.2 * j * sin(1.0 + i);
+        }
+    put_bspline(b, &next, B, 6, 4, 3, 3, kuB, kv);
+    /* C: A's east column (a cubic Bezier in v) raised to degree 4 */
+    double C[2 * 5 * 3];
+    for (int j = 0; j <= 4; j++) {
+        const double *lo = A + 3 * ((j > 0 ? j - 1 : 0) * 5 + 4), *hi = A + 3 * ((j < 4 ? j : 3) * 5 + 4);
+        double al = j / 4.0;
+        for (int c = 0; c < 3; c++)
+            C[3 * (2 * j) + c] = al * lo[c] + (1 - al) * hi[c];
+        C[3 * (2 * j + 1)] = C[3 * (2 * j)] + 1.5;
+        C[3 * (2 * j + 1) + 1] = C[3 * (2 * j) + 1];
+        C[3 * (2 * j + 1) + 2] = C[3 * (2 * j) + 2] + 0.2;
+    }
+    put_bspline(b, &next, C, 2, 5, 1, 4, NULL, NULL);
+    /* D: A's south row backwards (knots 1 - k) with 0.45 inserted, as its
+     * north row; its rows below run south */
+    double rev[5 * 3], kr[9], D[6 * 4 * 3], kuD[10];
+    for (int i = 0; i < 5; i++)
+        memcpy(rev + 3 * i, A + 3 * (4 - i), 3 * sizeof *rev);
+    for (int k = 0; k < 9; k++)
+        kr[k] = 1 - ku[8 - k];
+    insert_knot(rev, kr, 5, 0.45, D + 3 * 18, kuD);
+    for (int j = 0; j < 3; j++)
+        for (int i = 0; i < 6; i++) {
+            double *p = D + 3 * (j * 6 + i);
+            const double *q = D + 3 * (18 + i);
+            p[0] = q[0];
+            p[1] = q[1] - (3 - j);
+            p[2] = q[2] + 0.15 * (3 - j) * cos(0.5 + i);
+        }
+    put_bspline(b, &next, D, 6, 4, 3, 3, kuD, kv);
+}
+
+TEST(edges_of_other_knots_and_degrees_link)
+{
+    for (int variant = 0; variant < 2; variant++) {
+        sbuf b = {0};
+        knot_scene(&b, variant ? 0.01 : 0);
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        if (!parse_set(&b, "knots.obj", &set)) {
+            free(b.s);
+            continue;
+        }
+        if (make_model(&set, &m)) {
+            tsr_pmodel_info info;
+            tsr_pmodel_get_info(m, &info);
+            /* A takes 0.55 (from D) and 0.75 (from B), B 0.55, D 0.25:
+             * 4 + 4 + 1 + 4 pieces; links: 3 inside each of A, B, D and
+             * 4 + 4 + 1 across, each side counted. With B's row bumped it
+             * shares nothing: A takes only 0.55 (3 + 3 + 1 + 3 pieces, 4 + 4 +
+             * 4 links inside, 3 + 1 across). */
+            uint32_t want_breaks = variant ? 1 : 4, want_pieces = variant ? 10 : 13, want_links = variant ? 20 : 36;
+            CHECK_MSG(info.sources == 4 && info.pieces == want_pieces && info.conform_breaks == want_breaks,
+                      "variant %d: sources %u pieces %u breaks %u", variant, info.sources, info.pieces,
+                      info.conform_breaks);
+            CHECK_MSG(info.links == want_links, "variant %d: %u links, want %u", variant, info.links, want_links);
+            tsr_psource_info si;
+            CHECK(tsr_pmodel_source_info(m, 3, &si) && si.pieces_u == (variant ? 3u : 4u) && si.mirrored);
+            CHECK_MSG(info.mirrored == si.pieces_u, "%u mirrored", info.mirrored);
+            for (double E = 1e-2; E >= 0.99e-3; E /= 10) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                tsr_ptess_result r;
+                if (!run_ptess(m, &o, &r))
+                    continue;
+                tsr_validation v = validate(&r.mesh);
+                char what[64];
+                snprintf(what, sizeof what, "variant %d E %g", variant, E);
+                CHECK_MSG(v.misoriented_edges == 0 && v.nonmanifold_edges == 0 && v.degenerate_triangles == 0,
+                          "%s: misoriented %u non-manifold %u degenerate %u", what, v.misoriented_edges,
+                          v.nonmanifold_edges, v.degenerate_triangles);
+                if (variant == 0) {
+                    /* one disc: every seam closed */
+                    check_conforming(what, &v);
+                    CHECK_MSG(v.boundary_loops == 1 && v.euler == 1 && v.coincident_vertices == 0,
+                              "%s: loops %u euler %lld coincident %u", what, v.boundary_loops, (long long)v.euler,
+                              v.coincident_vertices);
+                } else {
+                    /* B apart, its seam with A open */
+                    CHECK_MSG(v.boundary_loops == 2, "%s: %u boundary loops, want 2", what, v.boundary_loops);
+                }
+                tsr_ptess_measure_result mr;
+                memset(&mr, 0, sizeof mr);
+                CHECK(tsr_ptess_measure(m, &r, 9, NULL, false, NULL, &mr) == TSR_OK);
+                double sl = fslack(mesh_maxabs(&r.mesh));
+                CHECK_MSG(mr.max_error <= E + sl && mr.uncovered == 0, "%s: measured %g, %llu uncovered", what,
+                          mr.max_error, (unsigned long long)mr.uncovered);
+                if (v.boundary_loops != (variant ? 2u : 1u))
+                    describe(what, &v);
+                tsr_ptess_result_free(&r);
+            }
+        }
+        tsr_pmodel_destroy(m);
+        tsr_patch_set_free(&set);
+        free(b.s);
+    }
+}
+
 /* The long quarter cylinder (rational, along x from 0 to VL) and a camera
  * looking along it from near its start: parsed into *set; false (after a
  * failed CHECK) when it does not parse. */
@@ -2844,6 +3012,7 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
           T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
+          T(edges_of_other_knots_and_degrees_link),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
           T(data_osd_corner_estimate),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
