@@ -357,6 +357,7 @@ typedef struct builder {
     vec loops;    /* tsr_trim_loop */
     vec segments; /* tsr_trim_segment */
     uint32_t skipped, first_skipped;
+    uint32_t polygons, first_polygon;
 } builder;
 
 static void builder_free(builder *b)
@@ -450,6 +451,7 @@ static tsr_status finish_set(builder *b, const lexer *L, tsr_patch_set *out)
     out->num_segments = (uint32_t)b->segments.n, out->segments = b->segments.data;
     out->num_curves = nc, out->curves = curves;
     out->num_skipped = b->skipped, out->first_skipped_line = b->first_skipped;
+    out->num_polygons = b->polygons, out->first_polygon_line = b->first_polygon;
     out->values = b->values.data, out->num_values = b->values.n;
     out->alloc = a ? *a : (tsr_allocator){NULL, NULL};
     b->loops.data = b->segments.data = b->values.data = NULL;
@@ -1003,6 +1005,8 @@ static tsr_status obj_statement(lexer *L, obj_state *o)
         /* scrv, sp, con, bmat, step, polygons, groups, display attributes,
          * anything else: read past */
         skipped(b, L->stmt_line);
+        if ((tok_is(&kw, "f") || tok_is(&kw, "fo") || tok_is(&kw, "l") || tok_is(&kw, "p")) && b->polygons++ == 0)
+            b->first_polygon = L->stmt_line;
         skip_statement(L);
     }
     return TSR_OK;

@@ -295,6 +295,11 @@ typedef struct tsr_patch_set {
      * `con`, polygons, unknown keywords), and the line of the first. */
     uint32_t num_skipped;
     uint32_t first_skipped_line;
+    /* Of those, the polygon, line and point statements (OBJ f, fo, l, p):
+     * geometry a file with free-form surfaces also holds and the set leaves
+     * out, and the line of the first. */
+    uint32_t num_polygons;
+    uint32_t first_polygon_line;
     double *values; /* storage of every control point, weight and knot */
     size_t num_values;
     tsr_allocator alloc;

@@ -192,6 +192,17 @@ static int run(int argc, char **argv)
     cli_patch_model pm;
     if (!cli_patch_model_load_weld("patch", in, scheme, weld, &pm))
         return CLI_FAIL;
+    if (!quiet && !pm.is_subd && pm.set.num_polygons)
+        fprintf(stderr,
+                "tessera patch: %s: note: %u polygon, line and point statements (f, l, p) beside the free-form "
+                "surfaces are not tessellated, the first at line %u (a file without surfaces is read as a "
+                "subdivision cage)\n",
+                in, pm.set.num_polygons, pm.set.first_polygon_line);
+    if (!quiet && pm.is_subd && pm.cage.num_skipped_tags)
+        fprintf(stderr,
+                "tessera patch: %s: note: %u tags OpenSubdiv does not use (hierarchical edits, unknown names) "
+                "ignored, the first at line %u\n",
+                in, pm.cage.num_skipped_tags, pm.cage.first_skipped_tag_line);
     if (!(pm.diag > 0)) {
         cli_error("patch", "%s: the model has no extent: every control point lies at one place", in);
         cli_patch_model_free(&pm);

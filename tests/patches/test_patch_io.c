@@ -194,7 +194,9 @@ static const char freeform_obj[] = "# written by test_patch_io\n"
                                    "parm v 0 0 1 1\n"
                                    "trim 0 4 1\n"
                                    "hole 0 4 -1\n"
-                                   "end\n";
+                                   "end\n"
+                                   "f 1 2 3\n"
+                                   "l 4 5\n";
 
 TEST(obj_freeform_trimmed)
 {
@@ -213,7 +215,8 @@ TEST(obj_freeform_trimmed)
     if (e.status != TSR_OK)
         return;
     CHECK(s.num_patches == 1 && s.num_curves == 2 && s.num_loops == 2 && s.num_segments == 2);
-    CHECK(s.num_skipped == 1 && s.first_skipped_line == 32); /* g */
+    CHECK(s.num_skipped == 3 && s.first_skipped_line == 32); /* g, f, l */
+    CHECK(s.num_polygons == 2 && s.first_polygon_line == 41);
     const tsr_patch *p = &s.patches[0];
     CHECK(p->kind == TSR_PATCH_NURBS && p->degree_u == 2 && p->degree_v == 1);
     CHECK(p->count_u == 3 && p->count_v == 2 && p->weights && p->knots_u && p->knots_v);

@@ -123,6 +123,16 @@ patch_bound_floor)
   grep -q "note: the default bound .* is below what the float32 mesh holds" "$cap/stderr" || fail "no note: $(cat "$cap/stderr")"
   rm "$dir/far.ply"
   echo "ok [$case]: default raised" ;;
+patch_skipped_statements)
+  # polygons beside free-form surfaces are not tessellated: said, not silent
+  printf 'g part\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 0 0\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nend\nf 2 5 4\nf 1 2 3\n' > "$dir/mixed.obj"
+  "$tessera" patch "$dir/mixed.obj" -o "$dir/mixed.ply" 2> "$cap/stderr" || fail "mixed: $(cat "$cap/stderr")"
+  grep -q "mixed\.obj: note: 2 polygon, line and point statements (f, l, p) beside the free-form surfaces are not tessellated, the first at line 11" "$cap/stderr" ||
+    fail "no note: $(cat "$cap/stderr")"
+  "$tessera" patch "$dir/mixed.obj" -o "$dir/mixed.ply" --quiet 2> "$cap/stderr" || fail "quiet failed"
+  [ ! -s "$cap/stderr" ] || fail "--quiet printed: $(cat "$cap/stderr")"
+  rm "$dir/mixed.ply"
+  echo "ok [$case]: polygons noted" ;;
 raw_wrong_size)
   expect_error 1 "nan\.f32: raw f32 5x4 needs 80 bytes but the file has 64" -- "$tessera" info "$dir/nan.f32" --raw 5 4 f32 ;;
 bad_options)
