@@ -20,9 +20,13 @@
  * up to 100000 curve points in all, at a tolerance of 1/100 of their
  * curves' extent); a cage
  * has faces of 3 or more vertices whose sizes add up, indices in range,
- * finite non-negative sharpness and its enums in range. */
+ * finite non-negative sharpness and its enums in range. A patch set also
+ * builds its tessellation model (pieces cut at shared breakpoints, edges
+ * linked): success with a piece per patch at least, or a failure with its
+ * message. */
 #include "fuzz.h"
 #include "patches/patches.h"
+#include "patches/ptess.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -220,6 +224,19 @@ int fuzz_patch_io(const uint8_t *data, size_t size)
                         : tsr_patch_set_parse(body, n, shown_name, f, &alloc, &set, &err);
     if (s == TSR_OK) {
         check_set(&set);
+        tsr_pmodel *m = NULL;
+        tsr_error merr = {0};
+        tsr_status ms = tsr_pmodel_from_set(&set, &alloc, &m, &merr);
+        if (ms == TSR_OK) {
+            tsr_pmodel_info info;
+            tsr_pmodel_get_info(m, &info);
+            if (info.sources != set.num_patches || info.pieces < info.sources)
+                fuzz_fail("patch_io: model of %u patches has %u sources, %u pieces", set.num_patches, info.sources,
+                          info.pieces);
+        } else if (ms >= TSR_STATUS_COUNT || merr.status != ms || !merr.message[0] || m) {
+            fuzz_fail("patch_io: model failure %d without its message", (int)ms);
+        }
+        tsr_pmodel_destroy(m);
     } else {
         check_failure(s, &err, shown_name, reader == 0 ? "bpt" : "obj");
         if (set.num_patches || set.patches || set.values)
