@@ -90,6 +90,7 @@ struct tsr_pmodel {
     uint32_t links, collapsed, mirrored, trimmed;
     uint32_t flat;           /* subd patches without area, left out */
     uint32_t conform_breaks; /* breakpoints a patch took from a neighbour */
+    uint32_t split_breaks;   /* breakpoints cut across curved directions */
 };
 
 static const tsr_allocator *ma(const tsr_pmodel *m) { return m->alloc.realloc ? &m->alloc : NULL; }
@@ -620,6 +621,164 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, brk
     return st;
 }
 
+static void bezier_second(int du, int dv, const double *P, const double *W, double M[3]);
+
+/* Quads a piece of second-derivative bounds M needs at max_error E, cut
+ * into k along `axis` (tsr_pmodel_set_options.split_error). */
+static double split_cost(const double M[3], double E, double N, int axis, double k)
+{
+    double m = axis == 0 ? M[0] / (k * k) + 2 * M[1] / k + M[2] : M[0] + 2 * M[1] / k + M[2] / (k * k);
+    double n2 = m / (8 * E);
+    return k * (n2 > N * N ? n2 : N * N);
+}
+
+/* Cuts the knot spans of patch p (breakpoints bu, bv) across their curved
+ * direction where that saves half the quads at max_error E. */
+static tsr_status split_patch(const tsr_patch *p, const double dom[4], brk *bu, brk *bv, double E, double N,
+                              const tsr_allocator *a, uint32_t *added)
+{
+    uint32_t nu = bu->n - 1, nv = bv->n - 1;
+    uint32_t *ku = tsr_alloc(a, (size_t)(nu + nv) * sizeof *ku), *kv = ku ? ku + nu : NULL;
+    if (!ku)
+        return TSR_ERR_NOMEM;
+    for (uint32_t i = 0; i < nu + nv; i++)
+        ku[i] = 1;
+    double ctrl[3 * TSR_BEZIER_MAX_POINTS], w[TSR_BEZIER_MAX_POINTS];
+    for (uint32_t b = 0; b < nv; b++)
+        for (uint32_t a2 = 0; a2 < nu; a2++) {
+            tsr_patch piece;
+            if (tsr_patch_bezier_piece(p, bu->b[a2], bu->b[a2 + 1], bv->b[b], bv->b[b + 1], ctrl, w, &piece) != TSR_OK)
+                continue;
+            double M[3];
+            bezier_second(piece.degree_u, piece.degree_v, ctrl, p->weights ? w : NULL, M);
+            if (!(isfinite(M[0]) && isfinite(M[1]) && isfinite(M[2])))
+                continue;
+            double base = split_cost(M, E, N, 0, 1), best = base;
+            uint32_t bk = 1;
+            int baxis = 0;
+            for (int axis = 0; axis < 2; axis++)
+                for (uint32_t k = 2; k <= 64; k++) {
+                    double c = split_cost(M, E, N, axis, k);
+                    if (c < best) {
+                        best = c;
+                        bk = k;
+                        baxis = axis;
+                    }
+                }
+            if (bk > 1 && 2 * best <= base) {
+                uint32_t *kk = baxis == 0 ? &ku[a2] : &kv[b];
+                *kk = bk > *kk ? bk : *kk;
+            }
+        }
+    tsr_status st = TSR_OK;
+    for (int axis = 0; axis < 2 && st == TSR_OK; axis++) {
+        brk *br = axis == 0 ? bu : bv;
+        uint32_t n = axis == 0 ? nu : nv;
+        const uint32_t *k = axis == 0 ? ku : kv;
+        double lo = dom[2 * axis], hi = dom[2 * axis + 1];
+        /* the cuts of every span first (inserting moves the spans) */
+        uint32_t total = 0;
+        for (uint32_t i = 0; i < n; i++)
+            total += k[i] - 1;
+        if (!total)
+            continue;
+        double *cuts = tsr_alloc(a, (size_t)total * sizeof *cuts);
+        if (!cuts) {
+            st = TSR_ERR_NOMEM;
+            break;
+        }
+        uint32_t c = 0;
+        for (uint32_t i = 0; i < n; i++)
+            for (uint32_t m = 1; m < k[i]; m++)
+                cuts[c++] = br->b[i] + (br->b[i + 1] - br->b[i]) * m / k[i];
+        for (uint32_t i = 0; i < c && st == TSR_OK; i++) {
+            int r = brk_insert(br, dom, axis, (cuts[i] - lo) / (hi - lo), a);
+            if (r < 0)
+                st = TSR_ERR_NOMEM;
+            else
+                *added += (uint32_t)r;
+        }
+        tsr_free(a, cuts);
+    }
+    tsr_free(a, ku);
+    return st;
+}
+
+static void free_breaks(brk *brks, uint32_t np, const tsr_allocator *a)
+{
+    for (uint32_t i = 0; brks && i < 2 * np; i++)
+        tsr_free(a, brks[i].b);
+    tsr_free(a, brks);
+}
+
+/* The breakpoints of every patch (2 per patch, u then v): its knots, cuts
+ * for split_error (when > 0; *split counts them), and those shared
+ * through whole edges (*shared). */
+static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, double tol, double split_error,
+                              double N, const tsr_allocator *a, brk **out, uint32_t *split, uint32_t *shared)
+{
+    uint32_t np = set->num_patches, nsplit = 0;
+    brk *brks = tsr_alloc(a, (size_t)np * 2 * sizeof *brks);
+    if (!brks)
+        return TSR_ERR_NOMEM;
+    memset(brks, 0, (size_t)np * 2 * sizeof *brks);
+    tsr_status st = TSR_OK;
+    uint64_t nbreaks = 0;
+    for (uint32_t i = 0; i < np && st == TSR_OK; i++) {
+        const tsr_patch *p = &set->patches[i];
+        for (int axis = 0; axis < 2 && st == TSR_OK; axis++) {
+            brk *br = &brks[2 * i + axis];
+            uint32_t n = tsr_patch_spans(p, axis, NULL, 0) + 1;
+            br->cap = n < 4 ? 4 : n;
+            br->b = tsr_alloc(a, (size_t)br->cap * sizeof *br->b);
+            if (!br->b) {
+                st = TSR_ERR_NOMEM;
+                break;
+            }
+            br->n = n;
+            tsr_patch_spans(p, axis, br->b, n);
+        }
+        bool trimmed = set->first_loop && set->first_loop[i + 1] > set->first_loop[i];
+        if (st == TSR_OK && split_error > 0 && !trimmed)
+            st = split_patch(p, doms + 4 * i, &brks[2 * i], &brks[2 * i + 1], split_error, N, a, &nsplit);
+        nbreaks += brks[2 * i].n + brks[2 * i + 1].n;
+    }
+    uint64_t budget = 4 * nbreaks + 1024;
+    if (st == TSR_OK)
+        st = share_breaks(set, doms, brks, tol, budget > (1u << 24) ? 1u << 24 : (uint32_t)budget, a, shared);
+    if (st != TSR_OK) {
+        free_breaks(brks, np, a);
+        return st;
+    }
+    if (split)
+        *split = nsplit;
+    *out = brks;
+    return TSR_OK;
+}
+
+/* The quads the pieces of a breakpoint layout need at max_error E by
+ * split_cost's estimate. */
+static double breaks_cost(const tsr_patch_set *set, const brk *brks, double E, double N)
+{
+    double total = 0, ctrl[3 * TSR_BEZIER_MAX_POINTS], w[TSR_BEZIER_MAX_POINTS];
+    for (uint32_t i = 0; i < set->num_patches; i++) {
+        const tsr_patch *p = &set->patches[i];
+        const brk *bu = &brks[2 * i], *bv = &brks[2 * i + 1];
+        for (uint32_t b = 0; b + 1 < bv->n; b++)
+            for (uint32_t a2 = 0; a2 + 1 < bu->n; a2++) {
+                tsr_patch piece;
+                double M[3];
+                if (tsr_patch_bezier_piece(p, bu->b[a2], bu->b[a2 + 1], bv->b[b], bv->b[b + 1], ctrl, w, &piece) !=
+                    TSR_OK)
+                    continue;
+                bezier_second(piece.degree_u, piece.degree_v, ctrl, p->weights ? w : NULL, M);
+                double c = split_cost(M, E, N, 0, 1);
+                total += isfinite(c) ? c : 0;
+            }
+    }
+    return total;
+}
+
 tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err)
 {
     return tsr_pmodel_from_set_tol(set, 0, alloc, out, err);
@@ -628,8 +787,19 @@ tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *al
 tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, const tsr_allocator *alloc,
                                    tsr_pmodel **out, tsr_error *err)
 {
+    tsr_pmodel_set_options o = {link_tol, 0, 0};
+    return tsr_pmodel_from_set_opts(set, &o, alloc, out, err);
+}
+
+tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_set_options *opt,
+                                    const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err)
+{
+    double link_tol = opt ? opt->link_tol : 0, split_error = opt ? opt->split_error : 0;
+    double split_tile = opt && opt->split_tile ? opt->split_tile : 4;
     if (!(link_tol > 0) || !isfinite(link_tol))
         link_tol = 0;
+    if (!(split_error > 0) || !isfinite(split_error))
+        split_error = 0;
     if (!out)
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "patch model: no output");
     *out = NULL;
@@ -644,48 +814,52 @@ tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, co
     const tsr_allocator *a = ma(m);
     uint32_t np = set->num_patches;
     double *doms = tsr_alloc(a, (size_t)np * 4 * sizeof *doms);
-    brk *brks = tsr_alloc(a, (size_t)np * 2 * sizeof *brks);
-    if (brks)
-        memset(brks, 0, (size_t)np * 2 * sizeof *brks);
-    tsr_status st = doms && brks ? TSR_OK : TSR_ERR_NOMEM;
-    /* each patch's own breakpoints, and the box of all control points */
+    brk *brks = NULL;
+    tsr_status st = doms ? TSR_OK : TSR_ERR_NOMEM;
+    /* the patches' domains and the box of all control points */
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    uint64_t nbreaks = 0;
     for (uint32_t i = 0; i < np && st == TSR_OK; i++) {
         const tsr_patch *p = &set->patches[i];
         uint32_t c = 0;
         double plo[3], phi[3];
         if (tsr_patch_to_bezier(p, NULL, 0, NULL, NULL, &c) != TSR_OK || tsr_patch_bounds(p, plo, phi) != TSR_OK) {
             tsr_free(a, doms);
-            tsr_free(a, brks);
             tsr_pmodel_destroy(m);
             return tsr_error_set(err, TSR_ERR_ARGUMENT, "patch model: patch %u is invalid", i);
         }
         box_add(lo, hi, plo);
         box_add(lo, hi, phi);
         tsr_patch_domain(p, doms + 4 * i);
-        for (int axis = 0; axis < 2 && st == TSR_OK; axis++) {
-            brk *br = &brks[2 * i + axis];
-            uint32_t n = tsr_patch_spans(p, axis, NULL, 0) + 1;
-            br->cap = n < 4 ? 4 : n;
-            br->b = tsr_alloc(a, (size_t)br->cap * sizeof *br->b);
-            if (!br->b) {
-                st = TSR_ERR_NOMEM;
-                break;
-            }
-            br->n = n;
-            tsr_patch_spans(p, axis, br->b, n);
-            nbreaks += n;
-        }
     }
-    /* ... and those of the patches they share a whole edge with */
+    /* the breakpoints: knots, those of neighbours sharing an edge, and, for
+     * split_error, cuts across curves where the whole model's estimate
+     * says they save quads (a neighbour curved the other way that takes
+     * the cuts may cost more than they save) */
     if (st == TSR_OK) {
         double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                            (hi[2] - lo[2]) * (hi[2] - lo[2]));
         double tol = link_tol > 0 ? link_tol : TSR_PMODEL_LINK_TOL * diag;
-        uint64_t budget = 4 * nbreaks + 1024;
-        st = share_breaks(set, doms, brks, tol, budget > (1u << 24) ? 1u << 24 : (uint32_t)budget, a,
-                          &m->conform_breaks);
+        st = make_breaks(set, doms, tol, 0, split_tile, a, &brks, NULL, &m->conform_breaks);
+        if (st == TSR_OK && split_error > 0) {
+            brk *cut = NULL;
+            uint32_t split = 0, shared = 0;
+            st = make_breaks(set, doms, tol, split_error, split_tile, a, &cut, &split, &shared);
+            /* trimmed patches are triangulated in (u, v) from their pieces'
+             * lattice points; cuts make those far from evenly spread */
+            bool trims_cut = false;
+            for (uint32_t i = 0; st == TSR_OK && split && i < np && !trims_cut; i++)
+                trims_cut = set->first_loop && set->first_loop[i + 1] > set->first_loop[i] &&
+                            (cut[2 * i].n != brks[2 * i].n || cut[2 * i + 1].n != brks[2 * i + 1].n);
+            if (st == TSR_OK && split && !trims_cut &&
+                breaks_cost(set, cut, split_error, split_tile) < 0.9 * breaks_cost(set, brks, split_error, split_tile)) {
+                free_breaks(brks, np, a);
+                brks = cut;
+                m->split_breaks = split;
+                m->conform_breaks = shared;
+            } else {
+                free_breaks(cut, np, a);
+            }
+        }
     }
     /* count pieces and values */
     uint64_t npieces = 0, nvalues = 0;
@@ -696,10 +870,8 @@ tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, co
         nvalues += c * per * 4;
     }
     if (st == TSR_OK && npieces >= (1u << 24)) {
-        for (uint32_t i = 0; i < 2 * np; i++)
-            tsr_free(a, brks[i].b);
+        free_breaks(brks, np, a);
         tsr_free(a, doms);
-        tsr_free(a, brks);
         tsr_pmodel_destroy(m);
         return tsr_error_set(err, TSR_ERR_TOO_LARGE, "patch model: %llu Bézier pieces, more than 2^24",
                              (unsigned long long)npieces);
@@ -769,10 +941,8 @@ tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, co
             }
         next += s->pu * s->pv;
     }
-    for (uint32_t i = 0; brks && i < 2 * np; i++)
-        tsr_free(a, brks[i].b);
+    free_breaks(brks, np, a);
     tsr_free(a, doms);
-    tsr_free(a, brks);
     if (st == TSR_OK)
         st = link_set_edges(m, link_tol);
     if (st == TSR_OK)
@@ -991,6 +1161,7 @@ void tsr_pmodel_get_info(const tsr_pmodel *m, tsr_pmodel_info *info)
     info->trimmed_sources = m->trimmed;
     info->flat_patches = m->flat;
     info->conform_breaks = m->conform_breaks;
+    info->split_breaks = m->split_breaks;
     memcpy(info->lo, m->lo, sizeof info->lo);
     memcpy(info->hi, m->hi, sizeof info->hi);
 }
@@ -1092,7 +1263,9 @@ static inline double sq_second(const double *a, const double *b, const double *c
     return x * x + y * y + z * z;
 }
 
-static void bezier_delta(int du, int dv, const double *P, const double *W, double N, double out[3])
+/* Bounds M = {M_ss, M_st, M_tt} of the lengths of the second derivatives
+ * of a Bézier net over [0,1]^2 (above). */
+static void bezier_second(int du, int dv, const double *P, const double *W, double M[3])
 {
     int nu = du + 1, nv = dv + 1;
     if (!W) { /* polynomial: the second differences of the net itself */
@@ -1114,11 +1287,10 @@ static void bezier_delta(int du, int dv, const double *P, const double *W, doubl
                 const double *p0 = P + 3 * (j * nu + i), *p1 = p0 + 3 * nu;
                 qst = dmax(qst, sq_second(p1 + 3, p1, p0 + 3, p0));
             }
-        double h2 = 1.0 / (N * N);
         double fuu = du * (du - 1.0), fvv = dv * (dv - 1.0), fuv = (double)du * dv;
-        shape_bounds(h2 * (fuu * sqrt(qss)), h2 * (fuv * sqrt(qst)), h2 * (fvv * sqrt(qtt)), out);
-        for (int k = 0; k < 3; k++)
-            out[k] = out[k] * (1 + 1e-12) + 1e-300;
+        M[0] = fuu * sqrt(qss);
+        M[1] = fuv * sqrt(qst);
+        M[2] = fvv * sqrt(qtt);
         return;
     }
     double c[3], lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -1190,8 +1362,17 @@ static void bezier_delta(int du, int dv, const double *P, const double *W, doubl
         Mtt = (fvv * qtt + 2 * fv * wt * Bt + fvv * wtt * A) / wmin;
         Mst = (fuv * qst + fuv * wst * A + fu * ws * Bt + fv * wt * Bs) / wmin;
     }
+    M[0] = Mss;
+    M[1] = Mst;
+    M[2] = Mtt;
+}
+
+static void bezier_delta(int du, int dv, const double *P, const double *W, double N, double out[3])
+{
+    double M[3];
+    bezier_second(du, dv, P, W, M);
     double h2 = 1.0 / (N * N);
-    shape_bounds(h2 * Mss, h2 * Mst, h2 * Mtt, out);
+    shape_bounds(h2 * M[0], h2 * M[1], h2 * M[2], out);
     for (int k = 0; k < 3; k++)
         out[k] = out[k] * (1 + 1e-12) + 1e-300;
 }

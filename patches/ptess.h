@@ -146,6 +146,37 @@ tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *al
 tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, const tsr_allocator *alloc,
                                    tsr_pmodel **out, tsr_error *err);
 
+/* Options of tsr_pmodel_from_set_opts (zeroed: tsr_pmodel_from_set).
+ *  - link_tol: as tsr_pmodel_from_set_tol (<= 0: the default).
+ *  - split_error: > 0, the max_error the model will be tessellated at
+ *    (model units). Every piece's quadtree samples it alike along s and
+ *    t, so a piece curved one way and straight the other (an extrusion,
+ *    a cylinder, a fillet) gets as many samples along its straight
+ *    direction as along its curved one. With split_error, a knot span is
+ *    cut into k equal pieces across the curved direction where that
+ *    needs fewer triangles by the estimate below (by half at least):
+ *    with M = {M_ss, M_st, M_tt}, the second-derivative bounds of the
+ *    pieces of the span (Tessellation, below), a piece cut into k along
+ *    s needs about n = max(tile, sqrt((M_ss/k^2 + 2 M_st/k + M_tt) / (8
+ *    split_error))) samples a side, k * n^2 quads in all (likewise along
+ *    t); k <= 64. The cuts are breakpoints like knots, shared with the
+ *    neighbours (Links, above), so the mesh stays conforming; coarser
+ *    bounds than split_error leave more triangles than needed, finer
+ *    ones as many as without. The cuts are kept only where the whole
+ *    model's estimate (the pieces' quads, uncut) falls by a tenth at
+ *    least (a neighbour curved the other way takes the cuts as well and
+ *    may cost more than they save), and trimmed patches are neither cut
+ *    nor given cuts (their (u, v) triangulation wants their lattice
+ *    points evenly spread). NaN or <= 0: no cuts.
+ *  - split_tile: the tile size the runs will use (0: 4). */
+typedef struct tsr_pmodel_set_options {
+    double link_tol;
+    double split_error;
+    uint32_t split_tile;
+} tsr_pmodel_set_options;
+tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_set_options *opt,
+                                    const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err);
+
 /* Builds the model of a subdivision surface (which must outlive the
  * model): one source per patch (face, sub) of every face with a limit
  * surface, numbered face by face, except the patches whose limit has no
@@ -169,6 +200,7 @@ typedef struct tsr_pmodel_info {
     uint32_t flat_patches; /* subd patches left out: their limit has no area */
     uint32_t conform_breaks; /* breakpoints added to patches of a set where a neighbour
                                 sharing a whole edge has them (Links, above) */
+    uint32_t split_breaks;   /* breakpoints added across curved directions (split_error) */
     double lo[3], hi[3];   /* box of the model */
 } tsr_pmodel_info;
 

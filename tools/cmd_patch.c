@@ -61,8 +61,10 @@ static int write_stats(const char *path, const char *in, const cli_patch_model *
     cJSON_AddNumberToObject(j, "patches", info.sources);
     cJSON_AddNumberToObject(j, "pieces", info.pieces);
     cJSON_AddNumberToObject(j, "linked_edges", info.links);
-    if (!pm->is_subd)
+    if (!pm->is_subd) {
         cJSON_AddNumberToObject(j, "shared_breakpoints", info.conform_breaks);
+        cJSON_AddNumberToObject(j, "split_breakpoints", info.split_breaks);
+    }
     cJSON_AddNumberToObject(j, "triangles", r->mesh.triangle_count);
     cJSON_AddNumberToObject(j, "vertices", r->mesh.vertex_count);
     cJSON_AddNumberToObject(j, "tiles", r->leaves);
@@ -252,6 +254,11 @@ static int run(int argc, char **argv)
                         "holds this far from the origin (coordinates up to %g); using %.3g\n",
                         in, opt.max_error, maxabs, floor_err);
             opt.max_error = floor_err;
+        }
+        /* cut pieces curved one way only across their curve, for this bound */
+        if (!cli_patch_model_split("patch", in, &pm, weld, opt.max_error, tile)) {
+            cli_patch_model_free(&pm);
+            return CLI_FAIL;
         }
     }
     tsr_ptess_result r;

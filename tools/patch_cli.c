@@ -67,6 +67,24 @@ bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *sc
     return true;
 }
 
+bool cli_patch_model_split(const char *cmd, const char *path, cli_patch_model *pm, double weld, double max_error,
+                           uint32_t tile)
+{
+    if (pm->is_subd)
+        return true;
+    tsr_pmodel_set_options o = {weld, max_error, tile};
+    tsr_pmodel *m = NULL;
+    tsr_error err = {0};
+    tsr_status st = tsr_pmodel_from_set_opts(&pm->set, &o, NULL, &m, &err);
+    if (st != TSR_OK) {
+        report_load_error(cmd, path, st, &err);
+        return false;
+    }
+    tsr_pmodel_destroy(pm->model);
+    pm->model = m;
+    return true;
+}
+
 void cli_patch_model_free(cli_patch_model *m)
 {
     tsr_pmodel_destroy(m->model);

@@ -32,10 +32,17 @@ bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *sc
 
 /* The --weld option's help, shared by patch and check. */
 #define CLI_WELD_HELP                                                                                  \
-    "  --weld D              link (and weld) free-form patch edges whose boundary control points lie\n" \
-    "                        within D of each other, model units (default 1e-6 of the box diagonal;\n" \
-    "                        CAD files often leave gaps of 1e-6 to 1e-3)\n"
+    "  --weld D              link (and weld) free-form patch edges that lie within D of each other,\n" \
+    "                        model units, whatever their knots and degrees (default 1e-6 of the box\n" \
+    "                        diagonal; CAD files often leave gaps of 1e-6 to 1e-3)\n"
 void cli_patch_model_free(cli_patch_model *m);
+
+/* Rebuilds a free-form model (not a cage) for tessellation at max_error
+ * with tiles of `tile` (tsr_pmodel_set_options.split_error: knot spans
+ * curved one way and straight the other cut across the curve). false
+ * after printing an error (the old model kept). */
+bool cli_patch_model_split(const char *cmd, const char *path, cli_patch_model *pm, double weld, double max_error,
+                           uint32_t tile);
 
 /* Tessellates with opt, measures (tsr_ptess_measure, per_side samples per
  * piece, with opt->camera when set), and where a source measures beyond

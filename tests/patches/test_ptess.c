@@ -1918,6 +1918,98 @@ TEST(edges_of_other_knots_and_degrees_link)
     }
 }
 
+/* ---- pieces cut across their curve (split_error) ------------------------------------- */
+
+/* A parabolic extrusion (degree 2 across x, straight along y) and a
+ * neighbour sharing its north edge (y = 40): a longer piece of the same
+ * extrusion (bicubic along y), or, with `curved`, one that bulges along y
+ * too. Without cuts every piece is sampled along y as finely as along x. */
+static void extrusion_scene(sbuf *b, bool curved)
+{
+    static const double ku[6] = {0, 0, 0, 1, 1, 1}, kv[4] = {0, 0, 1, 1}, kw[8] = {0, 0, 0, 0, 1, 1, 1, 1};
+    double A[3 * 2 * 3], B[3 * 4 * 3];
+    for (int j = 0; j < 2; j++)
+        for (int i = 0; i < 3; i++) {
+            double *p = A + 3 * (j * 3 + i);
+            p[0] = 25.0 * (i - 1);
+            p[1] = 40.0 * j;
+            p[2] = i == 1 ? -25 : 25;
+        }
+    int next = 1;
+    put_bspline(b, &next, A, 3, 2, 2, 1, ku, kv);
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 3; i++) {
+            double *p = B + 3 * (j * 3 + i);
+            p[0] = A[3 * (3 + i)];
+            p[1] = 40.0 + 10.0 * j;
+            p[2] = A[3 * (3 + i) + 2] + (curved && j ? 3.0 * sin(1.0 + i + j) : 0);
+        }
+    put_bspline(b, &next, B, 3, 4, 2, 3, ku, kw);
+}
+
+TEST(split_error_cuts_extrusions_across_their_curve)
+{
+    for (int curved = 0; curved < 2; curved++) {
+        sbuf b = {0};
+        extrusion_scene(&b, curved);
+        tsr_patch_set set;
+        if (!parse_set(&b, "extrusion.obj", &set)) {
+            free(b.s);
+            continue;
+        }
+        for (double E = 1e-2; E >= 0.99e-3; E /= 10) {
+            uint32_t tri[2] = {0, 0};
+            for (int split = 0; split < 2; split++) {
+                tsr_pmodel *m = NULL;
+                tsr_error e = {0};
+                tsr_pmodel_set_options mo = {0, split ? E : 0, 4};
+                CHECK_MSG(tsr_pmodel_from_set_opts(&set, &mo, NULL, &m, &e) == TSR_OK, "%s", e.message);
+                if (!m)
+                    continue;
+                tsr_pmodel_info info;
+                tsr_pmodel_get_info(m, &info);
+                if (split && !curved)
+                    CHECK_MSG(info.split_breaks >= 4 && info.pieces >= 10, "E %g: %u cuts, %u pieces", E,
+                              info.split_breaks, info.pieces);
+                if (!split)
+                    CHECK(info.split_breaks == 0 && info.pieces == 2);
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                tsr_ptess_result r;
+                if (run_ptess(m, &o, &r)) {
+                    char what[64];
+                    snprintf(what, sizeof what, "curved %d E %g split %d", curved, E, split);
+                    tsr_validation v = validate(&r.mesh);
+                    check_conforming(what, &v);
+                    CHECK_MSG(v.boundary_loops == 1 && v.euler == 1, "%s: loops %u euler %lld", what,
+                              v.boundary_loops, (long long)v.euler);
+                    tsr_ptess_measure_result mr;
+                    memset(&mr, 0, sizeof mr);
+                    CHECK(tsr_ptess_measure(m, &r, 9, NULL, false, NULL, &mr) == TSR_OK);
+                    CHECK_MSG(mr.max_error <= E + fslack(mesh_maxabs(&r.mesh)) && mr.uncovered == 0,
+                              "%s: measured %g", what, mr.max_error);
+                    tri[split] = r.mesh.triangle_count;
+                    tsr_ptess_result_free(&r);
+                }
+                tsr_pmodel_destroy(m);
+            }
+            /* the extrusion needs (200 / 8E)^(1/2) samples across x and
+             * one row along y, where an isotropic tree makes that many
+             * rows; a neighbour curved along y would take the cuts too
+             * (they are shared) and cost more than they save: then the
+             * model is left uncut, or cut where the estimate still gains */
+            if (!curved)
+                CHECK_MSG(tri[1] > 0 && 4 * tri[1] <= tri[0], "E %g: %u triangles with cuts, %u without", E, tri[1],
+                          tri[0]);
+            else
+                CHECK_MSG(tri[1] > 0 && tri[1] <= tri[0], "curved, E %g: %u triangles with cuts, %u without", E,
+                          tri[1], tri[0]);
+        }
+        tsr_patch_set_free(&set);
+        free(b.s);
+    }
+}
+
 /* The long quarter cylinder (rational, along x from 0 to VL) and a camera
  * looking along it from near its start: parsed into *set; false (after a
  * failed CHECK) when it does not parse. */
@@ -3012,7 +3104,7 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
           T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
-          T(edges_of_other_knots_and_degrees_link),
+          T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
           T(data_osd_corner_estimate),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
