@@ -632,6 +632,19 @@ static double split_cost(const double M[3], double E, double N, int axis, double
     return k * (n2 > N * N ? n2 : N * N);
 }
 
+/* Second-derivative bounds M of patch p over [ua, ub] x [va, vb] (a
+ * rectangle without a knot inside), its Bézier piece's; false when the
+ * piece cannot be made or a bound is not finite. */
+static bool span_second(const tsr_patch *p, double ua, double ub, double va, double vb, double M[3])
+{
+    double ctrl[3 * TSR_BEZIER_MAX_POINTS], w[TSR_BEZIER_MAX_POINTS];
+    tsr_patch piece;
+    if (tsr_patch_bezier_piece(p, ua, ub, va, vb, ctrl, w, &piece) != TSR_OK)
+        return false;
+    bezier_second(piece.degree_u, piece.degree_v, ctrl, p->weights ? w : NULL, M);
+    return isfinite(M[0]) && isfinite(M[1]) && isfinite(M[2]);
+}
+
 /* Cuts the knot spans of patch p (breakpoints bu, bv) across their curved
  * direction where that saves half the quads at max_error E. */
 static tsr_status split_patch(const tsr_patch *p, const double dom[4], brk *bu, brk *bv, double E, double N,
@@ -643,15 +656,10 @@ static tsr_status split_patch(const tsr_patch *p, const double dom[4], brk *bu, 
         return TSR_ERR_NOMEM;
     for (uint32_t i = 0; i < nu + nv; i++)
         ku[i] = 1;
-    double ctrl[3 * TSR_BEZIER_MAX_POINTS], w[TSR_BEZIER_MAX_POINTS];
     for (uint32_t b = 0; b < nv; b++)
         for (uint32_t a2 = 0; a2 < nu; a2++) {
-            tsr_patch piece;
-            if (tsr_patch_bezier_piece(p, bu->b[a2], bu->b[a2 + 1], bv->b[b], bv->b[b + 1], ctrl, w, &piece) != TSR_OK)
-                continue;
             double M[3];
-            bezier_second(piece.degree_u, piece.degree_v, ctrl, p->weights ? w : NULL, M);
-            if (!(isfinite(M[0]) && isfinite(M[1]) && isfinite(M[2])))
+            if (!span_second(p, bu->b[a2], bu->b[a2 + 1], bv->b[b], bv->b[b + 1], M))
                 continue;
             double base = split_cost(M, E, N, 0, 1), best = base;
             uint32_t bk = 1;
@@ -760,19 +768,16 @@ static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, doub
  * split_cost's estimate. */
 static double breaks_cost(const tsr_patch_set *set, const brk *brks, double E, double N)
 {
-    double total = 0, ctrl[3 * TSR_BEZIER_MAX_POINTS], w[TSR_BEZIER_MAX_POINTS];
+    double total = 0;
     for (uint32_t i = 0; i < set->num_patches; i++) {
         const tsr_patch *p = &set->patches[i];
         const brk *bu = &brks[2 * i], *bv = &brks[2 * i + 1];
         for (uint32_t b = 0; b + 1 < bv->n; b++)
             for (uint32_t a2 = 0; a2 + 1 < bu->n; a2++) {
-                tsr_patch piece;
                 double M[3];
-                if (tsr_patch_bezier_piece(p, bu->b[a2], bu->b[a2 + 1], bv->b[b], bv->b[b + 1], ctrl, w, &piece) !=
-                    TSR_OK)
-                    continue;
-                bezier_second(piece.degree_u, piece.degree_v, ctrl, p->weights ? w : NULL, M);
-                double c = split_cost(M, E, N, 0, 1);
+                double c = span_second(p, bu->b[a2], bu->b[a2 + 1], bv->b[b], bv->b[b + 1], M)
+                               ? split_cost(M, E, N, 0, 1)
+                               : 0;
                 total += isfinite(c) ? c : 0;
             }
     }
