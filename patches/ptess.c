@@ -621,6 +621,10 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, brk
     return st;
 }
 
+/* max and min for finite values, inlined (fmax and fmin are calls) */
+static inline double dmax(double a, double b) { return a > b ? a : b; }
+static inline double dmin(double a, double b) { return a < b ? a : b; }
+
 static void bezier_second(int du, int dv, const double *P, const double *W, double M[3]);
 
 /* Quads a piece of second-derivative bounds M needs at max_error E, cut
@@ -643,6 +647,27 @@ static bool span_second(const tsr_patch *p, double ua, double ub, double va, dou
         return false;
     bezier_second(piece.degree_u, piece.degree_v, ctrl, p->weights ? w : NULL, M);
     return isfinite(M[0]) && isfinite(M[1]) && isfinite(M[2]);
+}
+
+/* Quads the k pieces of a span [u0, u1] x [v0, v1] cut along `axis` need
+ * at max_error E by their own bounds, each piece's tiles counted whole (N
+ * x N quads times a power of 4); INFINITY when a bound fails. */
+static double cut_cost(const tsr_patch *p, double u0, double u1, double v0, double v1, int axis, uint32_t k,
+                       double E, double N)
+{
+    double total = 0;
+    for (uint32_t q = 0; q < k; q++) {
+        double M[3];
+        bool ok = axis == 0 ? span_second(p, u0 + (u1 - u0) * q / k, u0 + (u1 - u0) * (q + 1) / k, v0, v1, M)
+                            : span_second(p, u0, u1, v0 + (v1 - v0) * q / k, v0 + (v1 - v0) * (q + 1) / k, M);
+        if (!ok)
+            return INFINITY;
+        double need = (M[0] + 2 * M[1] + M[2]) / (8 * E), quads = N * N;
+        for (int l = 0; quads < need && l < 20; l++)
+            quads *= 4;
+        total += quads;
+    }
+    return total;
 }
 
 /* Cuts the knot spans of patch p (breakpoints bu, bv) across their curved
@@ -673,6 +698,22 @@ static tsr_status split_patch(const tsr_patch *p, const double dom[4], brk *bu, 
                         baxis = axis;
                     }
                 }
+            /* the whole span's bounds overstate its pieces' (a rational
+             * piece's quotient-rule terms shrink faster than 1 / k^2): from
+             * the k chosen, fewer pieces while their own bounds say that
+             * costs no more quads, tiles counted whole (cut_cost) */
+            if (bk > 1) {
+                double u0 = bu->b[a2], u1 = bu->b[a2 + 1], v0 = bv->b[b], v1 = bv->b[b + 1];
+                double cur = cut_cost(p, u0, u1, v0, v1, baxis, bk, E, N);
+                while (bk > 2) {
+                    double c = cut_cost(p, u0, u1, v0, v1, baxis, bk - 1, E, N);
+                    if (!(c <= cur))
+                        break;
+                    cur = c;
+                    bk--;
+                }
+                best = cur;
+            }
             if (bk > 1 && 2 * best <= base) {
                 uint32_t *kk = baxis == 0 ? &ku[a2] : &kv[b];
                 *kk = bk > *kk ? bk : *kk;
@@ -1247,10 +1288,6 @@ static void shape_bounds(double a, double b, double c, double out[3])
     out[2] = 0.5 * (gt + 0.7698004 * b); /* stitched along t (east, west edges) */
 }
 
-/* max and min for finite values, inlined (fmax and fmin are calls) */
-static inline double dmax(double a, double b) { return a > b ? a : b; }
-static inline double dmin(double a, double b) { return a < b ? a : b; }
-
 static double norm3(double x, double y, double z) { return sqrt(x * x + y * y + z * z); }
 
 /* The bounds of ptess.h for a Bézier net over its own [0,1]^2, tiles of N
@@ -1266,6 +1303,108 @@ static inline double sq_second(const double *a, const double *b, const double *c
     /* |a - b - c + d|^2 */
     double x = a[0] - b[0] - c[0] + d[0], y = a[1] - b[1] - c[1] + d[1], z = a[2] - b[2] - c[2] + d[2];
     return x * x + y * y + z * z;
+}
+
+/* The rational basis' derivative sum over [0,1] for weights a_0..a_n:
+ * with alpha_k = a_k B_k / sum a_i B_i, C_i = sum_{k <= i} alpha_k', the
+ * distribution alpha_k(s) is an exponential family in log(s / (1 - s)),
+ * so every C_i <= 0 and sum |C_i| = E' where E = sum k alpha_k, a rational
+ * Bézier function with values 0..n; E' = (N' - E D') / D gives, with D >=
+ * min a, E' <= n (max a + n max |a_{k+1} - a_k|) / min a (n for equal
+ * weights). */
+static double rational_basis_slope(int n, const double *a, int stride)
+{
+    double amin = INFINITY, amax = 0, da = 0;
+    for (int k = 0; k <= n; k++) {
+        amin = dmin(amin, a[k * stride]);
+        amax = dmax(amax, a[k * stride]);
+        if (k < n)
+            da = dmax(da, fabs(a[(k + 1) * stride] - a[k * stride]));
+    }
+    return n * (amax + n * da) / amin;
+}
+
+/* A bound of the second derivative's length of the rational Bézier
+ * curve of degree n with points P (stride ps doubles) and weights W
+ * (stride ws), over [0,1]: the quotient rule about the centre c of the
+ * points' box (S_s = (Q_s - w_s (S - c)) / w, S_ss = (Q_ss - w_ss (S - c)
+ * - 2 w_s S_s) / w, Q = w (P - c)), with |S_s| also within the basis'
+ * slope times the largest step of the points (S_s = -sum C_i (p_{i+1} -
+ * p_i), C as above). */
+static double rational_curve_second(int n, const double *P, int ps, const double *W, int wst)
+{
+    if (n < 2 && W[0] == W[wst])
+        return 0;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, c[3];
+    for (int k = 0; k <= n; k++)
+        for (int q = 0; q < 3; q++) {
+            lo[q] = dmin(lo[q], P[k * ps + q]);
+            hi[q] = dmax(hi[q], P[k * ps + q]);
+        }
+    for (int q = 0; q < 3; q++)
+        c[q] = 0.5 * (lo[q] + hi[q]);
+    double A = 0, wmin = INFINITY, qs = 0, qss = 0, ps1 = 0, dw = 0, dww = 0;
+    for (int k = 0; k <= n; k++) {
+        const double *p0 = P + k * ps;
+        double w0 = W[k * wst];
+        wmin = dmin(wmin, w0);
+        A = dmax(A, norm3(p0[0] - c[0], p0[1] - c[1], p0[2] - c[2]));
+        if (k + 1 <= n) {
+            const double *p1 = p0 + ps;
+            double w1 = W[(k + 1) * wst];
+            dw = dmax(dw, fabs(w1 - w0));
+            qs = dmax(qs, norm3(w1 * (p1[0] - c[0]) - w0 * (p0[0] - c[0]), w1 * (p1[1] - c[1]) - w0 * (p0[1] - c[1]),
+                                w1 * (p1[2] - c[2]) - w0 * (p0[2] - c[2])));
+            ps1 = dmax(ps1, norm3(p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]));
+        }
+        if (k + 2 <= n) {
+            const double *p1 = p0 + ps, *p2 = p1 + ps;
+            double w1 = W[(k + 1) * wst], w2 = W[(k + 2) * wst], d[3];
+            dww = dmax(dww, fabs(w2 - 2 * w1 + w0));
+            for (int q = 0; q < 3; q++)
+                d[q] = w2 * (p2[q] - c[q]) - 2 * w1 * (p1[q] - c[q]) + w0 * (p0[q] - c[q]);
+            qss = dmax(qss, norm3(d[0], d[1], d[2]));
+        }
+    }
+    double fn = n, fnn = n * (n - 1.0);
+    double Bs = dmin(fn * (qs + dw * A) / wmin, rational_basis_slope(n, W, wst) * ps1);
+    return (fnn * qss + 2 * fn * dw * Bs + fnn * dww * A) / wmin;
+}
+
+/* Bounds for a rational net whose weights are a product w_ij = a_i b_j
+ * (surfaces of revolution, extrusions, tori, spheres): false for other
+ * weights. Then S = sum alpha_i(s) beta_j(t) p_ij with rational bases
+ * alpha, beta of their own (each >= 0, summing to 1), so S_ss = sum_j
+ * beta_j(t) c_j''(s) with c_j the net's rows as rational curves: M_ss is
+ * the largest of the rows' bounds (each about its own centre: the net's
+ * extent across the rows no longer counts), M_tt likewise by columns; and
+ * summing by parts in i and j, S_st = sum C_i(s) D_j(t) (p_{i+1,j+1} -
+ * p_{i+1,j} - p_{i,j+1} + p_ij) (C, D as above): at most the largest
+ * mixed difference of the net times the two slopes. The quotient rule
+ * bounds the mixed term through w_s S_t and loses the cancellation: a
+ * cylinder's mixed differences are all zero. */
+static bool separable_second(int du, int dv, const double *P, const double *W, double M[3])
+{
+    int nu = du + 1, nv = dv + 1;
+    for (int j = 1; j < nv; j++)
+        for (int i = 1; i < nu; i++) {
+            double lhs = W[j * nu + i] * W[0], rhs = W[i] * W[j * nu];
+            if (!(fabs(lhs - rhs) <= 1e-12 * lhs))
+                return false;
+        }
+    double q = 0;
+    for (int j = 0; j + 1 < nv; j++)
+        for (int i = 0; i + 1 < nu; i++) {
+            const double *p0 = P + 3 * (j * nu + i), *p1 = p0 + 3 * nu;
+            q = dmax(q, sq_second(p1 + 3, p1, p0 + 3, p0));
+        }
+    M[1] = sqrt(q) * rational_basis_slope(du, W, 1) * rational_basis_slope(dv, W, nu);
+    M[0] = M[2] = 0;
+    for (int j = 0; j < nv; j++)
+        M[0] = dmax(M[0], rational_curve_second(du, P + 3 * j * nu, 3, W + j * nu, 1));
+    for (int i = 0; i < nu; i++)
+        M[2] = dmax(M[2], rational_curve_second(dv, P + 3 * i, 3 * nu, W + i, nu));
+    return true;
 }
 
 /* Bounds M = {M_ss, M_st, M_tt} of the lengths of the second derivatives
@@ -1366,6 +1505,12 @@ static void bezier_second(int du, int dv, const double *P, const double *W, doub
         Mss = (fuu * qss + 2 * fu * ws * Bs + fuu * wss * A) / wmin;
         Mtt = (fvv * qtt + 2 * fv * wt * Bt + fvv * wtt * A) / wmin;
         Mst = (fuv * qst + fuv * wst * A + fu * ws * Bt + fv * wt * Bs) / wmin;
+        double Ms[3];
+        if (separable_second(du, dv, P, W, Ms)) {
+            Mss = dmin(Mss, Ms[0]);
+            Mst = dmin(Mst, Ms[1]);
+            Mtt = dmin(Mtt, Ms[2]);
+        }
     }
     M[0] = Mss;
     M[1] = Mst;

@@ -58,7 +58,12 @@
  *    node's Bézier sub-patch (blossoming) gives bounds M of the second
  *    derivatives' lengths (control-net differences as vectors; for
  *    rational pieces through the quotient rule with the smallest weight,
- *    about the centre of the sub-net's box), and linear interpolation on
+ *    about the centre of the sub-net's box, and where the weights are a
+ *    product a_i b_j, as for surfaces of revolution, extrusions, tori
+ *    and spheres, the smaller of that and a bound through the rational
+ *    bases: rows and columns as curves about their own centres, and the
+ *    mixed term from the net's mixed differences, zero on a cylinder),
+ *    and linear interpolation on
  *    the tile's triangles is within (h_s^2 M_ss + 2 h_s h_t M_st + h_t^2
  *    M_tt) / 8 for its interior (right) triangles, and within a larger
  *    figure (ptess.c, shape_bounds) for a stitched triangle (base 2h on a
@@ -159,7 +164,9 @@ tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, co
  *    pieces of the span (Tessellation, below), a piece cut into k along
  *    s needs about n = max(tile, sqrt((M_ss/k^2 + 2 M_st/k + M_tt) / (8
  *    split_error))) samples a side, k * n^2 quads in all (likewise along
- *    t); k <= 64. The cuts are breakpoints like knots, shared with the
+ *    t); k <= 64. From that k, fewer pieces are taken while the pieces'
+ *    own bounds (a rational piece's fall faster than 1/k^2), with each
+ *    piece's tiles counted whole, say they cost no more quads. The cuts are breakpoints like knots, shared with the
  *    neighbours (Links, above), so the mesh stays conforming; coarser
  *    bounds than split_error leave more triangles than needed, finer
  *    ones as many as without. The cuts are kept only where the whole

@@ -2010,6 +2010,112 @@ TEST(split_error_cuts_extrusions_across_their_curve)
     }
 }
 
+/* Rational Bézier nets with weights a product a_i b_j (as surfaces of
+ * revolution and tori have) take a mixed-derivative bound of their own
+ * (ptess.c, separable_mixed): random twisted nets, weights spread 20:1,
+ * degrees 1..4, with and without a product form, must measure within the
+ * reported bound on 64 x 64 samples and every edge midpoint. */
+TEST(rational_product_weights_within_bound)
+{
+    uint64_t seed = 0x9e3779b97f4a7c15u;
+#define RNDU() ((seed = seed * 6364136223846793005u + 1442695040888963407u) >> 11) * (1.0 / 9007199254740992.0)
+    uint32_t runs = 0;
+    for (int k = 0; k < 24; k++) {
+        int du = 1 + k % 4, dv = 1 + (k / 4) % 4;
+        bool product = k % 3 != 2;
+        double a[5], bw[5];
+        for (int i = 0; i <= du; i++)
+            a[i] = 0.25 + 4.75 * RNDU();
+        for (int j = 0; j <= dv; j++)
+            bw[j] = 0.25 + 4.75 * RNDU();
+        sbuf b = {0};
+        for (int j = 0; j <= dv; j++)
+            for (int i = 0; i <= du; i++) {
+                /* a twisted sheet: bilinear twist plus noise */
+                double x = i + 0.4 * RNDU(), y = j + 0.4 * RNDU(), z = 0.8 * i * j / (du * dv + 1.0) + RNDU();
+                double w = product ? a[i] * bw[j] : 0.25 + 4.75 * RNDU();
+                sb_printf(&b, "v %.17g %.17g %.17g %.17g\n", x, y, z, w);
+            }
+        sb_printf(&b, "cstype rat bezier\ndeg %d %d\nsurf 0 1 0 1", du, dv);
+        for (int q = (du + 1) * (dv + 1); q > 0; q--)
+            sb_printf(&b, " -%d", q);
+        sb_printf(&b, "\nend\n");
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        if (parse_set(&b, "product.obj", &set) && make_model(&set, &m)) {
+            for (double E = 3e-2; E >= 0.99e-3; E /= 5.5) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                o.tile_n = k % 2 ? 2 : 4;
+                tsr_ptess_result r;
+                if (!run_ptess(m, &o, &r))
+                    continue;
+                tsr_ptess_measure_result mr;
+                memset(&mr, 0, sizeof mr);
+                CHECK(tsr_ptess_measure(m, &r, 64, NULL, false, NULL, &mr) == TSR_OK);
+                double sl = fslack(mesh_maxabs(&r.mesh));
+                CHECK_MSG(mr.max_error <= r.bound + sl && r.bound <= E && mr.uncovered == 0,
+                          "net %d (degree %d x %d, %s weights), E %g: measured %g, bound %g", k, du, dv,
+                          product ? "product" : "other", E, mr.max_error, r.bound);
+                runs++;
+                tsr_ptess_result_free(&r);
+            }
+        }
+        tsr_pmodel_destroy(m);
+        tsr_patch_set_free(&set);
+        free(b.s);
+    }
+#undef RNDU
+    CHECK(runs == 24 * 3);
+}
+
+/* A rational quarter cylinder cut across its curve (split_error) comes
+ * near a strip: its mixed derivative is zero, so the pieces need no rows
+ * along the axis beyond one tile's. The oracle: the fewest columns whose
+ * chords keep within E of the circle, ceil((pi / 2) / (2 acos(1 - E /
+ * R))), times 2 triangles; the parametric error the bound controls is at
+ * least the chord's, and the tiles are 4 x 4, so 8 x that (one tile's row
+ * per column) is the budget. Measured within E. */
+TEST(rational_cylinder_cut_near_its_strip)
+{
+    cylinder c = {0.5, -1.25, 0.25, 2, 3};
+    sbuf b = {0};
+    cyl_obj(&b, &c);
+    tsr_patch_set set;
+    if (!parse_set(&b, "cylinder.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    for (double E = 1e-2; E >= 0.99e-4; E /= 10) {
+        tsr_pmodel *m = NULL;
+        tsr_error e = {0};
+        tsr_pmodel_set_options mo = {0, E, 4};
+        CHECK_MSG(tsr_pmodel_from_set_opts(&set, &mo, NULL, &m, &e) == TSR_OK, "%s", e.message);
+        tsr_ptess_options o = {0};
+        o.max_error = E;
+        tsr_ptess_result r;
+        if (m && run_ptess(m, &o, &r)) {
+            double cols = ceil((PI / 2) / (2 * acos(1 - E / c.R)));
+            tsr_ptess_measure_result mr;
+            memset(&mr, 0, sizeof mr);
+            CHECK(tsr_ptess_measure(m, &r, 16, NULL, false, NULL, &mr) == TSR_OK);
+            fprintf(stderr, "  E %g: %u triangles, strip %g, measured %.3g\n", E, r.mesh.triangle_count, 2 * cols,
+                    mr.max_error);
+            CHECK_MSG(r.mesh.triangle_count <= 8 * 2 * cols, "E %g: %u triangles against a strip of %g", E,
+                      r.mesh.triangle_count, 2 * cols);
+            CHECK_MSG(mr.max_error <= E + fslack(mesh_maxabs(&r.mesh)) && mr.uncovered == 0, "E %g: measured %g", E,
+                      mr.max_error);
+            tsr_validation v = validate(&r.mesh);
+            check_conforming("cut cylinder", &v);
+            CHECK(v.boundary_loops == 1 && v.euler == 1);
+            tsr_ptess_result_free(&r);
+        }
+        tsr_pmodel_destroy(m);
+    }
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
 /* The long quarter cylinder (rational, along x from 0 to VL) and a camera
  * looking along it from near its start: parsed into *set; false (after a
  * failed CHECK) when it does not parse. */
@@ -2045,6 +2151,9 @@ TEST(camera_near_finer)
     tsr_pmodel *m = NULL;
     if (!long_cylinder_scene(&set, &cam))
         return;
+    /* fine enough that the tree is several levels deep along the axis (a
+     * cylinder's bounds need no rows along it for their own sake) */
+    cam.pixel_error = 0.15;
     /* the regions compared are in view: their corners project inside */
     const double probes[4][3] = {{1, 1, 0}, {1, 0, 1}, {20, 1, 0}, {20, 0, 1}};
     for (int k = 0; k < 4; k++) {
@@ -2106,11 +2215,11 @@ TEST(camera_near_finer)
         tsr_ptess_result r1, r2;
         bool ok1 = run_ptess(m, &opt, &r1);
         tsr_camera cam2 = cam;
-        cam2.pixel_error = 0.1;
+        cam2.pixel_error = 0.03;
         opt.camera = &cam2;
         bool ok2 = run_ptess(m, &opt, &r2);
         if (ok1 && ok2)
-            CHECK_MSG(r2.mesh.triangle_count > r1.mesh.triangle_count, "%u triangles at 0.1 px, %u at 0.5 px",
+            CHECK_MSG(r2.mesh.triangle_count > r1.mesh.triangle_count, "%u triangles at 0.03 px, %u at 0.15 px",
                       r2.mesh.triangle_count, r1.mesh.triangle_count);
         tsr_ptess_result_free(&r1);
         tsr_ptess_result_free(&r2);
@@ -3104,7 +3213,8 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
           T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
-          T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve),
+          T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
+         T(rational_cylinder_cut_near_its_strip),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
           T(data_osd_corner_estimate),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
