@@ -2148,6 +2148,111 @@ static tsr_status choose_tile(pctx *c, uint32_t tile, uint32_t maxN)
     return TSR_OK;
 }
 
+/* The tree state of a piece (its tiles' size, quadtree, node values and
+ * kept tile indices, linked-edge spans), apart from its points. */
+typedef struct ptree {
+    uint32_t N;
+    double inv_n2;
+    uint8_t *act[4];
+    tsr_surface surf;
+    tsr_quadtree *qt;
+    tsr_keymap memo;
+    nodeval *nv;
+    uint32_t nnv, capnv;
+    uint32_t *tidx;
+    uint32_t ntidx, captidx;
+} ptree;
+
+static ptree tree_take(pctx *c)
+{
+    ptree t = {c->N, c->inv_n2, {c->act[0], c->act[1], c->act[2], c->act[3]}, c->surf, c->qt, c->memo, c->nv,
+               c->nnv, c->capnv, c->tidx, c->ntidx, c->captidx};
+    return t;
+}
+
+static void tree_put(pctx *c, const ptree *t)
+{
+    c->N = t->N;
+    c->inv_n2 = t->inv_n2;
+    memcpy(c->act, t->act, sizeof c->act);
+    c->surf = t->surf;
+    c->qt = t->qt;
+    c->memo = t->memo;
+    c->nv = t->nv;
+    c->nnv = t->nnv;
+    c->capnv = t->capnv;
+    c->tidx = t->tidx;
+    c->ntidx = t->ntidx;
+    c->captidx = t->captidx;
+    c->cur_key = 0;
+}
+
+static void tree_free(ptree *t, const tsr_allocator *a)
+{
+    tsr_quadtree_destroy(t->qt);
+    tsr_keymap_free(&t->memo, a);
+    tsr_free(a, t->nv);
+    tsr_free(a, t->tidx);
+    for (int e = 0; e < 4; e++)
+        tsr_free(a, t->act[e]);
+    memset(t, 0, sizeof *t);
+}
+
+static uint64_t tree_quads(const pctx *c)
+{
+    return (uint64_t)tsr_quadtree_leaf_count(c->qt) * c->N * c->N;
+}
+
+/* A subd piece's tile size: its tile (c->N, selected here) or half that
+ * with one level more, the same lattice (so the same points, evaluated
+ * once), whichever selection has fewer quads (ties: the tile). Subd node
+ * values are not per unit tile (they come from the tile's own points), so
+ * each size takes a selection of its own. Near a tolerance the coarser
+ * tiles often hold where the larger split in four: a face of a cube
+ * meshed in one tile of 2 x 2 quads rather than four of 4 x 4. */
+#ifndef SUBD_HALF_TRIAL_LEAVES
+#define SUBD_HALF_TRIAL_LEAVES 16u
+#endif
+static tsr_status subd_choose_tile(pctx *c, uint32_t half)
+{
+    c->cur_key = 0;
+    tsr_status st = tsr_quadtree_select(c->qt, refine, c);
+    if (st != TSR_OK || c->nomem)
+        return st != TSR_OK ? st : TSR_ERR_NOMEM;
+    uint64_t full = tree_quads(c);
+    uint32_t leaves = tsr_quadtree_leaf_count(c->qt);
+    if (leaves <= 1 && full <= (uint64_t)half * half)
+        return TSR_OK; /* one tile already: no fewer quads below */
+    if (leaves > SUBD_HALF_TRIAL_LEAVES || c->surf.levels + 1 >= TSR_QUADTREE_MAX_LEVELS)
+        return TSR_OK;
+    ptree keep = tree_take(c), trial;
+    memset(&trial, 0, sizeof trial);
+    trial.N = half;
+    trial.inv_n2 = 1.0 / ((double)half * half);
+    trial.surf = keep.surf;
+    trial.surf.tile_n = half;
+    trial.surf.levels = keep.surf.levels + 1;
+    trial.qt = tsr_quadtree_create(&trial.surf, c->alloc);
+    st = trial.qt ? TSR_OK : TSR_ERR_NOMEM;
+    for (int e = 0; e < 4 && st == TSR_OK; e++)
+        if (keep.act[e] && !(trial.act[e] = tsr_alloc(c->alloc, (size_t)1 << trial.surf.levels)))
+            st = TSR_ERR_NOMEM;
+    if (st == TSR_OK) {
+        tree_put(c, &trial);
+        st = tsr_quadtree_select(c->qt, refine, c);
+        if (st == TSR_OK && c->nomem)
+            st = TSR_ERR_NOMEM;
+        trial = tree_take(c);
+    }
+    if (st == TSR_OK && tree_quads(c) < full) {
+        tree_free(&keep, c->alloc);
+        return TSR_OK;
+    }
+    tree_free(&trial, c->alloc);
+    tree_put(c, &keep);
+    return st;
+}
+
 /* After selection: every stitched tile's bound against the tolerance.
  * Where it fails, the coarse neighbour is marked to split (the finer tile
  * is then not stitched there); returns how many were marked. Adds the
@@ -3445,6 +3550,17 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         if (m->pieces[p].kind == KIND_BEZIER && !m->sources[m->pieces[p].source].trimmed)
             if ((st = choose_tile(&ctx[p], opt.tile_n, maxN)) == TSR_OK && ctx[p].nomem)
                 st = TSR_ERR_NOMEM;
+    /* subd pieces: tiles of tile_n or of half that (selected already) */
+    if (opt.tile_n / 2 >= TSR_TILE_MIN && !((opt.tile_n / 2) & 1))
+        for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++)
+            if (m->pieces[p].kind == KIND_SUBD) {
+                if (p > 0 && !ctx[p].npts && ctx[p - 1].npts >= 512 &&
+                    !tsr_keymap_reserve(&ctx[p].pmemo, ctx[p - 1].npts, a))
+                    st = TSR_ERR_NOMEM;
+                if (st == TSR_OK)
+                    st = subd_choose_tile(&ctx[p], opt.tile_n / 2);
+                dirty[p] = 0;
+            }
     double bound = 0;
     for (bool again = true; again && st == TSR_OK;) {
         out->passes++;

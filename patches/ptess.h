@@ -53,7 +53,13 @@
  * for a Bézier piece of an untrimmed source, of tile_n, tile_n + 2, ...,
  * 4 tile_n - 2 (at most TSR_TILE_MAX) the one whose selection has the
  * fewest quads, so rates N 2^l step by (N + 2) / N rather than by 2; for
- * other pieces tile_n. A node's error delta is:
+ * a subd piece whose selection at tile_n has at most 16 tiles, tile_n or
+ * tile_n / 2 (when even) with one level more (the same lattice, the same
+ * points), whichever selection has fewer quads (a face near the
+ * tolerance is often one tile of 2 x 2 quads where 4 x 4 ones would
+ * split in four; larger trees keep tile_n, as a second selection there
+ * costs more time than it saves triangles); for trimmed pieces tile_n.
+ * A node's error delta is:
  *  - for a Bézier piece (polynomial or rational), a bound that holds: the
  *    node's Bézier sub-patch (blossoming) gives bounds M of the second
  *    derivatives' lengths (control-net differences as vectors; for
@@ -243,7 +249,8 @@ typedef struct tsr_ptess_options {
      * pixel_error is the screen error allowed. */
     const tsr_camera *camera;
     uint32_t tile_n;    /* quads per tile side, even, 2..TSR_TILE_MAX; 0: 4. Bézier pieces
-                           choose theirs in tile_n .. 4 tile_n - 2 (see above) */
+                           choose theirs in tile_n .. 4 tile_n - 2, small subd trees
+                           tile_n or tile_n / 2 (see above) */
     uint32_t max_level; /* quadtree depth per piece, 1..12; 0: 10 */
     bool normals;       /* per-vertex normals of the true surface */
     /* Optional per-piece factor (0 < f <= 1) on the tolerance (max_error
