@@ -1371,6 +1371,19 @@ static double rational_curve_second(int n, const double *P, int ps, const double
     return (fnn * qss + 2 * fn * dw * Bs + fnn * dww * A) / wmin;
 }
 
+/* The largest squared mixed difference |p_{i+1,j+1} - p_{i+1,j} - p_{i,j+1}
+ * + p_ij|^2 of a net of nu x nv points. */
+static double max_mixed_sq(int nu, int nv, const double *P)
+{
+    double q = 0;
+    for (int j = 0; j + 1 < nv; j++)
+        for (int i = 0; i + 1 < nu; i++) {
+            const double *p0 = P + 3 * (j * nu + i), *p1 = p0 + 3 * nu;
+            q = dmax(q, sq_second(p1 + 3, p1, p0 + 3, p0));
+        }
+    return q;
+}
+
 /* Bounds for a rational net whose weights are a product w_ij = a_i b_j
  * (surfaces of revolution, extrusions, tori, spheres): false for other
  * weights. Then S = sum alpha_i(s) beta_j(t) p_ij with rational bases
@@ -1392,13 +1405,7 @@ static bool separable_second(int du, int dv, const double *P, const double *W, d
             if (!(fabs(lhs - rhs) <= 1e-12 * lhs))
                 return false;
         }
-    double q = 0;
-    for (int j = 0; j + 1 < nv; j++)
-        for (int i = 0; i + 1 < nu; i++) {
-            const double *p0 = P + 3 * (j * nu + i), *p1 = p0 + 3 * nu;
-            q = dmax(q, sq_second(p1 + 3, p1, p0 + 3, p0));
-        }
-    M[1] = sqrt(q) * rational_basis_slope(du, W, 1) * rational_basis_slope(dv, W, nu);
+    M[1] = sqrt(max_mixed_sq(nu, nv, P)) * rational_basis_slope(du, W, 1) * rational_basis_slope(dv, W, nu);
     M[0] = M[2] = 0;
     for (int j = 0; j < nv; j++)
         M[0] = dmax(M[0], rational_curve_second(du, P + 3 * j * nu, 3, W + j * nu, 1));
@@ -1413,7 +1420,7 @@ static void bezier_second(int du, int dv, const double *P, const double *W, doub
 {
     int nu = du + 1, nv = dv + 1;
     if (!W) { /* polynomial: the second differences of the net itself */
-        double qss = 0, qtt = 0, qst = 0;
+        double qss = 0, qtt = 0, qst = max_mixed_sq(nu, nv, P);
         for (int j = 0; j < nv; j++)
             for (int i = 0; i + 2 < nu; i++) {
                 const double *p0 = P + 3 * (j * nu + i);
@@ -1425,11 +1432,6 @@ static void bezier_second(int du, int dv, const double *P, const double *W, doub
                 const double *p0 = P + 3 * (j * nu + i), *p1 = p0 + 3 * nu, *p2 = p1 + 3 * nu;
                 double x = p2[0] - 2 * p1[0] + p0[0], y = p2[1] - 2 * p1[1] + p0[1], z = p2[2] - 2 * p1[2] + p0[2];
                 qtt = dmax(qtt, x * x + y * y + z * z);
-            }
-        for (int j = 0; j + 1 < nv; j++)
-            for (int i = 0; i + 1 < nu; i++) {
-                const double *p0 = P + 3 * (j * nu + i), *p1 = p0 + 3 * nu;
-                qst = dmax(qst, sq_second(p1 + 3, p1, p0 + 3, p0));
             }
         double fuu = du * (du - 1.0), fvv = dv * (dv - 1.0), fuv = (double)du * dv;
         M[0] = fuu * sqrt(qss);
@@ -2203,16 +2205,15 @@ static uint64_t tree_quads(const pctx *c)
     return (uint64_t)tsr_quadtree_leaf_count(c->qt) * c->N * c->N;
 }
 
+#define SUBD_HALF_TRIAL_LEAVES 16u /* trees up to this many tiles try half tiles */
+
 /* A subd piece's tile size: its tile (c->N, selected here) or half that
- * with one level more, the same lattice (so the same points, evaluated
+ * (half; 0: none) with one level more, the same lattice (so the same points, evaluated
  * once), whichever selection has fewer quads (ties: the tile). Subd node
  * values are not per unit tile (they come from the tile's own points), so
  * each size takes a selection of its own. Near a tolerance the coarser
  * tiles often hold where the larger split in four: a face of a cube
  * meshed in one tile of 2 x 2 quads rather than four of 4 x 4. */
-#ifndef SUBD_HALF_TRIAL_LEAVES
-#define SUBD_HALF_TRIAL_LEAVES 16u
-#endif
 static tsr_status subd_choose_tile(pctx *c, uint32_t half)
 {
     c->cur_key = 0;
@@ -2223,7 +2224,7 @@ static tsr_status subd_choose_tile(pctx *c, uint32_t half)
     uint32_t leaves = tsr_quadtree_leaf_count(c->qt);
     if (leaves <= 1 && full <= (uint64_t)half * half)
         return TSR_OK; /* one tile already: no fewer quads below */
-    if (leaves > SUBD_HALF_TRIAL_LEAVES || c->surf.levels + 1 >= TSR_QUADTREE_MAX_LEVELS)
+    if (!half || leaves > SUBD_HALF_TRIAL_LEAVES || c->surf.levels + 1 >= TSR_QUADTREE_MAX_LEVELS)
         return TSR_OK;
     ptree keep = tree_take(c), trial;
     memset(&trial, 0, sizeof trial);
@@ -3550,17 +3551,20 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         if (m->pieces[p].kind == KIND_BEZIER && !m->sources[m->pieces[p].source].trimmed)
             if ((st = choose_tile(&ctx[p], opt.tile_n, maxN)) == TSR_OK && ctx[p].nomem)
                 st = TSR_ERR_NOMEM;
-    /* subd pieces: tiles of tile_n or of half that (selected already) */
-    if (opt.tile_n / 2 >= TSR_TILE_MIN && !((opt.tile_n / 2) & 1))
-        for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++)
-            if (m->pieces[p].kind == KIND_SUBD) {
-                if (p > 0 && !ctx[p].npts && ctx[p - 1].npts >= 512 &&
-                    !tsr_keymap_reserve(&ctx[p].pmemo, ctx[p - 1].npts, a))
-                    st = TSR_ERR_NOMEM;
-                if (st == TSR_OK)
-                    st = subd_choose_tile(&ctx[p], opt.tile_n / 2);
-                dirty[p] = 0;
-            }
+    /* subd pieces: selected here, with tiles of tile_n or of half that
+     * (when even). A piece's point map starts at the size its
+     * predecessor's reached (the faces of one cage are alike) rather than
+     * rehashing up from 16 slots */
+    uint32_t half = opt.tile_n / 2 >= TSR_TILE_MIN && !((opt.tile_n / 2) & 1) ? opt.tile_n / 2 : 0;
+    for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++)
+        if (m->pieces[p].kind == KIND_SUBD) {
+            if (p > 0 && !ctx[p].npts && ctx[p - 1].npts >= 512 &&
+                !tsr_keymap_reserve(&ctx[p].pmemo, ctx[p - 1].npts, a))
+                st = TSR_ERR_NOMEM;
+            if (st == TSR_OK)
+                st = subd_choose_tile(&ctx[p], half);
+            dirty[p] = 0;
+        }
     double bound = 0;
     for (bool again = true; again && st == TSR_OK;) {
         out->passes++;
@@ -3568,14 +3572,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
             if (!dirty[p])
                 continue;
             ctx[p].cur_key = 0;
-            /* a subd piece's point map starts at the size its predecessor's
-             * reached (the faces of one cage are alike) rather than
-             * rehashing up from 16 slots */
-            if (p > 0 && m->pieces[p].kind == KIND_SUBD && !ctx[p].npts && ctx[p - 1].npts >= 512 &&
-                !tsr_keymap_reserve(&ctx[p].pmemo, ctx[p - 1].npts, a))
-                st = TSR_ERR_NOMEM;
-            if (st == TSR_OK)
-                st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
+            st = tsr_quadtree_select(ctx[p].qt, refine, &ctx[p]);
             if (st == TSR_OK && ctx[p].nomem)
                 st = TSR_ERR_NOMEM; /* stop at once (refine gave up) */
             dirty[p] = 0;
