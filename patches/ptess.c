@@ -1266,6 +1266,30 @@ tsr_status tsr_pmodel_eval(const tsr_pmodel *m, uint32_t src, double u, double v
     return st;
 }
 
+uint32_t tsr_pmodel_source_kinks(const tsr_pmodel *m, uint32_t src, int axis, double *out, uint32_t cap)
+{
+    if (!m || !m->set || src >= m->nsources || axis < 0 || axis > 1)
+        return 0;
+    const psource *s = &m->sources[src];
+    const tsr_patch *p = &m->set->patches[s->patch];
+    if (p->kind == TSR_PATCH_BEZIER)
+        return 0;
+    const double *k = axis ? p->knots_v : p->knots_u;
+    uint32_t deg = (uint32_t)(axis ? p->degree_v : p->degree_u), cnt = (axis ? p->count_v : p->count_u) + deg + 1,
+             n = 0;
+    double lo = s->domain[2 * axis], hi = s->domain[2 * axis + 1];
+    for (uint32_t i = 0, j; i < cnt; i = j) {
+        for (j = i + 1; j < cnt && k[j] == k[i];)
+            j++;
+        if (j - i >= deg && k[i] > lo && k[i] < hi) {
+            if (n < cap)
+                out[n] = k[i];
+            n++;
+        }
+    }
+    return n;
+}
+
 /* ---- error bounds --------------------------------------------------------- */
 
 /* Linear interpolation on a tile's triangles, from bounds a, b, c of

@@ -239,6 +239,14 @@ bool tsr_pmodel_source_info(const tsr_pmodel *m, uint32_t src, tsr_psource_info 
  * the oracle of tsr_ptess_measure. TSR_ERR_ARGUMENT for src out of range. */
 tsr_status tsr_pmodel_eval(const tsr_pmodel *m, uint32_t src, double u, double v, double pos[3], double normal[3]);
 
+/* The parameters strictly inside source src's domain, along u (axis 0)
+ * or v (axis 1), where its surface may crease: the knots of a B-spline or
+ * NURBS source of multiplicity at least its degree that way (the surface
+ * is only C0 there, a kink unless its control points line up). Up to cap
+ * values go to out, ascending; returns how many there are (0 for Bézier
+ * and subdivision sources, or src out of range). */
+uint32_t tsr_pmodel_source_kinks(const tsr_pmodel *m, uint32_t src, int axis, double *out, uint32_t cap);
+
 /* Options of tsr_ptess_run. Zero-initialised fields take the defaults. */
 typedef struct tsr_ptess_options {
     /* View-independent: the largest distance allowed between S(u, v) and
@@ -296,6 +304,34 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt, cons
                          tsr_ptess_result *out, tsr_error *err);
 
 void tsr_ptess_result_free(tsr_ptess_result *r);
+
+/* ---- Normals at creases ------------------------------------------------- */
+
+/* The welded mesh has one normal per vertex, so where surfaces meet at an
+ * angle (an infinitely sharp subdivision crease or corner, the faces of a
+ * box of patches, a B-spline's knot of full multiplicity) one side's
+ * normal would be drawn on both, and shading would smear across the
+ * crease. This makes a copy of r's mesh (r made with
+ * tsr_ptess_options.normals) for drawing. A vertex may sit on a crease
+ * where triangles of several sources share it, or where it lies on a kink
+ * of its source (tsr_pmodel_source_kinks) with triangles on either side.
+ * There each side's normal is evaluated once (tsr_pmodel_eval at the
+ * (u, v) of its first corner, moved a hair, 1e-9 of the domain, off a kink
+ * towards its triangle), and the sides are grouped, each joining the
+ * first group whose first normal is within crease_deg degrees of its own.
+ * Each group gets its own vertex (the first group keeps the vertex's
+ * index, the others are appended, at the same position), with the unit
+ * mean of the group's normals, and the group's corners use it. Other
+ * vertices keep their normals; positions, uvs and triangles are r's, so
+ * welding by index is given up at creases only. crease_deg in [0, 180];
+ * 180 splits nothing (such a vertex gets the mean of its sides' normals).
+ * *added (may be NULL): the vertices appended. out is zeroed first and
+ * left empty on failure. TSR_ERR_ARGUMENT (err says which) for NULL
+ * pointers, a result without normals, or crease_deg out of range;
+ * TSR_ERR_TOO_LARGE past 2^32 - 2 vertices; TSR_ERR_NOMEM; an evaluation's
+ * error, naming the source. */
+tsr_status tsr_ptess_crease_normals(const tsr_pmodel *m, const tsr_ptess_result *r, double crease_deg,
+                                    const tsr_allocator *alloc, tsr_mesh *out, uint32_t *added, tsr_error *err);
 
 /* ---- Measurement (the independent oracle) -------------------------------- */
 

@@ -38,21 +38,28 @@ static void help(FILE *f)
             "  --scheme S            catmark or bilinear, for a polygon cage (default: bilinear when the\n"
             "                        file name starts with \"bilinear\", else catmark)\n"
             CLI_WELD_HELP
-            "  --normals             per-vertex normals of the true surface\n"
+            "  --normals             per-vertex normals of the true surface; where surfaces meet at an\n"
+            "                        angle (sharp creases and corners of a cage, faces of a box of\n"
+            "                        patches) the vertex is written once per side, each with its side's\n"
+            "                        normal, so renderers draw the crease (not in .stl: facet normals)\n"
+            "  --crease-angle DEG    sides whose normals differ by more than DEG degrees are split so\n"
+            "                        (default 1; 180: never, one vertex with the sides' mean normal)\n"
             "  --no-verify           skip the measurement (and the re-tessellation it may ask for)\n"
             "  --stats FILE.json     patches, pieces, triangles, vertices, measured max_error and\n"
             "                        rms_error, bound, seconds, the options used, the mesh's\n"
             "                        boundary_edges, t_junctions and degenerate_triangles, and\n"
             "                        linked_edges (piece edges sampled alike with a neighbour's)\n"
             "                        and shared_breakpoints (knots a patch took from a neighbour\n"
-            "                        sharing an edge, so their pieces meet piece to piece)\n"
+            "                        sharing an edge, so their pieces meet piece to piece); with\n"
+            "                        --normals also vertices_written and crease_vertices (the copies\n"
+            "                        written at creases)\n"
             "  --quiet               print nothing on success\n"
             "  -h, --help            this help\n");
 }
 
 static int write_stats(const char *path, const char *in, const cli_patch_model *pm, const tsr_ptess_result *r,
                        const tsr_ptess_measure_result *meas, bool verified, const tsr_ptess_options *opt,
-                       uint32_t tightened, double secs, const tsr_validation *val)
+                       uint32_t tightened, double secs, const tsr_validation *val, const tsr_mesh *written)
 {
     tsr_pmodel_info info;
     tsr_pmodel_get_info(pm->model, &info);
@@ -69,6 +76,10 @@ static int write_stats(const char *path, const char *in, const cli_patch_model *
     cJSON_AddNumberToObject(j, "triangles", r->mesh.triangle_count);
     cJSON_AddNumberToObject(j, "vertices", r->mesh.vertex_count);
     cJSON_AddNumberToObject(j, "tiles", r->leaves);
+    if (written) { /* --normals: vertices written once per side of a crease */
+        cJSON_AddNumberToObject(j, "vertices_written", written->vertex_count);
+        cJSON_AddNumberToObject(j, "crease_vertices", written->vertex_count - r->mesh.vertex_count);
+    }
     if (verified) {
         cJSON_AddNumberToObject(j, "max_error", meas->max_error);
         cJSON_AddNumberToObject(j, "rms_error", meas->rms_error);
@@ -110,6 +121,7 @@ static int run(int argc, char **argv)
     view_options v = {60, 1920, 1080, 0, 0};
     uint32_t tile = 4, max_level = 10;
     bool normals = false, quiet = false, verify = true;
+    double crease = -1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         bool has_value = i + 1 < argc;
@@ -136,6 +148,12 @@ static int run(int argc, char **argv)
             }
         } else if (!strcmp(a, "--normals"))
             normals = true;
+        else if (!strcmp(a, "--crease-angle") && has_value) {
+            if (!cli_parse_double(argv[++i], &crease) || !(crease >= 0 && crease <= 180)) {
+                cli_error("patch", "--crease-angle %s: must be an angle in 0..180 degrees", argv[i]);
+                return CLI_USAGE;
+            }
+        }
         else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = true;
         else if (!strcmp(a, "--no-verify"))
@@ -178,6 +196,10 @@ static int run(int argc, char **argv)
     }
     if (tsr_mesh_format_from_path(out) == TSR_FORMAT_UNKNOWN) {
         cli_error("patch", "%s: unknown mesh format (use .obj, .ply, .stl or .glb)", out);
+        return CLI_USAGE;
+    }
+    if (crease >= 0 && !normals) {
+        cli_error("patch", "--crease-angle needs --normals");
         return CLI_USAGE;
     }
     if ((v.pixel_error > 0) != (cam_arg != NULL)) {
@@ -300,26 +322,41 @@ static int run(int argc, char **argv)
     /* a cage's non-manifold edges are left open by contract (ptess.h), and
      * another sheet's vertices may lie on them: no T-junction counts there */
     uint32_t tj = validated && !pm.is_subd ? val.t_junctions : 0, zero = validated ? val.degenerate_triangles : 0;
-    if (rc == CLI_OK && tsr_mesh_write(&r.mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
+    /* normals: a vertex where surfaces meet at an angle is written once
+     * per side (the welded mesh above is what was validated and measured) */
+    tsr_mesh split;
+    memset(&split, 0, sizeof split);
+    uint32_t crease_added = 0;
+    bool splitting = rc == CLI_OK && normals && tsr_mesh_format_from_path(out) != TSR_FORMAT_STL;
+    if (splitting && tsr_ptess_crease_normals(pm.model, &r, crease >= 0 ? crease : 1, NULL, &split, &crease_added,
+                                              &err) != TSR_OK) {
+        cli_error("patch", "%s: %s", in, err.message);
+        rc = CLI_FAIL;
+    }
+    if (rc == CLI_OK && tsr_mesh_write(splitting ? &split : &r.mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
         cli_error("patch", "%s", err.message);
         rc = CLI_FAIL;
     }
     double secs = cli_now() - t0;
     if (rc == CLI_OK && stats)
-        rc = write_stats(stats, in, &pm, &r, &meas, verify, &opt, tightened, secs, validated ? &val : NULL);
+        rc = write_stats(stats, in, &pm, &r, &meas, verify, &opt, tightened, secs, validated ? &val : NULL,
+                         splitting ? &split : NULL);
     if (rc == CLI_OK && !quiet) {
         tsr_pmodel_info info;
         tsr_pmodel_get_info(pm.model, &info);
+        char crease_note[64] = "";
+        if (crease_added)
+            snprintf(crease_note, sizeof crease_note, " (%u more written at creases)", crease_added);
         if (verify)
             fprintf(stderr,
-                    "tessera patch: %s: %u patches, %u triangles, %u vertices; max error %.4g %s (asked %.4g, "
+                    "tessera patch: %s: %u patches, %u triangles, %u vertices%s; max error %.4g %s (asked %.4g, "
                     "measured at %llu samples%s), %.2f s\n",
-                    in, info.sources, r.mesh.triangle_count, r.mesh.vertex_count, meas.max_error,
+                    in, info.sources, r.mesh.triangle_count, r.mesh.vertex_count, crease_note, meas.max_error,
                     opt.camera ? "px" : "units", tol, (unsigned long long)meas.samples,
                     tightened ? ", some patches re-tessellated" : "", secs);
         else
-            fprintf(stderr, "tessera patch: %s: %u patches, %u triangles, %u vertices, not measured, %.2f s\n", in,
-                    info.sources, r.mesh.triangle_count, r.mesh.vertex_count, secs);
+            fprintf(stderr, "tessera patch: %s: %u patches, %u triangles, %u vertices%s, not measured, %.2f s\n", in,
+                    info.sources, r.mesh.triangle_count, r.mesh.vertex_count, crease_note, secs);
         if (tj || zero)
             fprintf(stderr,
                     "tessera patch: %s: warning: %u T-junctions and %u zero-area triangles, where surfaces meet "
@@ -328,6 +365,7 @@ static int run(int argc, char **argv)
                     "them\n",
                     in, tj, zero);
     }
+    tsr_mesh_free(&split);
     tsr_ptess_result_free(&r);
     cli_patch_model_free(&pm);
     return rc;

@@ -2959,6 +2959,29 @@ static void check_allocation_failures(const char *what, const tsr_pmodel *m, dou
                 failing_run(what, m, &o,
                             (check_alloc){.fail_at = t ? last_kept : first_kept, .sticky = true, .fail_also = j}, calls,
                             &ref);
+        /* the crease normals' copy: NOMEM and nothing left, or the same copy */
+        for (int sticky = 0; normals && sticky < 2; sticky++) {
+            check_alloc g = {0};
+            tsr_allocator ga = {check_realloc, &g};
+            tsr_mesh want;
+            CHECK(tsr_ptess_crease_normals(m, &ref, 1, &ga, &want, NULL, &e) == TSR_OK);
+            for (long k = 1; k <= g.calls; k++) {
+                check_alloc h = {.fail_at = k, .sticky = sticky};
+                tsr_allocator ha = {check_realloc, &h};
+                tsr_mesh got;
+                tsr_status st = tsr_ptess_crease_normals(m, &ref, 1, &ha, &got, NULL, &e);
+                CHECK_MSG(st == TSR_ERR_NOMEM || (st == TSR_OK && got.vertex_count == want.vertex_count &&
+                                                  !memcmp(got.indices, want.indices,
+                                                          3 * (size_t)want.triangle_count * sizeof *got.indices)),
+                          "%s: crease normals, failure at allocation %ld: %s", what, k, tsr_status_str(st));
+                CHECK(st == TSR_OK || (got.vertex_count == 0 && got.triangle_count == 0 && !got.indices));
+                tsr_mesh_free(&got);
+                CHECK_MSG(h.live == 0, "%s: crease normals, failure at allocation %ld: %ld blocks leaked", what, k,
+                          h.live);
+            }
+            tsr_mesh_free(&want);
+            CHECK(g.live == 0);
+        }
         tsr_ptess_result_free(&ref);
     }
 }
@@ -3261,6 +3284,369 @@ TEST(data_osd_half_tiles)
     tsr_subd_destroy(subd);
 }
 
+/* ---- normals at creases ---------------------------------------------------- */
+
+/* Unit normal of triangle t of m, from its corners (0 for a degenerate one). */
+static void unit_face_normal(const tsr_mesh *m, uint32_t t, double n[3])
+{
+    face_normal(m, t, n);
+    double l = sqrt(dot3(n, n));
+    for (int k = 0; k < 3; k++)
+        n[k] = l > 0 ? n[k] / l : 0;
+}
+
+/* The largest angle (degrees) between a corner's normal and its triangle's
+ * own normal, over the corners of triangles with area. */
+static double worst_corner_angle(const tsr_mesh *m)
+{
+    double worst = 0;
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        double fn[3];
+        unit_face_normal(m, t, fn);
+        if (dot3(fn, fn) == 0)
+            continue;
+        for (int k = 0; k < 3; k++) {
+            const float *n = m->normals + 3 * m->indices[3 * t + k];
+            double nd[3] = {n[0], n[1], n[2]}, c = dot3(nd, fn) / sqrt(dot3(nd, nd));
+            worst = fmax(worst, acos(fmax(-1, fmin(1, c))) * 180 / PI);
+        }
+    }
+    return worst;
+}
+
+/* What every crease-normal copy keeps: r's triangles over the same
+ * positions (corner by corner), r's vertices first, unit normals; and
+ * every appended vertex a copy of one of r's. Returns, per vertex of r,
+ * how many vertices of out stand at its place (copies + 1) in *copies
+ * (allocated; caller frees). */
+static void check_crease_copy(const tsr_ptess_result *r, const tsr_mesh *out, uint32_t added, uint32_t **copies)
+{
+    const tsr_mesh *in = &r->mesh;
+    CHECK(out->triangle_count == in->triangle_count);
+    CHECK_MSG(out->vertex_count == in->vertex_count + added, "%u vertices, %u + %u added", out->vertex_count,
+              in->vertex_count, added);
+    CHECK(out->normals != NULL);
+    uint32_t moved = 0, not_unit = 0;
+    *copies = calloc(in->vertex_count, sizeof **copies);
+    uint32_t *orig = malloc((out->vertex_count + 1) * sizeof *orig);
+    for (uint32_t v = 0; v < out->vertex_count; v++)
+        orig[v] = v < in->vertex_count ? v : UINT32_MAX;
+    for (uint32_t c = 0; c < 3 * in->triangle_count && c < 3 * out->triangle_count; c++) {
+        uint32_t a = in->indices[c], b = out->indices[c];
+        if (b >= out->vertex_count) {
+            moved++;
+            continue;
+        }
+        moved += memcmp(in->positions + 3 * a, out->positions + 3 * b, 3 * sizeof(float)) != 0;
+        if (b >= in->vertex_count) { /* appended: a copy of a */
+            moved += orig[b] != UINT32_MAX && orig[b] != a;
+            orig[b] = a;
+        } else {
+            moved += b != a; /* a vertex of r keeps its index */
+        }
+    }
+    for (uint32_t v = 0; v < out->vertex_count; v++) {
+        const float *n = out->normals + 3 * v;
+        not_unit += fabs(sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]) - 1) > 1e-5;
+        if (v >= in->vertex_count) {
+            moved += orig[v] == UINT32_MAX; /* used by no triangle */
+            if (orig[v] != UINT32_MAX)
+                (*copies)[orig[v]]++;
+        }
+    }
+    for (uint32_t v = 0; v < in->vertex_count; v++)
+        (*copies)[v]++;
+    CHECK_MSG(moved == 0, "%u corners moved, renumbered or unused copies", moved);
+    CHECK_MSG(not_unit == 0, "%u normals not of unit length", not_unit);
+    free(orig);
+}
+
+/* A box of six bilinear patches (one written inward, so mirrored): a
+ * point of the box meets as many faces as it has coordinates on the
+ * box's planes, and with the crease normals there are that many vertices
+ * there, each corner's normal its own face's (a plane: the triangle's). */
+TEST(crease_normals_box)
+{
+    static const double lo[3] = {-1, 0, 0.5}, hi[3] = {1, 3, 1.25};
+    sbuf b = {0};
+    for (int axis = 0; axis < 3; axis++)
+        for (int side = 0; side < 2; side++) {
+            int u = (axis + 1) % 3, w = (axis + 2) % 3;
+            for (int c = 0; c < 4; c++) {
+                double p[3];
+                p[axis] = side ? hi[axis] : lo[axis];
+                int cu = c & 1, cw = c >> 1;
+                if (side ^ (axis == 1)) /* faces written both ways round */
+                    cu = !cu;
+                p[u] = cu ? hi[u] : lo[u];
+                p[w] = cw ? hi[w] : lo[w];
+                sb_printf(&b, "v %.17g %.17g %.17g\n", p[0], p[1], p[2]);
+            }
+            sb_printf(&b, "cstype bezier\ndeg 1 1\nsurf 0 1 0 1 -4 -3 -2 -1\nend\n");
+        }
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "box.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        tsr_ptess_options o = {0};
+        o.max_error = 1e-3;
+        o.normals = true;
+        tsr_ptess_result r;
+        if (run_ptess(m, &o, &r)) {
+            tsr_validation v = validate(&r.mesh);
+            check_conforming("box", &v);
+            CHECK(v.boundary_edges == 0 && v.euler == 2);
+            /* welded, an edge's vertex has one face's normal: 90 degrees
+             * off the other face's triangles */
+            CHECK_MSG(worst_corner_angle(&r.mesh) > 80, "welded box: corners within %g deg of their triangles",
+                      worst_corner_angle(&r.mesh));
+            tsr_mesh out;
+            uint32_t added = 0;
+            tsr_error e = {0};
+            tsr_status st = tsr_ptess_crease_normals(m, &r, 1, NULL, &out, &added, &e);
+            CHECK_MSG(st == TSR_OK, "%s", e.message);
+            if (st == TSR_OK) {
+                uint32_t *copies = NULL, wrong = 0, want_added = 0;
+                check_crease_copy(&r, &out, added, &copies);
+                CHECK_MSG(worst_corner_angle(&out) < 1e-3, "a corner %g deg off its face", worst_corner_angle(&out));
+                for (uint32_t i = 0; copies && i < r.mesh.vertex_count; i++) {
+                    uint32_t faces = 0;
+                    for (int k = 0; k < 3; k++) {
+                        double x = r.mesh.positions[3 * i + k];
+                        faces += (fabs(x - lo[k]) < 1e-6) + (fabs(x - hi[k]) < 1e-6);
+                    }
+                    wrong += copies[i] != faces;
+                    want_added += faces - 1;
+                }
+                CHECK_MSG(wrong == 0, "%u box points whose vertices are not one per face meeting there", wrong);
+                CHECK_MSG(added == want_added, "%u added, want %u", added, want_added);
+                free(copies);
+            }
+            tsr_mesh_free(&out);
+            /* 180 degrees: nothing split, the shared vertices' normals
+             * their faces' mean (between the faces: on the triangles' side) */
+            st = tsr_ptess_crease_normals(m, &r, 180, NULL, &out, &added, &e);
+            CHECK(st == TSR_OK && added == 0 && out.vertex_count == r.mesh.vertex_count);
+            if (st == TSR_OK) {
+                uint32_t *copies = NULL;
+                check_crease_copy(&r, &out, added, &copies);
+                double w = worst_corner_angle(&out);
+                CHECK_MSG(w > 50 && w < 60, "mean normals: worst corner %g deg (a cube corner's 54.7)", w);
+                free(copies);
+            }
+            tsr_mesh_free(&out);
+            /* refusals */
+            CHECK(tsr_ptess_crease_normals(NULL, &r, 1, NULL, &out, NULL, &e) == TSR_ERR_ARGUMENT);
+            CHECK(tsr_ptess_crease_normals(m, NULL, 1, NULL, &out, NULL, &e) == TSR_ERR_ARGUMENT);
+            CHECK(tsr_ptess_crease_normals(m, &r, 1, NULL, NULL, NULL, &e) == TSR_ERR_ARGUMENT);
+            CHECK(tsr_ptess_crease_normals(m, &r, -1, NULL, &out, NULL, &e) == TSR_ERR_ARGUMENT);
+            CHECK(tsr_ptess_crease_normals(m, &r, 181, NULL, &out, NULL, &e) == TSR_ERR_ARGUMENT);
+            CHECK(tsr_ptess_crease_normals(m, &r, NAN, NULL, &out, NULL, &e) == TSR_ERR_ARGUMENT);
+            CHECK(out.vertex_count == 0 && out.triangle_count == 0);
+        }
+        tsr_ptess_result_free(&r);
+        o.normals = false;
+        if (run_ptess(m, &o, &r)) {
+            tsr_mesh out;
+            tsr_error e = {0};
+            CHECK(tsr_ptess_crease_normals(m, &r, 1, NULL, &out, NULL, &e) == TSR_ERR_ARGUMENT);
+            CHECK_MSG(strstr(e.message, "normal") != NULL, "%s", e.message);
+        }
+        tsr_ptess_result_free(&r);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* The sphere of eight octants is smooth where they meet and at its poles
+ * (collapsed edges): no vertex is split, the normals stay radial. */
+TEST(crease_normals_smooth_sphere)
+{
+    sbuf b = {0};
+    sphere_obj(&b, outward_octants, 8);
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "sphere.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        tsr_ptess_options o = {0};
+        o.max_error = 1e-3;
+        o.normals = true;
+        tsr_ptess_result r;
+        if (run_ptess(m, &o, &r)) {
+            tsr_mesh out;
+            uint32_t added = 99;
+            tsr_error e = {0};
+            tsr_status st = tsr_ptess_crease_normals(m, &r, 1, NULL, &out, &added, &e);
+            CHECK_MSG(st == TSR_OK, "%s", e.message);
+            if (st == TSR_OK) {
+                uint32_t *copies = NULL;
+                check_crease_copy(&r, &out, added, &copies);
+                free(copies);
+                CHECK_MSG(added == 0, "%u vertices split on a smooth sphere", added);
+                uint32_t off = normals_off_radial(&out, 1, 1e-6);
+                CHECK_MSG(off == 0, "%u normals not radial", off);
+            }
+            tsr_mesh_free(&out);
+        }
+        tsr_ptess_result_free(&r);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* A roof: one cubic x linear B-spline whose knot u = 1 is triple, its two
+ * halves planes meeting at a ridge (x = 1) at an angle. The triple knot is
+ * its one kink; every ridge vertex is written twice, and each corner's
+ * normal is its own half's (a plane: its triangle's). With the knot
+ * simple (the surface then C2, no kink) nothing is split. */
+TEST(crease_normals_bspline_kink)
+{
+    for (int triple = 1; triple >= 0; triple--) {
+        sbuf b = {0};
+        /* control columns x = 0, 1/3, ..., 2 (triple: column 3 the ridge) */
+        int cols = triple ? 7 : 5;
+        for (int j = 0; j < 2; j++)
+            for (int i = 0; i < cols; i++) {
+                double x = triple ? i / 3.0 : (i == 0 ? 0 : i == cols - 1 ? 2 : 0.5 * i);
+                double z = x <= 1 ? 0.5 * x : 0.5 * (2 - x);
+                sb_printf(&b, "v %.17g %.17g %.17g\n", x, 1.5 * j, triple ? z : 0.1 * x * x);
+            }
+        sb_printf(&b, "cstype bspline\ndeg 3 1\nsurf 0 2 0 1");
+        for (int k = 2 * cols; k >= 1; k--)
+            sb_printf(&b, " -%d", k);
+        sb_printf(&b, triple ? "\nparm u 0 0 0 0 1 1 1 2 2 2 2\n" : "\nparm u 0 0 0 0 1 2 2 2 2\n");
+        sb_printf(&b, "parm v 0 0 1 1\nend\n");
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        if (!parse_set(&b, "roof.obj", &set)) {
+            free(b.s);
+            return;
+        }
+        if (make_model(&set, &m)) {
+            double k[4] = {0};
+            uint32_t nk = tsr_pmodel_source_kinks(m, 0, 0, k, 4);
+            CHECK_MSG(nk == (triple ? 1u : 0u) && (!triple || k[0] == 1), "%u kinks along u (first %g)", nk, k[0]);
+            CHECK(tsr_pmodel_source_kinks(m, 0, 1, k, 4) == 0);
+            CHECK(tsr_pmodel_source_kinks(m, 1, 0, k, 4) == 0); /* no such source */
+            tsr_ptess_options o = {0};
+            o.max_error = 1e-3;
+            o.normals = true;
+            tsr_ptess_result r;
+            if (run_ptess(m, &o, &r)) {
+                tsr_mesh out;
+                uint32_t added = 0;
+                tsr_error e = {0};
+                tsr_status st = tsr_ptess_crease_normals(m, &r, 1, NULL, &out, &added, &e);
+                CHECK_MSG(st == TSR_OK, "%s", e.message);
+                if (st == TSR_OK) {
+                    uint32_t *copies = NULL, ridge = 0, wrong = 0;
+                    check_crease_copy(&r, &out, added, &copies);
+                    for (uint32_t v = 0; copies && v < r.mesh.vertex_count; v++) {
+                        bool on = fabs(r.mesh.positions[3 * v] - 1) < 1e-6;
+                        ridge += on;
+                        wrong += copies[v] != (triple && on ? 2u : 1u);
+                    }
+                    free(copies);
+                    if (triple) {
+                        CHECK_MSG(ridge >= 2 && added == ridge, "%u ridge vertices, %u added", ridge, added);
+                        CHECK_MSG(worst_corner_angle(&out) < 1e-3, "a corner %g deg off its half",
+                                  worst_corner_angle(&out));
+                        CHECK_MSG(worst_corner_angle(&r.mesh) > 40, "welded: ridge corners within %g deg",
+                                  worst_corner_angle(&r.mesh));
+                    } else {
+                        CHECK_MSG(added == 0, "%u vertices split on a smooth surface", added);
+                    }
+                    CHECK_MSG(wrong == 0, "%u vertices with the wrong number of copies", wrong);
+                }
+                tsr_mesh_free(&out);
+            }
+            tsr_ptess_result_free(&r);
+        }
+        tsr_pmodel_destroy(m);
+        tsr_patch_set_free(&set);
+        free(b.s);
+    }
+}
+
+/* OpenSubdiv's cube with eleven infinitely sharp edges (and one of
+ * sharpness 0.1, smooth in the limit): with crease normals, every
+ * corner's normal is its own face's limit normal there (tsr_subd_normal at
+ * the corner's (u, v): a face meets its neighbour across a sharp edge at
+ * an angle), within the crease angle, and no corner is far from its
+ * triangle's own normal; welded, corners on the sharp edges were 90
+ * degrees off. */
+TEST(data_osd_crease_normals)
+{
+    const char *data = check_data_dir();
+    if (!data)
+        SKIP("no data folder");
+    char path[5200];
+    snprintf(path, sizeof path, "%.4096s/patches/osd/catmark_cube_creases2.obj", data);
+    struct stat sb;
+    if (stat(path, &sb) != 0)
+        SKIP("no %s", path);
+    tsr_subd *subd;
+    tsr_pmodel *m = cage_model(path, "catmark_cube_creases2.obj", &subd);
+    if (!m)
+        return;
+    tsr_pmodel_info info;
+    tsr_pmodel_get_info(m, &info);
+    tsr_ptess_options o = {0};
+    o.max_error = 1e-3 * dist3(info.lo, info.hi);
+    o.normals = true;
+    tsr_ptess_result r;
+    if (run_ptess(m, &o, &r)) {
+        double before = worst_corner_angle(&r.mesh);
+        CHECK_MSG(before > 80, "welded: worst corner %g deg off its triangle", before);
+        tsr_mesh out;
+        uint32_t added = 0;
+        tsr_error e = {0};
+        const double angle = 2;
+        tsr_status st = tsr_ptess_crease_normals(m, &r, angle, NULL, &out, &added, &e);
+        CHECK_MSG(st == TSR_OK, "%s", e.message);
+        if (st == TSR_OK) {
+            uint32_t *copies = NULL, off = 0;
+            check_crease_copy(&r, &out, added, &copies);
+            free(copies);
+            double after = worst_corner_angle(&out);
+            fprintf(stderr, "  %u vertices, %u added at creases; worst corner off its triangle %.1f -> %.1f deg\n",
+                    r.mesh.vertex_count, added, before, after);
+            CHECK(added > 0);
+            CHECK_MSG(after < 30, "a corner %g deg off its triangle", after);
+            for (uint32_t t = 0; t < out.triangle_count; t++) {
+                tsr_psource_info si;
+                if (!tsr_pmodel_source_info(m, r.tri_source[t], &si)) {
+                    off++;
+                    continue;
+                }
+                for (int k = 0; k < 3; k++) {
+                    double uv[2] = {r.tri_uv[6 * t + 2 * k], r.tri_uv[6 * t + 2 * k + 1]}, n[3];
+                    if (tsr_subd_normal(subd, si.patch, si.sub, uv, n) != TSR_OK) {
+                        off++;
+                        continue;
+                    }
+                    const float *f = out.normals + 3 * out.indices[3 * t + k];
+                    double c = (n[0] * f[0] + n[1] * f[1] + n[2] * f[2]) * (si.mirrored ? -1 : 1);
+                    off += c < cos(angle * PI / 180) - 1e-6;
+                }
+            }
+            CHECK_MSG(off == 0, "%u corners whose normal is not their face's within %g deg", off, angle);
+        }
+        tsr_mesh_free(&out);
+    }
+    tsr_ptess_result_free(&r);
+    tsr_pmodel_destroy(m);
+    tsr_subd_destroy(subd);
+}
+
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
@@ -3268,5 +3654,7 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
           T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
          T(rational_cylinder_cut_near_its_strip),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
-          T(data_osd_corner_estimate), T(data_osd_half_tiles),
+          T(data_osd_corner_estimate), T(data_osd_half_tiles), T(crease_normals_box), T(crease_normals_smooth_sphere),
+          T(crease_normals_bspline_kink),
+          T(data_osd_crease_normals),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))

@@ -133,6 +133,38 @@ patch_skipped_statements)
   [ ! -s "$cap/stderr" ] || fail "--quiet printed: $(cat "$cap/stderr")"
   rm "$dir/mixed.ply"
   echo "ok [$case]: polygons noted" ;;
+patch_crease_normals)
+  # a box of six planar patches: with --normals each vertex is written once
+  # per face meeting there, every normal that face's (an axis), every
+  # corner's position kept; 180 degrees keeps them welded (edges: the mean)
+  : > "$dir/box.obj"
+  for f in "0 0 0|0 1 0|0 0 1|0 1 1" "2 0 0|2 0 1|2 1 0|2 1 1" "0 0 0|0 0 1|2 0 0|2 0 1" \
+           "0 1 0|2 1 0|0 1 1|2 1 1" "0 0 0|2 0 0|0 1 0|2 1 0" "0 0 1|0 1 1|2 0 1|2 1 1"; do
+    echo "$f" | tr '|' '\n' | sed 's/^/v /' >> "$dir/box.obj"
+    printf 'cstype bezier\ndeg 1 1\nsurf 0 1 0 1 -4 -3 -2 -1\nend\n' >> "$dir/box.obj"
+  done
+  "$tessera" patch "$dir/box.obj" -o "$dir/box_n.obj" --normals --stats "$dir/s.json" 2> "$cap/stderr" ||
+    fail "normals: $(cat "$cap/stderr")"
+  grep -q "more written at creases" "$cap/stderr" || fail "summary: $(cat "$cap/stderr")"
+  welded=$(sed -n 's/.*"vertices":[[:space:]]*\([0-9]*\).*/\1/p' "$dir/s.json")
+  written=$(sed -n 's/.*"vertices_written":[[:space:]]*\([0-9]*\).*/\1/p' "$dir/s.json")
+  added=$(sed -n 's/.*"crease_vertices":[[:space:]]*\([0-9]*\).*/\1/p' "$dir/s.json")
+  [ -n "$welded" ] && [ -n "$written" ] && [ -n "$added" ] || fail "stats: $(cat "$dir/s.json")"
+  [ "$written" -eq $((welded + added)) ] && [ "$added" -gt 0 ] || fail "welded $welded written $written added $added"
+  [ "$(grep -c '^v ' "$dir/box_n.obj")" -eq "$written" ] || fail "v lines: $(grep -c '^v ' "$dir/box_n.obj")"
+  # every normal an axis: one component +-1, the others 0
+  bad=$(awk '/^vn /{a=0; for (i = 2; i <= 4; i++) { x = $i < 0 ? -$i : $i; if (x > 0.999999) a++; else if (x > 1e-6) a += 10 } if (a != 1) n++} END {print n + 0}' "$dir/box_n.obj")
+  [ "$bad" -eq 0 ] || fail "$bad normals not along an axis"
+  "$tessera" patch "$dir/box.obj" -o "$dir/box_w.obj" --normals --crease-angle 180 --quiet || fail "180 failed"
+  [ "$(grep -c '^v ' "$dir/box_w.obj")" -eq "$welded" ] || fail "180: $(grep -c '^v ' "$dir/box_w.obj") vertices"
+  # .stl has facet normals only: nothing to split, no such keys
+  "$tessera" patch "$dir/box.obj" -o "$dir/box.stl" --normals --stats "$dir/s2.json" --quiet || fail "stl failed"
+  ! grep -q vertices_written "$dir/s2.json" || fail "stl stats: $(cat "$dir/s2.json")"
+  expect_error 2 "--crease-angle needs --normals" -- "$tessera" patch "$dir/box.obj" -o "$out" --crease-angle 10
+  expect_error 2 "--crease-angle 200: must be an angle in 0\.\.180 degrees" -- \
+    "$tessera" patch "$dir/box.obj" -o "$out" --normals --crease-angle 200
+  rm -f "$dir/box_n.obj" "$dir/box_w.obj" "$dir/box.stl" "$dir/s.json" "$dir/s2.json"
+  echo "ok [$case]: $welded welded vertices, $written written" ;;
 raw_wrong_size)
   expect_error 1 "nan\.f32: raw f32 5x4 needs 80 bytes but the file has 64" -- "$tessera" info "$dir/nan.f32" --raw 5 4 f32 ;;
 bad_options)
