@@ -358,3 +358,163 @@ done:
     ctx_free(&c);
     return s;
 }
+
+/* ---- Flat faces ----------------------------------------------------------- */
+
+typedef struct fgroup {
+    double first[3], sum[3];
+    uint32_t vertex;
+} fgroup;
+
+tsr_status tsr_mesh_split_flat(tsr_mesh *m, uint32_t first, double crease_deg, tsr_error *err)
+{
+    if (!m)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "flat faces: no mesh");
+    if (!m->normals && m->vertex_count)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "flat faces: the mesh has no normals");
+    if (first > m->triangle_count)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "flat faces: triangle %u is beyond the %u triangles", first,
+                             m->triangle_count);
+    if (!(crease_deg >= 0 && crease_deg <= 180))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "flat faces: the crease angle %g is not within 0..180 degrees",
+                             crease_deg);
+    uint32_t nv = m->vertex_count, nt = m->triangle_count;
+    for (size_t c = 3 * (size_t)first; c < 3 * (size_t)nt; c++)
+        if (m->indices[c] >= nv)
+            return tsr_error_set(err, TSR_ERR_INVALID_MESH, "flat faces: triangle %zu has index %u >= %u vertices",
+                                 c / 3, m->indices[c], nv);
+    double cos_lim = crease_deg >= 180 ? -2 : cos(crease_deg * (3.14159265358979323846 / 180));
+    const tsr_allocator *a = &m->alloc;
+    size_t nc = 3 * (size_t)(nt - first);
+    uint32_t *off = tsr_alloc(a, ((size_t)nv + 2) * sizeof *off), *list = tsr_alloc(a, (nc + 1) * sizeof *list);
+    uint32_t *idx = tsr_alloc(a, (nc + 1) * sizeof *idx), *gof = tsr_alloc(a, (nc + 1) * sizeof *gof);
+    uint8_t *top = tsr_alloc(a, (size_t)nv + 1);
+    double *fn = tsr_alloc(a, (3 * (size_t)(nt - first) + 1) * sizeof *fn);
+    fgroup *g = NULL;
+    uint32_t gcap = 0;
+    tsr_status st = TSR_ERR_NOMEM;
+    if (!off || !list || !idx || !gof || !top || !fn)
+        goto done;
+    memset(top, 0, nv);
+    for (size_t c = 0; c < 3 * (size_t)first; c++)
+        top[m->indices[c]] = 1;
+    for (uint32_t t = first; t < nt; t++) { /* unit normals (0 when degenerate) */
+        const float *p0 = m->positions + 3 * (size_t)m->indices[3 * (size_t)t],
+                    *p1 = m->positions + 3 * (size_t)m->indices[3 * (size_t)t + 1],
+                    *p2 = m->positions + 3 * (size_t)m->indices[3 * (size_t)t + 2];
+        double e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+        double *n = fn + 3 * (size_t)(t - first);
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int k = 0; k < 3; k++)
+            n[k] = l > 0 ? n[k] / l : 0;
+    }
+    /* the new faces' corners, by vertex */
+    memset(off, 0, ((size_t)nv + 2) * sizeof *off);
+    for (size_t c = 0; c < nc; c++)
+        off[m->indices[3 * (size_t)first + c] + 2]++;
+    for (uint32_t v = 0; v < nv; v++)
+        off[v + 2] += off[v + 1];
+    for (size_t c = 0; c < nc; c++)
+        list[off[m->indices[3 * (size_t)first + c] + 1]++] = (uint32_t)c;
+    /* now off[v] .. off[v + 1] are v's corners; group them */
+    uint32_t add = 0;
+    for (uint32_t v = 0; v < nv; v++) {
+        uint32_t lo = off[v], hi = off[v + 1], ng = 0;
+        if (lo == hi)
+            continue;
+        if (hi - lo > gcap) {
+            uint32_t cap = gcap ? gcap : 8;
+            while (cap < hi - lo)
+                cap *= 2;
+            fgroup *ng2 = tsr_realloc(a, g, cap * sizeof *g);
+            if (!ng2)
+                goto done;
+            g = ng2;
+            gcap = cap;
+        }
+        for (uint32_t k = lo; k < hi; k++) {
+            const double *n = fn + 3 * (size_t)(list[k] / 3);
+            uint32_t j = 0;
+            bool flat = n[0] == 0 && n[1] == 0 && n[2] == 0;
+            while (j < ng && !flat && n[0] * g[j].first[0] + n[1] * g[j].first[1] + n[2] * g[j].first[2] < cos_lim)
+                j++;
+            if (j == ng && (flat && ng)) /* degenerate: the first group */
+                j = 0;
+            if (j == ng) {
+                memcpy(g[j].first, n, sizeof g[j].first);
+                memset(g[j].sum, 0, sizeof g[j].sum);
+                ng++;
+            }
+            for (int x = 0; x < 3; x++)
+                g[j].sum[x] += n[x];
+            gof[k] = j;
+        }
+        for (uint32_t j = 0; j < ng; j++)
+            g[j].vertex = j == 0 && !top[v] ? v : nv + add++;
+        for (uint32_t k = lo; k < hi; k++)
+            idx[list[k]] = g[gof[k]].vertex;
+    }
+    if ((uint64_t)nv + add > UINT32_MAX - 1) {
+        st = tsr_error_set(err, TSR_ERR_TOO_LARGE, "flat faces: more than 2^32 - 2 vertices");
+        goto done;
+    }
+    if (tsr_mesh_reserve(m, nv + add, nt) != TSR_OK)
+        goto done;
+    /* the copies: position, uv and (for faces without area) normal of the
+     * vertex they split; then every vertex of the faces takes the unit sum
+     * of its faces' normals */
+    for (uint32_t v = 0; v < nv; v++)
+        for (uint32_t k = off[v]; k < off[v + 1]; k++) {
+            uint32_t w = idx[list[k]];
+            if (w >= nv) {
+                memcpy(m->positions + 3 * (size_t)w, m->positions + 3 * (size_t)v, 3 * sizeof(float));
+                memcpy(m->normals + 3 * (size_t)w, m->normals + 3 * (size_t)v, 3 * sizeof(float));
+                if (m->uvs)
+                    memcpy(m->uvs + 2 * (size_t)w, m->uvs + 2 * (size_t)v, 2 * sizeof(float));
+            }
+        }
+    double *sum = tsr_alloc(a, (3 * (size_t)(nv + add) + 1) * sizeof *sum);
+    if (!sum)
+        goto done;
+    uint8_t *own = tsr_alloc(a, (size_t)(nv + add) + 1); /* vertex takes its faces' normal */
+    if (!own) {
+        tsr_free(a, sum);
+        goto done;
+    }
+    memset(own, 0, (size_t)(nv + add));
+    memset(sum, 0, 3 * (size_t)(nv + add) * sizeof *sum);
+    for (size_t c = 0; c < nc; c++) {
+        uint32_t w = idx[c];
+        own[w] = 1;
+        for (int x = 0; x < 3; x++)
+            sum[3 * (size_t)w + x] += fn[3 * (c / 3) + x];
+    }
+    for (uint32_t w = 0; w < nv + add; w++) {
+        if (!own[w])
+            continue;
+        double *s = sum + 3 * (size_t)w, l = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+        float *n = m->normals + 3 * (size_t)w;
+        if (l > 0)
+            for (int x = 0; x < 3; x++)
+                n[x] = (float)(s[x] / l);
+    }
+    tsr_free(a, sum);
+    tsr_free(a, own);
+    m->vertex_count = nv + add;
+    memcpy(m->indices + 3 * (size_t)first, idx, nc * sizeof *idx);
+    st = TSR_OK;
+done:
+    tsr_free(a, off);
+    tsr_free(a, list);
+    tsr_free(a, idx);
+    tsr_free(a, gof);
+    tsr_free(a, top);
+    tsr_free(a, fn);
+    tsr_free(a, g);
+    if (st == TSR_ERR_NOMEM)
+        tsr_error_set(err, st, "flat faces: out of memory");
+    return st;
+}

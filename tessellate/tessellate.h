@@ -321,7 +321,8 @@ bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x
  * Attributes of the new vertices, when the mesh has them: normals are the
  * unit bisector of (0, 0, -1) and the outward horizontal normal of the
  * corner (mean of its two walls'), a 45-degree bevel: vertices are shared
- * for watertightness, so walls are smooth-shaded, not flat, and the top's
+ * for watertightness, so walls are smooth-shaded, not flat (for drawing,
+ * tsr_mesh_split_flat gives them vertices of their own), and the top's
  * normals are left as they are; uvs are copied from the top vertex above.
  *
  * base_z (world units) must be finite and, as a float, strictly below the
@@ -335,6 +336,23 @@ bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x
  * mesh's content is unchanged (its capacity may have grown). Cost:
  * O(T log T) plus the triangulation of the boundary vertices. */
 tsr_status tsr_mesh_add_base(tsr_mesh *mesh, double base_z, tsr_error *err);
+
+/* Flat shading for the faces from triangle `first` on (a solid's walls and
+ * bottom, added by tsr_mesh_add_base after the top's triangles), in place,
+ * for drawing: at each vertex, those triangles are grouped by their own
+ * unit normals (each joining the first group whose first normal is within
+ * crease_deg degrees, 0..180), and each group gets a vertex of its own (a
+ * copy at the same position, uv copied) with the unit mean of its
+ * triangles' normals, used by its corners. Triangles before `first` keep
+ * their vertices and normals; a vertex only the new faces use becomes their
+ * first group's. So the walls and the bottom shade flat with sharp edges
+ * between them and the top, and the mesh stays closed by position but no
+ * longer by index there. The mesh must have normals; TSR_ERR_ARGUMENT for
+ * NULL, a mesh without normals, first beyond the triangles or an angle out
+ * of range; TSR_ERR_TOO_LARGE past 2^32 - 2 vertices; TSR_ERR_NOMEM (the
+ * mesh unchanged but for its capacity). Degenerate triangles (no normal)
+ * join their corners' first group. */
+tsr_status tsr_mesh_split_flat(tsr_mesh *mesh, uint32_t first, double crease_deg, tsr_error *err);
 
 #ifdef __cplusplus
 }

@@ -63,7 +63,9 @@ static void help(FILE *f)
             "  --north-up            y = -r*dy: +y is the image's up (north in a north-up GIS raster),\n"
             "                        so x east, y north, z up is right-handed and the terrain is not\n"
             "                        mirrored in a z-up viewer (the default's y runs down the rows)\n"
-            "  --normals             per-vertex normals from the heightfield's gradients\n"
+            "  --normals             per-vertex normals from the heightfield's gradients (with --base,\n"
+            "                        the walls and bottom flat-shaded: their vertices are written apart\n"
+            "                        from the top's, except in .stl, which has facet normals)\n"
             "  --normal-map FILE     a normal map image at the heightfield's resolution (.png, .tif)\n"
             "  --hillshade FILE      a hillshade image at the heightfield's resolution (.png, .tif)\n"
             "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
@@ -419,7 +421,16 @@ static int run(int argc, char **argv)
         for (uint32_t i = 0; i < mesh.vertex_count; i++)
             zmin = fmin(zmin, mesh.positions[3 * (size_t)i + 2]);
         base_z = zmin - base;
+        uint32_t top = mesh.triangle_count;
         if (tsr_mesh_add_base(&mesh, base_z, &err) != TSR_OK) {
+            cli_error("mesh", "--base: %s", err.message);
+            rc = CLI_FAIL;
+        }
+        /* with normals (not in .stl: facet normals), the walls and the
+         * bottom shade flat, their vertices apart from the top's; turns of
+         * the outline under 30 degrees stay smooth */
+        if (rc == CLI_OK && to.normals && tsr_mesh_format_from_path(out) != TSR_FORMAT_STL &&
+            tsr_mesh_split_flat(&mesh, top, 30, &err) != TSR_OK) {
             cli_error("mesh", "--base: %s", err.message);
             rc = CLI_FAIL;
         }

@@ -554,7 +554,85 @@ TEST(closed_mesh_left_alone)
     tsr_mesh_free(&m);
 }
 
+/* tsr_mesh_split_flat on a closed grid (a 4 x 3 rectangle): the walls
+ * and the bottom shade flat, the top keeps its vertices and normals, every
+ * corner stays where it was. Each top rim vertex gains one vertex per wall
+ * direction meeting there (2 at the 4 corners, 1 on the 10 side
+ * vertices); each bottom vertex is split between the bottom and its wall
+ * directions, keeping its index for the first: 36 new vertices. */
+TEST(split_flat_walls_and_bottom)
+{
+    tsr_mesh m;
+    grid_mesh(&m, TSR_MESH_NORMALS | TSR_MESH_UVS, 4, 3, NULL, NAN);
+    uint32_t ntop = m.triangle_count;
+    tsr_error err = {0};
+    CHECK(tsr_mesh_add_base(&m, 0, &err) == TSR_OK);
+    uint32_t nv = m.vertex_count, nt = m.triangle_count;
+    CHECK(nv == 20 + 14);
+    float *pos = malloc(9 * sizeof(float) * nt), *nrm = malloc(9 * sizeof(float) * ntop);
+    uint32_t *idx = malloc(3 * sizeof(uint32_t) * ntop);
+    for (uint32_t c = 0; c < 3 * nt; c++)
+        memcpy(pos + 3 * c, m.positions + 3 * m.indices[c], 3 * sizeof(float));
+    for (uint32_t c = 0; c < 3 * ntop; c++) {
+        idx[c] = m.indices[c];
+        memcpy(nrm + 3 * c, m.normals + 3 * m.indices[c], 3 * sizeof(float));
+    }
+    CHECK_MSG(tsr_mesh_split_flat(&m, ntop, 1, &err) == TSR_OK, "%s", err.message);
+    CHECK(m.triangle_count == nt);
+    CHECK_MSG(m.vertex_count == nv + 36, "%u vertices, want %u + 36", m.vertex_count, nv);
+    uint32_t moved = 0, top_changed = 0, smeared = 0;
+    for (uint32_t c = 0; c < 3 * nt; c++)
+        moved += memcmp(pos + 3 * c, m.positions + 3 * m.indices[c], 3 * sizeof(float)) != 0;
+    for (uint32_t c = 0; c < 3 * ntop; c++)
+        top_changed += idx[c] != m.indices[c] || memcmp(nrm + 3 * c, m.normals + 3 * m.indices[c], 12) != 0;
+    for (uint32_t t = ntop; t < nt; t++) {
+        const float *p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = m.positions + 3 * m.indices[3 * t + k];
+        double a[3], b[3], n[3];
+        for (int k = 0; k < 3; k++) {
+            a[k] = p[1][k] - p[0][k];
+            b[k] = p[2][k] - p[0][k];
+        }
+        n[0] = a[1] * b[2] - a[2] * b[1];
+        n[1] = a[2] * b[0] - a[0] * b[2];
+        n[2] = a[0] * b[1] - a[1] * b[0];
+        double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int k = 0; k < 3; k++) {
+            const float *q = m.normals + 3 * m.indices[3 * t + k];
+            smeared += (q[0] * n[0] + q[1] * n[1] + q[2] * n[2]) / l < 1 - 1e-6;
+        }
+        /* and no top vertex is used by a wall or the bottom */
+        for (int k = 0; k < 3; k++)
+            moved += m.indices[3 * t + k] < 20;
+    }
+    CHECK_MSG(moved == 0, "%u corners moved", moved);
+    CHECK_MSG(top_changed == 0, "%u top corners changed", top_changed);
+    CHECK_MSG(smeared == 0, "%u wall or bottom corners not their face's normal", smeared);
+    for (uint32_t v = nv; v < m.vertex_count; v++) /* uv of the vertex copied: the one above */
+        CHECK_NEAR(m.uvs[2 * v], m.positions[3 * v] / 4, 1e-7);
+    tsr_mesh_free(&m);
+    /* 180 degrees: one vertex per rim vertex for the walls, the bottom's kept */
+    grid_mesh(&m, TSR_MESH_NORMALS, 4, 3, NULL, NAN);
+    CHECK(tsr_mesh_add_base(&m, 0, &err) == TSR_OK);
+    CHECK(tsr_mesh_split_flat(&m, ntop, 180, &err) == TSR_OK);
+    CHECK_MSG(m.vertex_count == nv + 14, "180: %u vertices", m.vertex_count);
+    /* refusals */
+    CHECK(tsr_mesh_split_flat(&m, m.triangle_count + 1, 1, &err) == TSR_ERR_ARGUMENT);
+    CHECK(tsr_mesh_split_flat(&m, 0, -1, &err) == TSR_ERR_ARGUMENT);
+    CHECK(tsr_mesh_split_flat(&m, 0, NAN, &err) == TSR_ERR_ARGUMENT);
+    CHECK(tsr_mesh_split_flat(NULL, 0, 1, &err) == TSR_ERR_ARGUMENT);
+    tsr_mesh_free(&m);
+    grid_mesh(&m, 0, 4, 3, NULL, NAN);
+    CHECK(tsr_mesh_add_base(&m, 0, &err) == TSR_OK);
+    CHECK(tsr_mesh_split_flat(&m, ntop, 1, &err) == TSR_ERR_ARGUMENT);
+    tsr_mesh_free(&m);
+    free(pos);
+    free(nrm);
+    free(idx);
+}
+
 TEST_MAIN(T(grid_heightfield), T(flat_top_volume_is_area_times_height), T(hole_makes_genus_one), T(two_components),
           T(notched_boundary), T(island_in_a_hole), T(diagonal_holes_pinch), T(bowtie_outer_pinch), T(reflex_pinch),
           T(normals_and_uvs_of_new_vertices), T(random_masks), T(base_not_below_mesh), T(bad_meshes_refused),
-          T(closed_mesh_left_alone))
+          T(closed_mesh_left_alone), T(split_flat_walls_and_bottom))

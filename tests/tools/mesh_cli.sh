@@ -155,6 +155,16 @@ if [ -f "$modules/gltf-validator/package.json" ]; then
   TSR_NODE_MODULES="$modules" node "$(dirname "$0")/gltf_validate.mjs" --strict "$dir/m.glb" || fail "glTF validator"
   echo "ok glb validated"
 fi
+# with --normals the solid's walls and bottom shade flat: a bottom corner's
+# normal is -z, a wall corner's horizontal, none shared with the top's
+"$tessera" mesh "$dir/t.png" --dx 10 --max-error 3 --base 50 --normals -o "$dir/solid_n.obj" --quiet || fail "base normals"
+bad=$(awk '$1 == "v" {z[++n] = $4; if (n == 1 || $4 < lo) lo = $4}
+  $1 == "vn" {nz[++m] = $4}
+  $1 == "f" {k = 0; for (i = 2; i <= 4; i++) { split($i, a, "/"); v[i] = a[1]; k += z[a[1]] == lo }
+    if (k == 3) { for (i = 2; i <= 4; i++) if (nz[v[i]] != -1) b++ }
+    else if (k > 0) { for (i = 2; i <= 4; i++) if (nz[v[i]] > 1e-6 || nz[v[i]] < -1e-6) b++ } }
+  END {print b + 0}' "$dir/solid_n.obj")
+[ "$bad" -eq 0 ] || fail "--base --normals: $bad wall or bottom corners not flat-shaded"
 echo "ok solid, images"
 
 # --north-up: every vertex (x, y, z) becomes (x, -y, z) with its normal's y
