@@ -1649,7 +1649,10 @@ typedef struct pctx {
     uint32_t N;      /* quads per tile side: the piece's own (choose_tile) */
     double inv_n2;   /* 1 / N^2 */
     double tol; /* max_error or pixel_error, times the piece's scale */
-    uint8_t *act[4]; /* per segment of a linked edge: span log of the leaf there */
+    uint8_t *act[4]; /* per segment of a linked edge (after selection, collect_spans):
+                        span log of the leaf there; segments of the deepest leaf's size,
+                        each 2^act_shift of the finest level's */
+    uint8_t act_shift;
     tsr_surface surf;
     tsr_quadtree *qt;
     const tsr_allocator *alloc;
@@ -1743,7 +1746,7 @@ static bool memo_room(pctx *c, uint32_t extra)
 {
     if (c->npts + extra <= c->cappts)
         return true;
-    uint32_t cap = c->cappts ? 2 * c->cappts : 1024;
+    uint32_t cap = c->cappts ? 2 * c->cappts : 64;
     while (cap < c->npts + extra)
         cap *= 2;
     double *np = tsr_realloc(c->alloc, c->pts, (size_t)cap * 3 * sizeof *np);
@@ -1867,7 +1870,7 @@ static void keep_tile(pctx *c, nodeval *v)
 {
     size_t rr = (size_t)(c->N + 1) * (c->N + 1), st = tile_stride(c);
     if (c->ntidx == c->captidx) {
-        uint32_t cap = c->captidx ? 2 * c->captidx : 64;
+        uint32_t cap = c->captidx ? 2 * c->captidx : 8;
         uint32_t *nt = tsr_realloc(c->alloc, c->tidx, cap * st * sizeof *nt);
         if (!nt)
             return;
@@ -2030,7 +2033,7 @@ static const nodeval *node_info(pctx *c, tsr_qnode n)
                                                                    c->surf.error_isotropic))
                                     : 1;
         if (c->nnv == c->capnv) {
-            uint32_t cap = c->capnv ? 2 * c->capnv : 256;
+            uint32_t cap = c->capnv ? 2 * c->capnv : 16;
             nodeval *nv = cap > c->capnv ? tsr_realloc(c->alloc, c->nv, (size_t)cap * sizeof *nv) : NULL;
             if (nv) {
                 c->nv = nv;
@@ -2179,7 +2182,6 @@ static tsr_status choose_tile(pctx *c, uint32_t tile, uint32_t maxN)
 typedef struct ptree {
     uint32_t N;
     double inv_n2;
-    uint8_t *act[4];
     tsr_surface surf;
     tsr_quadtree *qt;
     tsr_keymap memo;
@@ -2191,7 +2193,7 @@ typedef struct ptree {
 
 static ptree tree_take(pctx *c)
 {
-    ptree t = {c->N, c->inv_n2, {c->act[0], c->act[1], c->act[2], c->act[3]}, c->surf, c->qt, c->memo, c->nv,
+    ptree t = {c->N, c->inv_n2, c->surf, c->qt, c->memo, c->nv,
                c->nnv, c->capnv, c->tidx, c->ntidx, c->captidx};
     return t;
 }
@@ -2200,7 +2202,6 @@ static void tree_put(pctx *c, const ptree *t)
 {
     c->N = t->N;
     c->inv_n2 = t->inv_n2;
-    memcpy(c->act, t->act, sizeof c->act);
     c->surf = t->surf;
     c->qt = t->qt;
     c->memo = t->memo;
@@ -2219,8 +2220,6 @@ static void tree_free(ptree *t, const tsr_allocator *a)
     tsr_keymap_free(&t->memo, a);
     tsr_free(a, t->nv);
     tsr_free(a, t->tidx);
-    for (int e = 0; e < 4; e++)
-        tsr_free(a, t->act[e]);
     memset(t, 0, sizeof *t);
 }
 
@@ -2259,9 +2258,6 @@ static tsr_status subd_choose_tile(pctx *c, uint32_t half)
     trial.surf.levels = keep.surf.levels + 1;
     trial.qt = tsr_quadtree_create(&trial.surf, c->alloc);
     st = trial.qt ? TSR_OK : TSR_ERR_NOMEM;
-    for (int e = 0; e < 4 && st == TSR_OK; e++)
-        if (keep.act[e] && !(trial.act[e] = tsr_alloc(c->alloc, (size_t)1 << trial.surf.levels)))
-            st = TSR_ERR_NOMEM;
     if (st == TSR_OK) {
         tree_put(c, &trial);
         st = tsr_quadtree_select(c->qt, refine, c);
@@ -2309,17 +2305,31 @@ static uint32_t check_stitched(pctx *c, double *bound)
     return marked;
 }
 
-/* Fills act[] from the current leaves. */
-static void collect_spans(pctx *c)
+/* Makes act[] of the linked edges from the leaves, at the resolution of
+ * the deepest leaf (a small tree's arrays stay small). false: out of
+ * memory. */
+static bool collect_spans(pctx *c)
 {
-    uint32_t nl = tsr_quadtree_leaf_count(c->qt);
+    uint32_t nl = tsr_quadtree_leaf_count(c->qt), deepest = 0;
     const tsr_qleaf *lv = tsr_quadtree_leaves(c->qt);
+    const piece *p = &c->m->pieces[c->piece];
+    for (uint32_t i = 0; i < nl; i++)
+        deepest = lv[i].node.level > deepest ? lv[i].node.level : deepest;
+    c->act_shift = (uint8_t)(c->surf.levels - deepest);
+    for (int e = 0; e < 4; e++) {
+        tsr_free(c->alloc, c->act[e]);
+        c->act[e] = NULL;
+        if (p->nlinks[e] && !(c->act[e] = tsr_alloc(c->alloc, (size_t)1 << deepest)))
+            return false;
+    }
     for (uint32_t i = 0; i < nl; i++)
         for (int e = 0; e < 4; e++) {
             uint32_t k0, k1;
             if (c->act[e] && node_edge_range(c, lv[i].node, e, &k0, &k1))
-                memset(c->act[e] + k0, (int)(c->surf.levels - lv[i].node.level), k1 - k0);
+                memset(c->act[e] + (k0 >> c->act_shift), (int)(c->surf.levels - lv[i].node.level),
+                       (k1 - k0) >> c->act_shift);
         }
+    return true;
 }
 
 /* ---- vertex welding ------------------------------------------------------------ */
@@ -2837,7 +2847,7 @@ static bool edge_foreign(builder *b, uint32_t pi, int e, uint32_t Ta, uint32_t T
         uint64_t Slo = l->reversed ? s0 - dhi : s0 + dlo, Shi = l->reversed ? s0 - dlo : s0 + dhi;
         uint32_t before = b->nfp;
         for (uint64_t S = Slo; S <= Shi;) {
-            uint64_t g = S / Nq < Mq ? S / Nq : Mq - 1, step = (uint64_t)1 << act[g];
+            uint64_t g = S / Nq < Mq ? S / Nq : Mq - 1, step = (uint64_t)1 << act[g >> q->act_shift];
             if (S % step) {
                 S = (S / step + 1) * step;
                 continue;
@@ -3552,15 +3562,6 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
             st = TSR_ERR_NOMEM;
             break;
         }
-        for (int e = 0; e < 4; e++) {
-            if (!pc->nlinks[e])
-                continue;
-            c->act[e] = tsr_alloc(a, (size_t)1 << L);
-            if (!c->act[e]) {
-                st = TSR_ERR_NOMEM;
-                break;
-            }
-        }
     }
     /* select; then stitched tiles within the bound, or their coarse
      * neighbours split, until none fails. Linked edges need no agreement:
@@ -3616,7 +3617,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         }
     }
     for (uint32_t p = 0; p < m->npieces && st == TSR_OK; p++)
-        collect_spans(&ctx[p]);
+        if (!collect_spans(&ctx[p]))
+            st = TSR_ERR_NOMEM;
     tsr_free(a, dirty);
     /* assemble */
     builder b = {.m = m, .opt = &opt, .ctx = ctx, .out = out, .a = a};

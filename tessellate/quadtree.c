@@ -132,7 +132,7 @@ static int mark_split(tsr_quadtree *qt, tsr_qnode n)
         return 0;
     node_list *L = &qt->lists[n.level];
     if (L->count == L->cap) {
-        uint32_t cap = L->cap ? 2 * L->cap : 64;
+        uint32_t cap = L->cap ? 2 * L->cap : 16;
         uint32_t *xy = tsr_realloc(qa(qt), L->xy, (size_t)cap * 2 * sizeof *xy);
         if (!xy)
             return -1;
@@ -182,7 +182,7 @@ static bool neighbour(tsr_qnode n, int d, tsr_qnode *out)
 static bool push_leaf(tsr_quadtree *qt, tsr_qnode n)
 {
     if (qt->leaf_count == qt->leaf_cap) {
-        uint32_t cap = qt->leaf_cap ? 2 * qt->leaf_cap : 256;
+        uint32_t cap = qt->leaf_cap ? 2 * qt->leaf_cap : 16;
         tsr_qleaf *l = tsr_realloc(qa(qt), qt->leaves, (size_t)cap * sizeof *l);
         if (!l)
             return false;

@@ -3647,6 +3647,80 @@ TEST(data_osd_crease_normals)
     tsr_subd_destroy(subd);
 }
 
+/* An allocator that keeps the peak of the bytes alive (a header before
+ * each block holds its size). */
+typedef struct byte_count {
+    size_t live, peak;
+} byte_count;
+
+static void *count_realloc(void *user, void *ptr, size_t size)
+{
+    byte_count *c = user;
+    size_t *h = ptr ? (size_t *)ptr - 2 : NULL, old = h ? h[0] : 0;
+    if (size == 0) {
+        c->live -= old;
+        free(h);
+        return NULL;
+    }
+    size_t *n = realloc(h, size + 2 * sizeof *n);
+    if (!n)
+        return NULL;
+    n[0] = size;
+    c->live += size - old;
+    c->peak = c->live > c->peak ? c->live : c->peak;
+    return n + 2;
+}
+
+/* A cage of many small faces (a bumpy torus of 40 x 20 quads, each face a
+ * tile or two at this bound): the run's memory grows with what each face
+ * selects, a few kilobytes, not with the deepest tree a face could have
+ * (per-face arrays sized for 2^10 segments, point memos of 1024, made a
+ * 20,000-face cage take 810 MB and 2.7 s, mostly first touches of pages). */
+TEST(small_faces_small_memory)
+{
+    enum { NU = 40, NV = 20 };
+    sbuf b = {0};
+    for (int j = 0; j < NV; j++)
+        for (int i = 0; i < NU; i++) {
+            double u = 2 * PI * i / NU, v = 2 * PI * j / NV, r = 1 + 0.15 * sin(7 * u) * cos(3 * v);
+            sb_printf(&b, "v %.17g %.17g %.17g\n", (3 + r * cos(v)) * cos(u), (3 + r * cos(v)) * sin(u), r * sin(v));
+        }
+    for (int j = 0; j < NV; j++)
+        for (int i = 0; i < NU; i++)
+            sb_printf(&b, "f %d %d %d %d\n", j * NU + i + 1, j * NU + (i + 1) % NU + 1,
+                      (j + 1) % NV * NU + (i + 1) % NU + 1, (j + 1) % NV * NU + i + 1);
+    tsr_cage cage;
+    tsr_error e = {0};
+    tsr_subd *subd = NULL;
+    tsr_pmodel *m = NULL;
+    CHECK_MSG(tsr_cage_parse(b.s, b.n, "torus.obj", NULL, &cage, &e) == TSR_OK, "%s", e.message);
+    CHECK_MSG(tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, &subd, &e) == TSR_OK, "%s", e.message);
+    tsr_cage_free(&cage);
+    if (subd && tsr_pmodel_from_subd(subd, NULL, &m, &e) == TSR_OK) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        for (double frac = 3e-3; frac >= 0.9e-3; frac /= 3) {
+            byte_count bc = {0, 0};
+            tsr_allocator al = {count_realloc, &bc};
+            tsr_ptess_options o = {0};
+            o.max_error = frac * dist3(info.lo, info.hi);
+            tsr_ptess_result r;
+            CHECK(tsr_ptess_run(m, &o, &al, &r, &e) == TSR_OK);
+            double per_face = (double)bc.peak / (NU * NV), per_tile = (double)bc.peak / r.leaves;
+            fprintf(stderr, "  %g of the diagonal: %u tiles, %u triangles, peak %.0f bytes per face, %.0f per tile\n",
+                    frac, r.leaves, r.mesh.triangle_count, per_face, per_tile);
+            CHECK_MSG(per_tile < 16000, "%.0f bytes per tile at its peak (about 60,000 before)", per_tile);
+            tsr_validation v = validate(&r.mesh);
+            CHECK(v.boundary_edges == 0 && v.euler == 0);
+            tsr_ptess_result_free(&r);
+            CHECK(bc.live == 0);
+        }
+    }
+    tsr_pmodel_destroy(m);
+    tsr_subd_destroy(subd);
+    free(b.s);
+}
+
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
@@ -3655,6 +3729,6 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
          T(rational_cylinder_cut_near_its_strip),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
           T(data_osd_corner_estimate), T(data_osd_half_tiles), T(crease_normals_box), T(crease_normals_smooth_sphere),
-          T(crease_normals_bspline_kink),
+          T(crease_normals_bspline_kink), T(small_faces_small_memory),
           T(data_osd_crease_normals),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
