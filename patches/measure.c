@@ -40,13 +40,22 @@
  * collapsed edge is not papered over. These triangles are consulted only
  * for samples that no kept triangle contains. A sample in neither is
  * `uncovered` (untrimmed source: a gap of the mesh) or `trimmed_out`.
+ *
+ * Threads. Sources are measured independently, each into its own record
+ * (largest error and where, sum of squares, counts), and the records are
+ * merged in source order afterwards, so the figures are the same on any
+ * number of threads. With the default allocator and enough samples the
+ * sources are shared out among every core's thread (claimed a few at a
+ * time); a caller's allocator is only called from the calling thread.
  */
 #include "patches/ptess.h"
 
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* A reconstructed dropped triangle: (u, v) corners and welded vertices. */
 typedef struct gap_tri {
@@ -61,13 +70,19 @@ typedef struct vloc {
     int64_t qu, qw; /* (u, w) on a grid of 2^-36 of the domain: a sort key that rounding does not reorder */
 } vloc;
 
+/* What one source measured (merged in source order). */
+typedef struct src_result {
+    double max, sum2, uv[2];
+    uint64_t samples, uncovered, trimmed_out;
+} src_result;
+
 typedef struct measurer {
     const tsr_pmodel *m;
     const tsr_ptess_result *r;
     const tsr_camera *cam;
     const tsr_allocator *alloc;
-    tsr_ptess_measure_result *out;
-    double sum2;
+    src_result *out;     /* the current source's record */
+    double *source_error; /* per source max, or NULL */
     uint32_t nsrc;
 
     uint32_t *src_start; /* nsrc + 1: triangles of source s are src_tris[src_start[s] .. src_start[s+1]) */
@@ -86,6 +101,11 @@ typedef struct measurer {
     size_t cell_cap;
     uint32_t *entries;
     size_t entry_cap;
+
+    /* samples waiting for their true points: evaluated BATCH at a time
+     * (one preparation of the source), then recorded in order */
+    double *buv, *bmesh, *btruth;
+    uint32_t nbatch;
 
     /* the current source */
     uint32_t src, ntri;
@@ -143,17 +163,40 @@ static void record(measurer *M, double u, double v, const double truth[3], const
     }
     if (!isfinite(e))
         e = INFINITY; /* a NaN position is the worst error, not an ignored one */
-    tsr_ptess_measure_result *o = M->out;
+    src_result *o = M->out;
     o->samples++;
-    M->sum2 += e * e;
-    if (o->samples == 1 || e > o->max_error) {
-        o->max_error = e;
-        o->worst_source = M->src;
-        o->worst_uv[0] = u;
-        o->worst_uv[1] = v;
+    o->sum2 += e * e;
+    if (o->samples == 1 || e > o->max) {
+        o->max = e;
+        o->uv[0] = u;
+        o->uv[1] = v;
     }
-    if (o->source_error && e > o->source_error[M->src])
-        o->source_error[M->src] = e;
+    if (M->source_error && e > M->source_error[M->src])
+        M->source_error[M->src] = e;
+}
+
+enum { BATCH = 512 };
+
+/* Evaluates the waiting samples and records them, in order. */
+static tsr_status flush(measurer *M)
+{
+    if (!M->nbatch)
+        return TSR_OK;
+    tsr_status st = tsr_pmodel_eval_points(M->m, M->src, M->buv, M->nbatch, M->btruth);
+    for (uint32_t k = 0; k < M->nbatch && st == TSR_OK; k++)
+        record(M, M->buv[2 * k], M->buv[2 * k + 1], M->btruth + 3 * k, M->bmesh + 3 * k);
+    M->nbatch = 0;
+    return st;
+}
+
+/* A sample at (u, v) whose mesh point is mesh: queued. */
+static tsr_status sample(measurer *M, double u, double v, const double mesh[3])
+{
+    uint32_t k = M->nbatch++;
+    M->buv[2 * k] = u;
+    M->buv[2 * k + 1] = v;
+    memcpy(M->bmesh + 3 * k, mesh, 3 * sizeof *mesh);
+    return M->nbatch == BATCH ? flush(M) : TSR_OK;
 }
 
 /* Twice the signed area of (a, b, c). */
@@ -566,7 +609,7 @@ static tsr_status measure_source(measurer *M, uint32_t per_side)
         double v = j + 1 == nv ? M->dom[3] : M->dom[2] + (M->dom[3] - M->dom[2]) * ((double)j / (double)(nv - 1));
         for (uint64_t i = 0; i < nu; i++) {
             double u = i + 1 == nu ? M->dom[1] : M->dom[0] + (M->dom[1] - M->dom[0]) * ((double)i / (double)(nu - 1));
-            double mesh[3], truth[3];
+            double mesh[3];
             if (!mesh_point(M, u, v, mesh)) {
                 if (si.trimmed)
                     M->out->trimmed_out++;
@@ -574,9 +617,8 @@ static tsr_status measure_source(measurer *M, uint32_t per_side)
                     M->out->uncovered++;
                 continue;
             }
-            if ((st = tsr_pmodel_eval(M->m, M->src, u, v, truth, NULL)) != TSR_OK)
+            if ((st = sample(M, u, v, mesh)) != TSR_OK)
                 return st;
-            record(M, u, v, truth, mesh);
         }
     }
 
@@ -588,17 +630,83 @@ static tsr_status measure_source(measurer *M, uint32_t per_side)
         for (int q = 0; q < 3; q++) {
             int q2 = (q + 1) % 3;
             double u = 0.5 * (uv[2 * q] + uv[2 * q2]), v = 0.5 * (uv[2 * q + 1] + uv[2 * q2 + 1]);
-            double a[3], b[3], mesh[3], truth[3];
+            double a[3], b[3], mesh[3];
             vertex_pos(M, ix[3 * (size_t)t + q], a);
             vertex_pos(M, ix[3 * (size_t)t + q2], b);
             for (int d = 0; d < 3; d++)
                 mesh[d] = 0.5 * (a[d] + b[d]);
-            if ((st = tsr_pmodel_eval(M->m, M->src, u, v, truth, NULL)) != TSR_OK)
+            if ((st = sample(M, u, v, mesh)) != TSR_OK)
                 return st;
-            record(M, u, v, truth, mesh);
         }
     }
-    return TSR_OK;
+    return flush(M);
+}
+
+enum { MAX_THREADS = 64, CLAIM = 8 /* sources a thread takes at a time */ };
+
+/* What the threads share: the prototype measurer (model, mesh, sources'
+ * triangles), the per-source records, the next source to claim and the
+ * first failure. */
+typedef struct mshare {
+    const measurer *proto;
+    uint32_t per_side;
+    src_result *res;
+    uint32_t next;
+    tsr_status st;
+} mshare;
+
+static void measurer_free(measurer *M)
+{
+    tsr_free(M->alloc, M->stamp);
+    tsr_free(M->alloc, M->multi);
+    tsr_free(M->alloc, M->uv0);
+    tsr_free(M->alloc, M->locs);
+    tsr_free(M->alloc, M->gaps);
+    tsr_free(M->alloc, M->cell_start);
+    tsr_free(M->alloc, M->entries);
+    tsr_free(M->alloc, M->buv);
+    tsr_free(M->alloc, M->bmesh);
+    tsr_free(M->alloc, M->btruth);
+}
+
+/* One thread: its own scratch, sources claimed until none is left or one
+ * fails. */
+static void *measure_worker(void *arg)
+{
+    mshare *sh = arg;
+    measurer M = *sh->proto;
+    uint32_t nvert = M.r->mesh.vertex_count;
+    size_t nv = nvert ? nvert : 1;
+    M.stamp = tsr_alloc(M.alloc, nv * sizeof *M.stamp);
+    M.multi = tsr_alloc(M.alloc, nv * sizeof *M.multi);
+    M.uv0 = tsr_alloc(M.alloc, 2 * nv * sizeof *M.uv0);
+    M.buv = tsr_alloc(M.alloc, 2 * BATCH * sizeof *M.buv);
+    M.bmesh = tsr_alloc(M.alloc, 3 * BATCH * sizeof *M.bmesh);
+    M.btruth = tsr_alloc(M.alloc, 3 * BATCH * sizeof *M.btruth);
+    M.nbatch = 0;
+    tsr_status st = TSR_OK;
+    if (!M.stamp || !M.multi || !M.uv0 || !M.buv || !M.bmesh || !M.btruth) {
+        st = TSR_ERR_NOMEM;
+    } else {
+        memset(M.stamp, 0, nv * sizeof *M.stamp);
+        memset(M.multi, 0, nv * sizeof *M.multi);
+    }
+    while (st == TSR_OK && __atomic_load_n(&sh->st, __ATOMIC_ACQUIRE) == TSR_OK) {
+        uint32_t s0 = __atomic_fetch_add(&sh->next, CLAIM, __ATOMIC_RELAXED);
+        if (s0 >= M.nsrc)
+            break;
+        for (uint32_t s = s0; s < s0 + CLAIM && s < M.nsrc && st == TSR_OK; s++) {
+            M.src = s;
+            M.out = &sh->res[s];
+            st = measure_source(&M, sh->per_side);
+        }
+    }
+    if (st != TSR_OK) {
+        tsr_status ok = TSR_OK;
+        __atomic_compare_exchange_n(&sh->st, &ok, st, false, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE);
+    }
+    measurer_free(&M);
+    return NULL;
 }
 
 tsr_status tsr_ptess_measure(const tsr_pmodel *m, const tsr_ptess_result *r, uint32_t per_side,
@@ -629,9 +737,9 @@ tsr_status tsr_ptess_measure(const tsr_pmodel *m, const tsr_ptess_result *r, uin
     M.r = r;
     M.cam = camera;
     M.alloc = alloc;
-    M.out = out;
     M.nsrc = info.sources;
     tsr_status st = TSR_OK;
+    src_result *res = NULL;
     if (per_source_error && info.sources) {
         out->source_error = tsr_alloc(alloc, info.sources * sizeof *out->source_error);
         if (!out->source_error)
@@ -639,17 +747,15 @@ tsr_status tsr_ptess_measure(const tsr_pmodel *m, const tsr_ptess_result *r, uin
         for (uint32_t s = 0; s < info.sources; s++)
             out->source_error[s] = 0;
     }
+    M.source_error = out->source_error;
     M.src_start = tsr_alloc(alloc, ((size_t)info.sources + 1) * sizeof *M.src_start);
     M.src_tris = tsr_alloc(alloc, (ntri ? ntri : 1) * sizeof *M.src_tris);
-    M.stamp = tsr_alloc(alloc, (nvert ? nvert : 1) * sizeof *M.stamp);
-    M.multi = tsr_alloc(alloc, (nvert ? nvert : 1) * sizeof *M.multi);
-    M.uv0 = tsr_alloc(alloc, 2 * (size_t)(nvert ? nvert : 1) * sizeof *M.uv0);
-    if (!M.src_start || !M.src_tris || !M.stamp || !M.multi || !M.uv0) {
+    res = tsr_alloc(alloc, ((size_t)info.sources + 1) * sizeof *res);
+    if (!M.src_start || !M.src_tris || !res) {
         st = TSR_ERR_NOMEM;
         goto done;
     }
-    memset(M.stamp, 0, (nvert ? nvert : 1) * sizeof *M.stamp);
-    memset(M.multi, 0, (nvert ? nvert : 1) * sizeof *M.multi);
+    memset(res, 0, ((size_t)info.sources + 1) * sizeof *res);
     /* triangles grouped by source (counting sort) */
     memset(M.src_start, 0, ((size_t)info.sources + 1) * sizeof *M.src_start);
     for (uint32_t t = 0; t < ntri; t++)
@@ -662,23 +768,43 @@ tsr_status tsr_ptess_measure(const tsr_pmodel *m, const tsr_ptess_result *r, uin
         M.src_start[s] = M.src_start[s - 1];
     M.src_start[0] = 0;
 
+    /* about how many samples: threads where that is worth their start */
+    uint64_t work = 3 * (uint64_t)ntri + (uint64_t)info.pieces * per_side * per_side;
+    long ncpu = alloc || info.sources < 2 || work < ((uint64_t)1 << 17) ? 1 : sysconf(_SC_NPROCESSORS_ONLN);
+    uint32_t nthreads = ncpu < 1 ? 1 : ncpu > MAX_THREADS ? MAX_THREADS : (uint32_t)ncpu;
+    mshare sh = {&M, per_side, res, 0, TSR_OK};
+    pthread_t th[MAX_THREADS];
+    uint32_t started = 0;
+    for (uint32_t k = 1; k < nthreads; k++)
+        if (pthread_create(&th[started], NULL, measure_worker, &sh) == 0)
+            started++;
+    measure_worker(&sh);
+    for (uint32_t k = 0; k < started; k++)
+        pthread_join(th[k], NULL);
+    st = __atomic_load_n(&sh.st, __ATOMIC_ACQUIRE);
+
+    /* merged in source order, whatever the threads */
+    double sum2 = 0;
     for (uint32_t s = 0; s < info.sources && st == TSR_OK; s++) {
-        M.src = s;
-        st = measure_source(&M, per_side);
+        const src_result *q = &res[s];
+        if (q->samples && (!out->samples || q->max > out->max_error)) {
+            out->max_error = q->max;
+            out->worst_source = s;
+            out->worst_uv[0] = q->uv[0];
+            out->worst_uv[1] = q->uv[1];
+        }
+        out->samples += q->samples;
+        out->uncovered += q->uncovered;
+        out->trimmed_out += q->trimmed_out;
+        sum2 += q->sum2;
     }
     if (st == TSR_OK && out->samples)
-        out->rms_error = sqrt(M.sum2 / (double)out->samples);
+        out->rms_error = sqrt(sum2 / (double)out->samples);
 
 done:
     tsr_free(alloc, M.src_start);
     tsr_free(alloc, M.src_tris);
-    tsr_free(alloc, M.stamp);
-    tsr_free(alloc, M.multi);
-    tsr_free(alloc, M.uv0);
-    tsr_free(alloc, M.locs);
-    tsr_free(alloc, M.gaps);
-    tsr_free(alloc, M.cell_start);
-    tsr_free(alloc, M.entries);
+    tsr_free(alloc, res);
     if (st != TSR_OK) {
         tsr_free(alloc, out->source_error);
         double *none = NULL;

@@ -1266,6 +1266,22 @@ tsr_status tsr_pmodel_eval(const tsr_pmodel *m, uint32_t src, double u, double v
     return st;
 }
 
+tsr_status tsr_pmodel_eval_points(const tsr_pmodel *m, uint32_t src, const double *uv, uint32_t count, double *pos)
+{
+    if (!m || src >= m->nsources || (count && (!uv || !pos)))
+        return TSR_ERR_ARGUMENT;
+    const psource *s = &m->sources[src];
+    if (!m->set)
+        return tsr_subd_eval(m->subd, s->patch, s->sub, uv, count, pos, NULL, NULL);
+    for (uint32_t k = 0; k < count; k++) {
+        tsr_status st = tsr_patch_eval(&m->set->patches[s->patch], uv[2 * (size_t)k], uv[2 * (size_t)k + 1],
+                                       pos + 3 * (size_t)k, NULL, NULL, NULL);
+        if (st != TSR_OK)
+            return st;
+    }
+    return TSR_OK;
+}
+
 uint32_t tsr_pmodel_source_kinks(const tsr_pmodel *m, uint32_t src, int axis, double *out, uint32_t cap)
 {
     if (!m || !m->set || src >= m->nsources || axis < 0 || axis > 1)

@@ -239,6 +239,13 @@ bool tsr_pmodel_source_info(const tsr_pmodel *m, uint32_t src, tsr_psource_info 
  * the oracle of tsr_ptess_measure. TSR_ERR_ARGUMENT for src out of range. */
 tsr_status tsr_pmodel_eval(const tsr_pmodel *m, uint32_t src, double u, double v, double pos[3], double normal[3]);
 
+/* Positions only, as tsr_pmodel_eval, of count points of source src
+ * (uv: u, v each; pos: 3 each), the source prepared once for them all
+ * (a subdivision face's Bfr surface): what a caller evaluating many points
+ * of one source, or sources on several threads, should use.
+ * TSR_ERR_ARGUMENT for src out of range or NULL arrays with count > 0. */
+tsr_status tsr_pmodel_eval_points(const tsr_pmodel *m, uint32_t src, const double *uv, uint32_t count, double *pos);
+
 /* The parameters strictly inside source src's domain, along u (axis 0)
  * or v (axis 1), where its surface may crease: the knots of a B-spline or
  * NURBS source of multiplicity at least its degree that way (the surface
@@ -360,8 +367,12 @@ typedef struct tsr_ptess_measure_result {
  * camera: NULL for model units. per_source_error: when true, fills
  * out->source_error (allocated with alloc; caller frees with tsr_free).
  * Independent of how r was built: it reads only the mesh, tri_source,
- * tri_uv and tsr_pmodel_eval. TSR_ERR_ARGUMENT for NULL pointers or
- * per_side < 2, TSR_ERR_NOMEM. */
+ * tri_uv and tsr_pmodel_eval_points. With alloc NULL and some 10^5
+ * samples or more, the sources are measured on a thread per core (alloc
+ * given: on the calling thread only); each source is measured on its own
+ * and the figures merged in source order, so they do not depend on the
+ * threads. TSR_ERR_ARGUMENT for NULL pointers or per_side < 2,
+ * TSR_ERR_NOMEM. */
 tsr_status tsr_ptess_measure(const tsr_pmodel *m, const tsr_ptess_result *r, uint32_t per_side,
                              const tsr_camera *camera, bool per_source_error, const tsr_allocator *alloc,
                              tsr_ptess_measure_result *out);

@@ -3721,6 +3721,63 @@ TEST(small_faces_small_memory)
     free(b.s);
 }
 
+/* tsr_ptess_measure on threads (alloc NULL, enough samples) and on the
+ * calling thread alone (a caller's allocator) gives the same figures to
+ * the bit: each source is measured on its own and merged in order. */
+TEST(measure_threads_same_figures)
+{
+    enum { NU = 24, NV = 12 };
+    sbuf b = {0};
+    for (int j = 0; j < NV; j++)
+        for (int i = 0; i < NU; i++) {
+            double u = 2 * PI * i / NU, v = 2 * PI * j / NV, r = 1 + 0.2 * sin(5 * u) * cos(2 * v);
+            sb_printf(&b, "v %.17g %.17g %.17g\n", (3 + r * cos(v)) * cos(u), (3 + r * cos(v)) * sin(u), r * sin(v));
+        }
+    for (int j = 0; j < NV; j++)
+        for (int i = 0; i < NU; i++)
+            sb_printf(&b, "f %d %d %d %d\n", j * NU + i + 1, j * NU + (i + 1) % NU + 1,
+                      (j + 1) % NV * NU + (i + 1) % NU + 1, (j + 1) % NV * NU + i + 1);
+    tsr_cage cage;
+    tsr_error e = {0};
+    tsr_subd *subd = NULL;
+    tsr_pmodel *m = NULL;
+    CHECK_MSG(tsr_cage_parse(b.s, b.n, "torus.obj", NULL, &cage, &e) == TSR_OK, "%s", e.message);
+    CHECK_MSG(tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, &subd, &e) == TSR_OK, "%s", e.message);
+    tsr_cage_free(&cage);
+    if (subd && tsr_pmodel_from_subd(subd, NULL, &m, &e) == TSR_OK) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        tsr_ptess_options o = {0};
+        o.max_error = 3e-3 * dist3(info.lo, info.hi);
+        tsr_ptess_result r;
+        if (run_ptess(m, &o, &r)) {
+            tsr_ptess_measure_result a, c;
+            check_alloc f = {0};
+            tsr_allocator al = {check_realloc, &f};
+            CHECK(tsr_ptess_measure(m, &r, 32, NULL, true, NULL, &a) == TSR_OK);
+            CHECK(tsr_ptess_measure(m, &r, 32, NULL, true, &al, &c) == TSR_OK);
+            CHECK_MSG(a.samples >= 32 * 32 * NU * NV, "%llu samples", (unsigned long long)a.samples);
+            CHECK(a.samples == c.samples && a.uncovered == 0 && c.uncovered == 0 && a.trimmed_out == c.trimmed_out);
+            CHECK_MSG(a.max_error == c.max_error && a.rms_error == c.rms_error && a.worst_source == c.worst_source &&
+                          a.worst_uv[0] == c.worst_uv[0] && a.worst_uv[1] == c.worst_uv[1],
+                      "threads: max %.17g rms %.17g at %u; one: max %.17g rms %.17g at %u", a.max_error, a.rms_error,
+                      a.worst_source, c.max_error, c.rms_error, c.worst_source);
+            uint32_t differ = 0;
+            for (uint32_t s = 0; a.source_error && c.source_error && s < info.sources; s++)
+                differ += a.source_error[s] != c.source_error[s];
+            CHECK_MSG(differ == 0, "%u sources' errors differ", differ);
+            CHECK(a.max_error > 0 && a.max_error <= o.max_error * 1.5);
+            tsr_free(NULL, a.source_error);
+            tsr_free(&al, c.source_error);
+            CHECK(f.live == 0);
+        }
+        tsr_ptess_result_free(&r);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_subd_destroy(subd);
+    free(b.s);
+}
+
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
@@ -3729,6 +3786,6 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
          T(rational_cylinder_cut_near_its_strip),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
           T(data_osd_corner_estimate), T(data_osd_half_tiles), T(crease_normals_box), T(crease_normals_smooth_sphere),
-          T(crease_normals_bspline_kink), T(small_faces_small_memory),
+          T(crease_normals_bspline_kink), T(small_faces_small_memory), T(measure_threads_same_figures),
           T(data_osd_crease_normals),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
