@@ -651,9 +651,16 @@ typedef struct mshare {
     const measurer *proto;
     uint32_t per_side;
     src_result *res;
-    uint32_t next;
+    uint32_t next, done;
     tsr_status st;
+    void (*progress)(void *, double);
+    void *user;
 } mshare;
+
+typedef struct mworker {
+    mshare *sh;
+    bool caller; /* the calling thread: the one that reports progress */
+} mworker;
 
 static void measurer_free(measurer *M)
 {
@@ -673,7 +680,8 @@ static void measurer_free(measurer *M)
  * fails. */
 static void *measure_worker(void *arg)
 {
-    mshare *sh = arg;
+    const mworker *w = arg;
+    mshare *sh = w->sh;
     measurer M = *sh->proto;
     uint32_t nvert = M.r->mesh.vertex_count;
     size_t nv = nvert ? nvert : 1;
@@ -695,11 +703,15 @@ static void *measure_worker(void *arg)
         uint32_t s0 = __atomic_fetch_add(&sh->next, CLAIM, __ATOMIC_RELAXED);
         if (s0 >= M.nsrc)
             break;
-        for (uint32_t s = s0; s < s0 + CLAIM && s < M.nsrc && st == TSR_OK; s++) {
+        uint32_t s = s0;
+        for (; s < s0 + CLAIM && s < M.nsrc && st == TSR_OK; s++) {
             M.src = s;
             M.out = &sh->res[s];
             st = measure_source(&M, sh->per_side);
         }
+        uint32_t done = __atomic_add_fetch(&sh->done, s - s0, __ATOMIC_RELAXED);
+        if (w->caller && sh->progress)
+            sh->progress(sh->user, (double)done / M.nsrc);
     }
     if (st != TSR_OK) {
         tsr_status ok = TSR_OK;
@@ -712,6 +724,14 @@ static void *measure_worker(void *arg)
 tsr_status tsr_ptess_measure(const tsr_pmodel *m, const tsr_ptess_result *r, uint32_t per_side,
                              const tsr_camera *camera, bool per_source_error, const tsr_allocator *alloc,
                              tsr_ptess_measure_result *out)
+{
+    return tsr_ptess_measure_progress(m, r, per_side, camera, per_source_error, alloc, NULL, NULL, out);
+}
+
+tsr_status tsr_ptess_measure_progress(const tsr_pmodel *m, const tsr_ptess_result *r, uint32_t per_side,
+                                      const tsr_camera *camera, bool per_source_error, const tsr_allocator *alloc,
+                                      void (*progress)(void *user, double fraction), void *user,
+                                      tsr_ptess_measure_result *out)
 {
     if (!out)
         return TSR_ERR_ARGUMENT;
@@ -772,13 +792,14 @@ tsr_status tsr_ptess_measure(const tsr_pmodel *m, const tsr_ptess_result *r, uin
     uint64_t work = 3 * (uint64_t)ntri + (uint64_t)info.pieces * per_side * per_side;
     long ncpu = alloc || info.sources < 2 || work < ((uint64_t)1 << 17) ? 1 : sysconf(_SC_NPROCESSORS_ONLN);
     uint32_t nthreads = ncpu < 1 ? 1 : ncpu > MAX_THREADS ? MAX_THREADS : (uint32_t)ncpu;
-    mshare sh = {&M, per_side, res, 0, TSR_OK};
+    mshare sh = {&M, per_side, res, 0, 0, TSR_OK, progress, user};
+    mworker helper = {&sh, false}, caller = {&sh, true};
     pthread_t th[MAX_THREADS];
     uint32_t started = 0;
     for (uint32_t k = 1; k < nthreads; k++)
-        if (pthread_create(&th[started], NULL, measure_worker, &sh) == 0)
+        if (pthread_create(&th[started], NULL, measure_worker, &helper) == 0)
             started++;
-    measure_worker(&sh);
+    measure_worker(&caller);
     for (uint32_t k = 0; k < started; k++)
         pthread_join(th[k], NULL);
     st = __atomic_load_n(&sh.st, __ATOMIC_ACQUIRE);

@@ -377,6 +377,14 @@ tsr_status tsr_ptess_measure(const tsr_pmodel *m, const tsr_ptess_result *r, uin
                              const tsr_camera *camera, bool per_source_error, const tsr_allocator *alloc,
                              tsr_ptess_measure_result *out);
 
+/* As tsr_ptess_measure, telling progress (when not NULL) the fraction of
+ * the sources measured so far, now and then, always from the calling
+ * thread. */
+tsr_status tsr_ptess_measure_progress(const tsr_pmodel *m, const tsr_ptess_result *r, uint32_t per_side,
+                                      const tsr_camera *camera, bool per_source_error, const tsr_allocator *alloc,
+                                      void (*progress)(void *user, double fraction), void *user,
+                                      tsr_ptess_measure_result *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -289,9 +289,12 @@ static int run(int argc, char **argv)
     uint32_t tightened = 0;
     tsr_error err = {0};
     tsr_status st;
-    if (verify)
-        st = cli_patch_tessellate(pm.model, &opt, 64, 6, &r, &meas, &tightened, &err);
-    else {
+    if (verify) {
+        cli_progress pr;
+        cli_progress_start(&pr, "patch: measuring", !quiet);
+        st = cli_patch_tessellate(pm.model, &opt, 64, 6, &r, &meas, &tightened, &pr, &err);
+        cli_progress_end(&pr);
+    } else {
         memset(&meas, 0, sizeof meas);
         st = tsr_ptess_run(pm.model, &opt, NULL, &r, &err);
     }

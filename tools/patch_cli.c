@@ -96,7 +96,7 @@ void cli_patch_model_free(cli_patch_model *m)
 
 tsr_status cli_patch_tessellate(const tsr_pmodel *m, const tsr_ptess_options *opt_in, uint32_t per_side, uint32_t rounds,
                                 tsr_ptess_result *r, tsr_ptess_measure_result *meas, uint32_t *tightened,
-                                tsr_error *err)
+                                cli_progress *progress, tsr_error *err)
 {
     tsr_pmodel_info info;
     tsr_pmodel_get_info(m, &info);
@@ -114,7 +114,10 @@ tsr_status cli_patch_tessellate(const tsr_pmodel *m, const tsr_ptess_options *op
         if (st != TSR_OK)
             break;
         tsr_free(NULL, meas->source_error);
-        st = tsr_ptess_measure(m, r, per_side, opt.camera, true, NULL, meas);
+        st = tsr_ptess_measure_progress(m, r, per_side, opt.camera, true, NULL, progress ? cli_progress_cb : NULL,
+                                        progress, meas);
+        if (progress)
+            cli_progress_end(progress);
         if (st != TSR_OK) {
             tsr_error_set(err, st, "measuring the tessellation: %s", tsr_status_str(st));
             break;

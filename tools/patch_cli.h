@@ -49,9 +49,11 @@ bool cli_patch_model_split(const char *cmd, const char *path, cli_patch_model *p
  * the tolerance (max_error, or the camera's pixel_error) re-tessellates
  * with its pieces' tolerance halved, up to `rounds` times. The result is
  * in *r and its measurement in *meas (source_error freed). Returns the
- * status of the last run; *tightened counts the sources tightened. */
+ * status of the last run; *tightened counts the sources tightened.
+ * progress (may be NULL): a bar for each round's measurement, the long
+ * part of the work on a big model. */
 tsr_status cli_patch_tessellate(const tsr_pmodel *m, const tsr_ptess_options *opt, uint32_t per_side, uint32_t rounds,
                                 tsr_ptess_result *r, tsr_ptess_measure_result *meas, uint32_t *tightened,
-                                tsr_error *err);
+                                cli_progress *progress, tsr_error *err);
 
 #endif
