@@ -46,7 +46,8 @@
  * merged in source order afterwards, so the figures are the same on any
  * number of threads. With the default allocator and enough samples the
  * sources are shared out among every core's thread (claimed a few at a
- * time); a caller's allocator is only called from the calling thread.
+ * time, a thread's scratch made at its first claim); a caller's allocator,
+ * the measurement's or the model's, keeps it on the calling thread.
  */
 #include "patches/ptess.h"
 
@@ -685,24 +686,26 @@ static void *measure_worker(void *arg)
     measurer M = *sh->proto;
     uint32_t nvert = M.r->mesh.vertex_count;
     size_t nv = nvert ? nvert : 1;
-    M.stamp = tsr_alloc(M.alloc, nv * sizeof *M.stamp);
-    M.multi = tsr_alloc(M.alloc, nv * sizeof *M.multi);
-    M.uv0 = tsr_alloc(M.alloc, 2 * nv * sizeof *M.uv0);
-    M.buv = tsr_alloc(M.alloc, 2 * BATCH * sizeof *M.buv);
-    M.bmesh = tsr_alloc(M.alloc, 3 * BATCH * sizeof *M.bmesh);
-    M.btruth = tsr_alloc(M.alloc, 3 * BATCH * sizeof *M.btruth);
-    M.nbatch = 0;
     tsr_status st = TSR_OK;
-    if (!M.stamp || !M.multi || !M.uv0 || !M.buv || !M.bmesh || !M.btruth) {
-        st = TSR_ERR_NOMEM;
-    } else {
-        memset(M.stamp, 0, nv * sizeof *M.stamp);
-        memset(M.multi, 0, nv * sizeof *M.multi);
-    }
     while (st == TSR_OK && __atomic_load_n(&sh->st, __ATOMIC_ACQUIRE) == TSR_OK) {
         uint32_t s0 = __atomic_fetch_add(&sh->next, CLAIM, __ATOMIC_RELAXED);
         if (s0 >= M.nsrc)
             break;
+        if (!M.stamp) { /* the first claim: this thread's scratch */
+            M.stamp = tsr_alloc(M.alloc, nv * sizeof *M.stamp);
+            M.multi = tsr_alloc(M.alloc, nv * sizeof *M.multi);
+            M.uv0 = tsr_alloc(M.alloc, 2 * nv * sizeof *M.uv0);
+            M.buv = tsr_alloc(M.alloc, 2 * BATCH * sizeof *M.buv);
+            M.bmesh = tsr_alloc(M.alloc, 3 * BATCH * sizeof *M.bmesh);
+            M.btruth = tsr_alloc(M.alloc, 3 * BATCH * sizeof *M.btruth);
+            M.nbatch = 0;
+            if (!M.stamp || !M.multi || !M.uv0 || !M.buv || !M.bmesh || !M.btruth) {
+                st = TSR_ERR_NOMEM;
+                break;
+            }
+            memset(M.stamp, 0, nv * sizeof *M.stamp);
+            memset(M.multi, 0, nv * sizeof *M.multi);
+        }
         uint32_t s = s0;
         for (; s < s0 + CLAIM && s < M.nsrc && st == TSR_OK; s++) {
             M.src = s;
@@ -790,8 +793,10 @@ tsr_status tsr_ptess_measure_progress(const tsr_pmodel *m, const tsr_ptess_resul
 
     /* about how many samples: threads where that is worth their start */
     uint64_t work = 3 * (uint64_t)ntri + (uint64_t)info.pieces * per_side * per_side;
-    long ncpu = alloc || info.sources < 2 || work < ((uint64_t)1 << 17) ? 1 : sysconf(_SC_NPROCESSORS_ONLN);
+    long ncpu = alloc || info.own_alloc || work < ((uint64_t)1 << 17) ? 1 : sysconf(_SC_NPROCESSORS_ONLN);
+    uint32_t claims = (info.sources + CLAIM - 1) / CLAIM; /* no more threads than claims */
     uint32_t nthreads = ncpu < 1 ? 1 : ncpu > MAX_THREADS ? MAX_THREADS : (uint32_t)ncpu;
+    nthreads = nthreads > claims ? (claims ? claims : 1) : nthreads;
     mshare sh = {&M, per_side, res, 0, 0, TSR_OK, progress, user};
     mworker helper = {&sh, false}, caller = {&sh, true};
     pthread_t th[MAX_THREADS];
@@ -803,6 +808,8 @@ tsr_status tsr_ptess_measure_progress(const tsr_pmodel *m, const tsr_ptess_resul
     for (uint32_t k = 0; k < started; k++)
         pthread_join(th[k], NULL);
     st = __atomic_load_n(&sh.st, __ATOMIC_ACQUIRE);
+    if (st == TSR_OK && progress)
+        progress(user, 1); /* (the last sources may have been another thread's) */
 
     /* merged in source order, whatever the threads */
     double sum2 = 0;

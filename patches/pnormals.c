@@ -8,6 +8,7 @@
  * the sides are grouped by the angle between them. */
 #include "patches/ptess.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -40,7 +41,7 @@ static uint32_t corner_side(const tsr_ptess_result *r, const kinks *kk, size_t c
             b = mid;
     }
     double k = kk->at[a];
-    if (fabs(x - k) > tol)
+    if (fabs(x - k) > fmax(tol, 16 * DBL_EPSILON * fabs(k)))
         return 0;
     const double *t = r->tri_uv + 6 * (c / 3);
     double mid = (t[axis] + t[2 + axis] + t[4 + axis]) / 3;
@@ -61,9 +62,7 @@ typedef struct vgroup { /* sources whose normals agree there */
 
 static tsr_status fail(tsr_error *err, tsr_status st, const char *msg)
 {
-    if (err)
-        snprintf(err->message, sizeof err->message, "crease normals: %s", msg);
-    return st;
+    return tsr_error_set(err, st, "crease normals: %s", msg);
 }
 
 /* Room for n records of size sz in *p (capacity *cap). */
@@ -187,9 +186,11 @@ tsr_status tsr_ptess_crease_normals(const tsr_pmodel *m, const tsr_ptess_result 
             if (j < ns)
                 continue;
             uint32_t s = (uint32_t)(key / 9), su = (uint32_t)(key % 9) / 3, sv = (uint32_t)(key % 3);
+            /* off the kink by a hair (and by more than its rounding) */
             double pos[3], n[3], u = r->tri_uv[2 * (size_t)c], w = r->tri_uv[2 * (size_t)c + 1];
-            u += su == 1 ? -tol[2 * s] : su == 2 ? tol[2 * s] : 0;
-            w += sv == 1 ? -tol[2 * s + 1] : sv == 2 ? tol[2 * s + 1] : 0;
+            double hu = fmax(tol[2 * s], 16 * DBL_EPSILON * fabs(u)), hw = fmax(tol[2 * s + 1], 16 * DBL_EPSILON * fabs(w));
+            u += su == 1 ? -hu : su == 2 ? hu : 0;
+            w += sv == 1 ? -hw : sv == 2 ? hw : 0;
             tsr_status es = tsr_pmodel_eval(m, s, u, w, pos, n);
             if (es != TSR_OK) {
                 snprintf(buf, sizeof buf, "source %u could not be evaluated (%s)", s, tsr_status_str(es));
@@ -219,7 +220,7 @@ tsr_status tsr_ptess_crease_normals(const tsr_pmodel *m, const tsr_ptess_result 
                 memcpy(out->normals + 3 * (size_t)v, fn, sizeof fn);
                 continue;
             }
-            if (out->vertex_count >= NONE - 1) {
+            if (out->vertex_count >= NONE - 2) { /* (tsr_mesh's limit) */
                 st = TSR_ERR_TOO_LARGE;
                 msg = "more than 2^32 - 2 vertices";
                 goto done;

@@ -1210,6 +1210,7 @@ void tsr_pmodel_get_info(const tsr_pmodel *m, tsr_pmodel_info *info)
     info->split_breaks = m->split_breaks;
     memcpy(info->lo, m->lo, sizeof info->lo);
     memcpy(info->hi, m->hi, sizeof info->hi);
+    info->own_alloc = m->alloc.realloc != NULL || (m->subd && tsr_subd_has_allocator(m->subd));
 }
 
 bool tsr_pmodel_source_info(const tsr_pmodel *m, uint32_t src, tsr_psource_info *info)
@@ -2337,6 +2338,8 @@ static bool collect_spans(pctx *c)
         c->act[e] = NULL;
         if (p->nlinks[e] && !(c->act[e] = tsr_alloc(c->alloc, (size_t)1 << deepest)))
             return false;
+        if (c->act[e])
+            memset(c->act[e], 0, (size_t)1 << deepest);
     }
     for (uint32_t i = 0; i < nl; i++)
         for (int e = 0; e < 4; e++) {

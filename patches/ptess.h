@@ -215,6 +215,8 @@ typedef struct tsr_pmodel_info {
                                 sharing a whole edge has them (Links, above) */
     uint32_t split_breaks;   /* breakpoints added across curved directions (split_error) */
     double lo[3], hi[3];   /* box of the model */
+    bool own_alloc;        /* made with a caller's allocator, or from a tsr_subd that was
+                              (tsr_subd_has_allocator): evaluating may call it */
 } tsr_pmodel_info;
 
 void tsr_pmodel_get_info(const tsr_pmodel *m, tsr_pmodel_info *info);
@@ -250,8 +252,9 @@ tsr_status tsr_pmodel_eval_points(const tsr_pmodel *m, uint32_t src, const doubl
  * or v (axis 1), where its surface may crease: the knots of a B-spline or
  * NURBS source of multiplicity at least its degree that way (the surface
  * is only C0 there, a kink unless its control points line up). Up to cap
- * values go to out, ascending; returns how many there are (0 for Bézier
- * and subdivision sources, or src out of range). */
+ * values go to out (which may be NULL when cap is 0), ascending; returns
+ * how many there are (0 for Bézier and subdivision sources, or src out of
+ * range). */
 uint32_t tsr_pmodel_source_kinks(const tsr_pmodel *m, uint32_t src, int axis, double *out, uint32_t cap);
 
 /* Options of tsr_ptess_run. Zero-initialised fields take the defaults. */
@@ -332,6 +335,9 @@ void tsr_ptess_result_free(tsr_ptess_result *r);
  * vertices keep their normals; positions, uvs and triangles are r's, so
  * welding by index is given up at creases only. crease_deg in [0, 180];
  * 180 splits nothing (such a vertex gets the mean of its sides' normals).
+ * A side is a source, and a side of one of its kinks: where a closed
+ * source meets itself (the seam of a periodic surface) it is one side,
+ * never split.
  * *added (may be NULL): the vertices appended. out is zeroed first and
  * left empty on failure. TSR_ERR_ARGUMENT (err says which) for NULL
  * pointers, a result without normals, or crease_deg out of range;
@@ -367,11 +373,12 @@ typedef struct tsr_ptess_measure_result {
  * camera: NULL for model units. per_source_error: when true, fills
  * out->source_error (allocated with alloc; caller frees with tsr_free).
  * Independent of how r was built: it reads only the mesh, tri_source,
- * tri_uv and tsr_pmodel_eval_points. With alloc NULL and some 10^5
- * samples or more, the sources are measured on a thread per core (alloc
- * given: on the calling thread only); each source is measured on its own
- * and the figures merged in source order, so they do not depend on the
- * threads. TSR_ERR_ARGUMENT for NULL pointers or per_side < 2,
+ * tri_uv and tsr_pmodel_eval_points. With some 10^5 samples or more,
+ * alloc NULL and a model made without a caller's allocator
+ * (tsr_pmodel_info.own_alloc), the sources are measured on a thread per
+ * core, else on the calling thread alone; each source is measured on its
+ * own and the figures merged in source order, so they do not depend on
+ * the threads. TSR_ERR_ARGUMENT for NULL pointers or per_side < 2,
  * TSR_ERR_NOMEM. */
 tsr_status tsr_ptess_measure(const tsr_pmodel *m, const tsr_ptess_result *r, uint32_t per_side,
                              const tsr_camera *camera, bool per_source_error, const tsr_allocator *alloc,

@@ -601,6 +601,11 @@ extern "C" uint32_t tsr_subd_face_count(const tsr_subd *s)
     return s ? s->num_faces : 0;
 }
 
+extern "C" bool tsr_subd_has_allocator(const tsr_subd *s)
+{
+    return s && s->alloc.realloc != nullptr;
+}
+
 extern "C" uint32_t tsr_subd_face_size(const tsr_subd *s, uint32_t face)
 {
     return s && face < s->num_faces ? face_size(s, face) : 0;

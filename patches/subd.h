@@ -92,6 +92,11 @@ void tsr_subd_destroy(tsr_subd *s);
 /* Number of base faces (the cage's num_faces). */
 uint32_t tsr_subd_face_count(const tsr_subd *s);
 
+/* Whether s was made with a caller's allocator (tsr_subd_create's alloc
+ * not NULL): evaluations may allocate with it, so callers that would
+ * evaluate on several threads can tell whether they may. */
+bool tsr_subd_has_allocator(const tsr_subd *s);
+
 /* Vertices of base face `face`; 0 for a face out of range. */
 uint32_t tsr_subd_face_size(const tsr_subd *s, uint32_t face);
 

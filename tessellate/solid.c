@@ -362,7 +362,7 @@ done:
 /* ---- Flat faces ----------------------------------------------------------- */
 
 typedef struct fgroup {
-    double first[3], sum[3];
+    double first[3];
     uint32_t vertex;
 } fgroup;
 
@@ -379,7 +379,7 @@ tsr_status tsr_mesh_split_flat(tsr_mesh *m, uint32_t first, double crease_deg, t
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "flat faces: the crease angle %g is not within 0..180 degrees",
                              crease_deg);
     uint32_t nv = m->vertex_count, nt = m->triangle_count;
-    for (size_t c = 3 * (size_t)first; c < 3 * (size_t)nt; c++)
+    for (size_t c = 0; c < 3 * (size_t)nt; c++)
         if (m->indices[c] >= nv)
             return tsr_error_set(err, TSR_ERR_INVALID_MESH, "flat faces: triangle %zu has index %u >= %u vertices",
                                  c / 3, m->indices[c], nv);
@@ -435,29 +435,29 @@ tsr_status tsr_mesh_split_flat(tsr_mesh *m, uint32_t first, double crease_deg, t
             g = ng2;
             gcap = cap;
         }
-        for (uint32_t k = lo; k < hi; k++) {
-            const double *n = fn + 3 * (size_t)(list[k] / 3);
-            uint32_t j = 0;
-            bool flat = n[0] == 0 && n[1] == 0 && n[2] == 0;
-            while (j < ng && !flat && n[0] * g[j].first[0] + n[1] * g[j].first[1] + n[2] * g[j].first[2] < cos_lim)
-                j++;
-            if (j == ng && (flat && ng)) /* degenerate: the first group */
-                j = 0;
-            if (j == ng) {
-                memcpy(g[j].first, n, sizeof g[j].first);
-                memset(g[j].sum, 0, sizeof g[j].sum);
-                ng++;
+        /* faces with a normal first; then those without (no area) join
+         * the first group, or make one if they are all there is */
+        for (int pass = 0; pass < 2; pass++)
+            for (uint32_t k = lo; k < hi; k++) {
+                const double *n = fn + 3 * (size_t)(list[k] / 3);
+                bool flat = n[0] == 0 && n[1] == 0 && n[2] == 0;
+                if (flat != (pass == 1))
+                    continue;
+                uint32_t j = 0;
+                while (j < ng && !flat && n[0] * g[j].first[0] + n[1] * g[j].first[1] + n[2] * g[j].first[2] < cos_lim)
+                    j++;
+                if (j == ng) {
+                    memcpy(g[j].first, n, sizeof g[j].first);
+                    ng++;
+                }
+                gof[k] = j;
             }
-            for (int x = 0; x < 3; x++)
-                g[j].sum[x] += n[x];
-            gof[k] = j;
-        }
         for (uint32_t j = 0; j < ng; j++)
             g[j].vertex = j == 0 && !top[v] ? v : nv + add++;
         for (uint32_t k = lo; k < hi; k++)
             idx[list[k]] = g[gof[k]].vertex;
     }
-    if ((uint64_t)nv + add > UINT32_MAX - 1) {
+    if ((uint64_t)nv + add > UINT32_MAX - 2) {
         st = tsr_error_set(err, TSR_ERR_TOO_LARGE, "flat faces: more than 2^32 - 2 vertices");
         goto done;
     }

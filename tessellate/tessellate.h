@@ -349,9 +349,10 @@ tsr_status tsr_mesh_add_base(tsr_mesh *mesh, double base_z, tsr_error *err);
  * between them and the top, and the mesh stays closed by position but no
  * longer by index there. The mesh must have normals; TSR_ERR_ARGUMENT for
  * NULL, a mesh without normals, first beyond the triangles or an angle out
- * of range; TSR_ERR_TOO_LARGE past 2^32 - 2 vertices; TSR_ERR_NOMEM (the
- * mesh unchanged but for its capacity). Degenerate triangles (no normal)
- * join their corners' first group. */
+ * of range; TSR_ERR_INVALID_MESH for an index beyond the vertices;
+ * TSR_ERR_TOO_LARGE past 2^32 - 2 vertices; TSR_ERR_NOMEM (the mesh
+ * unchanged but for its capacity). Triangles without area (no normal)
+ * join the first group of their corner's vertex. */
 tsr_status tsr_mesh_split_flat(tsr_mesh *mesh, uint32_t first, double crease_deg, tsr_error *err);
 
 #ifdef __cplusplus

@@ -3721,9 +3721,24 @@ TEST(small_faces_small_memory)
     free(b.s);
 }
 
+typedef struct progress_log {
+    uint32_t calls, backwards;
+    double last;
+} progress_log;
+
+static void log_progress(void *user, double f)
+{
+    progress_log *p = user;
+    p->backwards += f < p->last || f < 0 || f > 1;
+    p->last = f;
+    p->calls++;
+}
+
 /* tsr_ptess_measure on threads (alloc NULL, enough samples) and on the
  * calling thread alone (a caller's allocator) gives the same figures to
- * the bit: each source is measured on its own and merged in order. */
+ * the bit: each source is measured on its own and merged in order. (On a
+ * machine of one core both are one thread.) The progress variant reports
+ * fractions that only grow, up to 1, and measures the same. */
 TEST(measure_threads_same_figures)
 {
     enum { NU = 24, NV = 12 };
@@ -3767,11 +3782,39 @@ TEST(measure_threads_same_figures)
                 differ += a.source_error[s] != c.source_error[s];
             CHECK_MSG(differ == 0, "%u sources' errors differ", differ);
             CHECK(a.max_error > 0 && a.max_error <= o.max_error * 1.5);
+            progress_log pl = {0, 0, 0};
+            tsr_ptess_measure_result p;
+            CHECK(tsr_ptess_measure_progress(m, &r, 32, NULL, false, NULL, log_progress, &pl, &p) == TSR_OK);
+            CHECK_MSG(pl.calls >= 1 && pl.backwards == 0 && pl.last == 1, "%u calls, %u backwards, last %g", pl.calls,
+                      pl.backwards, pl.last);
+            CHECK(p.max_error == a.max_error && p.rms_error == a.rms_error && p.samples == a.samples);
+            CHECK(!info.own_alloc);
             tsr_free(NULL, a.source_error);
             tsr_free(&al, c.source_error);
             CHECK(f.live == 0);
         }
         tsr_ptess_result_free(&r);
+    }
+    /* a tsr_subd made with a caller's allocator: the model says so (and
+     * the measurement then keeps to the calling thread) */
+    {
+        check_alloc f2 = {0};
+        tsr_allocator al2 = {check_realloc, &f2};
+        tsr_cage c2;
+        tsr_subd *s2 = NULL;
+        tsr_pmodel *m2 = NULL;
+        if (tsr_cage_parse(b.s, b.n, "torus.obj", NULL, &c2, &e) == TSR_OK) {
+            CHECK(tsr_subd_create(&c2, TSR_SUBD_CATMARK, &al2, &s2, &e) == TSR_OK);
+            tsr_cage_free(&c2);
+        }
+        if (s2 && tsr_pmodel_from_subd(s2, NULL, &m2, &e) == TSR_OK) {
+            tsr_pmodel_info i2;
+            tsr_pmodel_get_info(m2, &i2);
+            CHECK(i2.own_alloc && tsr_subd_has_allocator(s2) && !tsr_subd_has_allocator(subd));
+        }
+        tsr_pmodel_destroy(m2);
+        tsr_subd_destroy(s2);
+        CHECK(f2.live == 0);
     }
     tsr_pmodel_destroy(m);
     tsr_subd_destroy(subd);

@@ -632,7 +632,59 @@ TEST(split_flat_walls_and_bottom)
     free(idx);
 }
 
+/* tsr_mesh_split_flat with a triangle without area met first at its
+ * vertices: it joins the first real face's group (it makes none of its
+ * own, and takes none of theirs); and an index beyond the vertices, in the
+ * faces kept or those split, is refused. */
+TEST(split_flat_degenerate_and_bad_index)
+{
+    static const float P[5][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 0}};
+    for (int wide = 0; wide < 2; wide++) {
+        tsr_mesh m;
+        tsr_mesh_init(&m, TSR_MESH_NORMALS, NULL);
+        const float up[3] = {0, 0, 1};
+        for (int k = 0; k < 5; k++)
+            tsr_mesh_add_vertex(&m, P[k], up, NULL);
+        tsr_mesh_add_triangle(&m, 0, 1, 4); /* no area (4 is where 1 is) */
+        tsr_mesh_add_triangle(&m, 0, 1, 2); /* facing +z */
+        tsr_mesh_add_triangle(&m, 0, 3, 1); /* facing +y */
+        tsr_error err = {0};
+        CHECK_MSG(tsr_mesh_split_flat(&m, 0, wide ? 120 : 1, &err) == TSR_OK, "%s", err.message);
+        if (!wide) {
+            /* 0 and 1 split between +z and +y; the flat triangle on the first */
+            CHECK_MSG(m.vertex_count == 7, "%u vertices", m.vertex_count);
+            CHECK(m.indices[0] == m.indices[3] && m.indices[1] == m.indices[4]);
+            CHECK(m.indices[0] != m.indices[6] && m.indices[1] != m.indices[8]);
+            const float *n0 = m.normals + 3 * m.indices[3], *n2 = m.normals + 3 * m.indices[6];
+            CHECK(n0[0] == 0 && n0[1] == 0 && n0[2] == 1);
+            CHECK_NEAR(n2[1], 1, 1e-7);
+        } else {
+            /* 120 degrees: +z and +y together, nothing split */
+            CHECK_MSG(m.vertex_count == 5, "%u vertices", m.vertex_count);
+            const float *n0 = m.normals;
+            CHECK_NEAR(n0[1], sqrt(0.5), 1e-7);
+            CHECK_NEAR(n0[2], sqrt(0.5), 1e-7);
+        }
+        tsr_mesh_free(&m);
+    }
+    for (int kept = 0; kept < 2; kept++) {
+        tsr_mesh m;
+        tsr_mesh_init(&m, TSR_MESH_NORMALS, NULL);
+        const float up[3] = {0, 0, 1};
+        for (int k = 0; k < 3; k++)
+            tsr_mesh_add_vertex(&m, P[k], up, NULL);
+        tsr_mesh_add_triangle(&m, 0, 1, 2);
+        tsr_mesh_add_triangle(&m, 0, 2, 1);
+        m.indices[kept ? 1 : 4] = 1000000; /* beyond the vertices */
+        tsr_error err = {0};
+        CHECK(tsr_mesh_split_flat(&m, 1, 1, &err) == TSR_ERR_INVALID_MESH);
+        CHECK(m.vertex_count == 3);
+        tsr_mesh_free(&m);
+    }
+}
+
 TEST_MAIN(T(grid_heightfield), T(flat_top_volume_is_area_times_height), T(hole_makes_genus_one), T(two_components),
           T(notched_boundary), T(island_in_a_hole), T(diagonal_holes_pinch), T(bowtie_outer_pinch), T(reflex_pinch),
           T(normals_and_uvs_of_new_vertices), T(random_masks), T(base_not_below_mesh), T(bad_meshes_refused),
-          T(closed_mesh_left_alone), T(split_flat_walls_and_bottom))
+          T(closed_mesh_left_alone), T(split_flat_walls_and_bottom),
+          T(split_flat_degenerate_and_bad_index))
