@@ -3647,6 +3647,36 @@ TEST(data_osd_crease_normals)
     tsr_subd_destroy(subd);
 }
 
+/* A Catmull-Clark cage of nu x nv quads on a torus (radii 3 and 1) whose
+ * tube radius is bumped by amp sin(ku u) cos(kv v): OBJ text into b. */
+static void bumpy_torus_cage(sbuf *b, int nu, int nv, double amp, int ku, int kv)
+{
+    for (int j = 0; j < nv; j++)
+        for (int i = 0; i < nu; i++) {
+            double u = 2 * PI * i / nu, v = 2 * PI * j / nv, r = 1 + amp * sin(ku * u) * cos(kv * v);
+            sb_printf(b, "v %.17g %.17g %.17g\n", (3 + r * cos(v)) * cos(u), (3 + r * cos(v)) * sin(u), r * sin(v));
+        }
+    for (int j = 0; j < nv; j++)
+        for (int i = 0; i < nu; i++)
+            sb_printf(b, "f %d %d %d %d\n", j * nu + i + 1, j * nu + (i + 1) % nu + 1,
+                      (j + 1) % nv * nu + (i + 1) % nu + 1, (j + 1) % nv * nu + i + 1);
+}
+
+/* Its Catmull-Clark model: *subd and the model (NULL after a failed CHECK). */
+static tsr_pmodel *bumpy_torus_model(const sbuf *b, tsr_subd **subd)
+{
+    tsr_cage cage;
+    tsr_error e = {0};
+    tsr_pmodel *m = NULL;
+    *subd = NULL;
+    CHECK_MSG(tsr_cage_parse(b->s, b->n, "torus.obj", NULL, &cage, &e) == TSR_OK, "%s", e.message);
+    CHECK_MSG(tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, subd, &e) == TSR_OK, "%s", e.message);
+    tsr_cage_free(&cage);
+    if (*subd)
+        CHECK_MSG(tsr_pmodel_from_subd(*subd, NULL, &m, &e) == TSR_OK, "%s", e.message);
+    return m;
+}
+
 /* An allocator that keeps the peak of the bytes alive (a header before
  * each block holds its size). */
 typedef struct byte_count {
@@ -3680,23 +3710,11 @@ TEST(small_faces_small_memory)
 {
     enum { NU = 40, NV = 20 };
     sbuf b = {0};
-    for (int j = 0; j < NV; j++)
-        for (int i = 0; i < NU; i++) {
-            double u = 2 * PI * i / NU, v = 2 * PI * j / NV, r = 1 + 0.15 * sin(7 * u) * cos(3 * v);
-            sb_printf(&b, "v %.17g %.17g %.17g\n", (3 + r * cos(v)) * cos(u), (3 + r * cos(v)) * sin(u), r * sin(v));
-        }
-    for (int j = 0; j < NV; j++)
-        for (int i = 0; i < NU; i++)
-            sb_printf(&b, "f %d %d %d %d\n", j * NU + i + 1, j * NU + (i + 1) % NU + 1,
-                      (j + 1) % NV * NU + (i + 1) % NU + 1, (j + 1) % NV * NU + i + 1);
-    tsr_cage cage;
+    bumpy_torus_cage(&b, NU, NV, 0.15, 7, 3);
     tsr_error e = {0};
     tsr_subd *subd = NULL;
-    tsr_pmodel *m = NULL;
-    CHECK_MSG(tsr_cage_parse(b.s, b.n, "torus.obj", NULL, &cage, &e) == TSR_OK, "%s", e.message);
-    CHECK_MSG(tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, &subd, &e) == TSR_OK, "%s", e.message);
-    tsr_cage_free(&cage);
-    if (subd && tsr_pmodel_from_subd(subd, NULL, &m, &e) == TSR_OK) {
+    tsr_pmodel *m = bumpy_torus_model(&b, &subd);
+    if (m) {
         tsr_pmodel_info info;
         tsr_pmodel_get_info(m, &info);
         for (double frac = 3e-3; frac >= 0.9e-3; frac /= 3) {
@@ -3743,23 +3761,11 @@ TEST(measure_threads_same_figures)
 {
     enum { NU = 24, NV = 12 };
     sbuf b = {0};
-    for (int j = 0; j < NV; j++)
-        for (int i = 0; i < NU; i++) {
-            double u = 2 * PI * i / NU, v = 2 * PI * j / NV, r = 1 + 0.2 * sin(5 * u) * cos(2 * v);
-            sb_printf(&b, "v %.17g %.17g %.17g\n", (3 + r * cos(v)) * cos(u), (3 + r * cos(v)) * sin(u), r * sin(v));
-        }
-    for (int j = 0; j < NV; j++)
-        for (int i = 0; i < NU; i++)
-            sb_printf(&b, "f %d %d %d %d\n", j * NU + i + 1, j * NU + (i + 1) % NU + 1,
-                      (j + 1) % NV * NU + (i + 1) % NU + 1, (j + 1) % NV * NU + i + 1);
-    tsr_cage cage;
+    bumpy_torus_cage(&b, NU, NV, 0.2, 5, 2);
     tsr_error e = {0};
     tsr_subd *subd = NULL;
-    tsr_pmodel *m = NULL;
-    CHECK_MSG(tsr_cage_parse(b.s, b.n, "torus.obj", NULL, &cage, &e) == TSR_OK, "%s", e.message);
-    CHECK_MSG(tsr_subd_create(&cage, TSR_SUBD_CATMARK, NULL, &subd, &e) == TSR_OK, "%s", e.message);
-    tsr_cage_free(&cage);
-    if (subd && tsr_pmodel_from_subd(subd, NULL, &m, &e) == TSR_OK) {
+    tsr_pmodel *m = bumpy_torus_model(&b, &subd);
+    if (m) {
         tsr_pmodel_info info;
         tsr_pmodel_get_info(m, &info);
         tsr_ptess_options o = {0};
