@@ -28,11 +28,12 @@ typedef struct band {
     uint32_t x0, y0, ww, wh, rb, re;
     const tsr_mesh *mesh;
     const tsr_camera *cam;
-    float *worst, *wpix;
+    const tsr_allocator *alloc;
     const uint32_t *tris; /* the triangles whose rows meet the band, in order */
     uint32_t ntris;
     tsr_error_report out; /* the band's figures (rms_vertical unused) */
     double sumsq;         /* of the band's covered samples' errors */
+    bool nomem;
 } band;
 
 /* The window rows a triangle's footprint may cover, [*r0, *r1]; false when
@@ -61,7 +62,21 @@ static void measure_band(band *b)
     const tsr_mesh *mesh = b->mesh;
     const tsr_camera *cam = b->cam;
     uint32_t x0 = b->x0, y0 = b->y0, ww = b->ww;
-    float *worst = b->worst, *wpix = b->wpix;
+    /* per sample of the band (its own rows: a band writes no other's):
+     * its worst error so far (NaN: not reached), and in pixels */
+    size_t ns = (size_t)(b->re - b->rb) * ww;
+    float *worst = tsr_alloc(b->alloc, ns * sizeof *worst);
+    float *wpix = cam ? tsr_alloc(b->alloc, ns * sizeof *wpix) : NULL;
+    if (!worst || (cam && !wpix)) {
+        tsr_free(b->alloc, worst);
+        tsr_free(b->alloc, wpix);
+        b->nomem = true;
+        return;
+    }
+    for (size_t i = 0; i < ns; i++)
+        worst[i] = NAN;
+    for (size_t i = 0; wpix && i < ns; i++)
+        wpix[i] = -1;
     tsr_error_report *out = &b->out;
     for (uint32_t ti = 0; ti < b->ntris; ti++) {
         const uint32_t *ix = mesh->indices + 3 * (size_t)b->tris[ti];
@@ -99,7 +114,7 @@ static void measure_band(band *b)
                     continue;
                 double zm = p0[2] + l1 * ((double)p1[2] - p0[2]) + l2 * ((double)p2[2] - p0[2]);
                 double z = h * hf->dz, ev = fabs(zm - z);
-                size_t si = (size_t)r * ww + c;
+                size_t si = (size_t)(r - b->rb) * ww + c;
                 if (isnan(worst[si]) || ev > worst[si])
                     worst[si] = (float)ev;
                 if (ev > out->max_vertical) {
@@ -137,7 +152,7 @@ static void measure_band(band *b)
         for (uint32_t c = 0; c < ww; c++) {
             if (isnan(row[c]))
                 continue;
-            size_t si = (size_t)r * ww + c;
+            size_t si = (size_t)(r - b->rb) * ww + c;
             if (isnan(worst[si])) {
                 out->uncovered++;
                 continue;
@@ -149,6 +164,8 @@ static void measure_band(band *b)
         }
     }
     b->sumsq = sumsq;
+    tsr_free(b->alloc, worst);
+    tsr_free(b->alloc, wpix);
 }
 
 typedef struct band_job {
@@ -179,16 +196,10 @@ tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, ui
     if (x0 >= hf->width || y0 >= hf->height || ww > hf->width - x0 || wh > hf->height - y0)
         return TSR_ERR_ARGUMENT;
     const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
-    size_t ns = (size_t)ww * wh;
     uint32_t nb = (wh + BAND_ROWS - 1) / BAND_ROWS;
-    /* per sample: its worst error so far (NaN: not reached) */
-    float *worst = tsr_alloc(a, ns * sizeof *worst);
-    float *wpix = cam ? tsr_alloc(a, ns * sizeof *wpix) : NULL;
     band *b = tsr_alloc(a, (size_t)nb * sizeof *b);
     uint32_t *start = tsr_alloc(a, ((size_t)nb + 1) * sizeof *start), *list = NULL;
-    if (!worst || (cam && !wpix) || !b || !start) {
-        tsr_free(a, worst);
-        tsr_free(a, wpix);
+    if (!b || !start) {
         tsr_free(a, b);
         tsr_free(a, start);
         return TSR_ERR_NOMEM;
@@ -208,8 +219,6 @@ tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, ui
         start[k + 1] += start[k];
     list = entries < UINT32_MAX ? tsr_alloc(a, (size_t)entries * sizeof *list + 1) : NULL;
     if (!list) {
-        tsr_free(a, worst);
-        tsr_free(a, wpix);
         tsr_free(a, b);
         tsr_free(a, start);
         return TSR_ERR_NOMEM;
@@ -224,15 +233,10 @@ tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, ui
     for (uint32_t k = nb; k > 0; k--) /* back to the bands' starts */
         start[k] = start[k - 1];
     start[0] = 0;
-    for (size_t i = 0; i < ns; i++)
-        worst[i] = NAN;
-    if (wpix)
-        for (size_t i = 0; i < ns; i++)
-            wpix[i] = -1;
     memset(b, 0, (size_t)nb * sizeof *b);
     for (uint32_t i = 0; i < nb; i++) {
         b[i].hf = hf, b[i].x0 = x0, b[i].y0 = y0, b[i].ww = ww, b[i].wh = wh, b[i].mesh = mesh, b[i].cam = cam;
-        b[i].worst = worst, b[i].wpix = wpix;
+        b[i].alloc = a;
         b[i].tris = list + start[i], b[i].ntris = start[i + 1] - start[i];
         b[i].rb = i * BAND_ROWS;
         b[i].re = b[i].rb + BAND_ROWS < wh ? b[i].rb + BAND_ROWS : wh;
@@ -242,7 +246,10 @@ tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, ui
     pthread_mutex_destroy(&j.lock);
     /* in band order: the first band's worst sample wins a tie */
     double sumsq = 0;
-    for (uint32_t i = 0; i < nb; i++) {
+    bool nomem = false;
+    for (uint32_t i = 0; i < nb; i++)
+        nomem = nomem || b[i].nomem;
+    for (uint32_t i = 0; i < nb && !nomem; i++) {
         const tsr_error_report *r = &b[i].out;
         if (r->max_vertical > out->max_vertical) {
             out->max_vertical = r->max_vertical;
@@ -262,10 +269,12 @@ tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, ui
         sumsq += b[i].sumsq;
     }
     out->rms_vertical = out->covered ? sqrt(sumsq / (double)out->covered) : 0;
-    tsr_free(a, worst);
-    tsr_free(a, wpix);
     tsr_free(a, b);
     tsr_free(a, start);
     tsr_free(a, list);
+    if (nomem) {
+        memset(out, 0, sizeof *out);
+        return TSR_ERR_NOMEM;
+    }
     return TSR_OK;
 }

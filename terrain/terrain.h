@@ -376,7 +376,10 @@ tsr_status tsr_terrain_measure(const tsr_heightfield *hf, const tsr_mesh *mesh, 
                                tsr_error_report *out);
 /* The same over the samples of the window (x0, y0, w, h) only; the mesh in
  * the whole heightfield's coordinates. TSR_ERR_ARGUMENT for a window not
- * inside hf. */
+ * inside hf, TSR_ERR_NOMEM. Both run in bands of rows on every processor,
+ * each band with its own scratch (a few of its rows: not a copy of the
+ * heightfield), made with the heightfield's allocator from those threads;
+ * the figures do not depend on the threads. */
 tsr_status tsr_terrain_measure_window(const tsr_heightfield *hf, uint32_t x0, uint32_t y0, uint32_t w, uint32_t h,
                                       const tsr_mesh *mesh, const tsr_camera *cam, tsr_error_report *out);
 

@@ -804,5 +804,63 @@ TEST(data_real_terrain)
     data_file("egm84-epsg3857-float32.tif", NULL, 0.05);
 }
 
-TEST_MAIN(T(error_bound_generated), T(flips_fewer_triangles), T(spacing_and_scale), T(flat_and_planar), T(budgets),
+/* tsr_terrain_measure_window in bands of rows, each with scratch of its
+ * own: over a field of several bands (with no-data), its max and count of
+ * covered samples are the brute-force oracle's; and a failed allocation
+ * (the band's scratch) is TSR_ERR_NOMEM with nothing left. */
+TEST(measure_bands_agree_with_brute_force)
+{
+    tsr_heightfield *hf = terrain(90, 400, 7);
+    float *d = tsr_heightfield_data(hf);
+    for (uint32_t r = 150; r < 170; r++) /* a hole across a band's edge (row 128 .. 255) */
+        for (uint32_t c = 30; c < 45; c++)
+            d[(size_t)r * 90 + c] = NAN;
+    tsr_tin_options o = {0};
+    o.max_error = 5;
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    tsr_error err = {0};
+    tsr_tin_report rep;
+    CHECK_MSG(tsr_terrain_mesh(hf, &o, &m, &rep, &err) == TSR_OK, "%s", err.message);
+    oracle or;
+    brute(hf, 0, 0, 90, 400, &m, &or);
+    tsr_error_report er;
+    CHECK(tsr_terrain_measure_window(hf, 0, 0, 90, 400, &m, NULL, &er) == TSR_OK);
+    CHECK_MSG(fabs(er.max_vertical - or.max_error) <= 1e-6 * 500, "bands %.9g, brute force %.9g", er.max_vertical,
+              or.max_error);
+    CHECK_MSG(er.covered == or.covered && er.uncovered == 0, "covered %llu vs %llu, uncovered %llu",
+              (unsigned long long)er.covered, (unsigned long long)or.covered, (unsigned long long)er.uncovered);
+    tsr_mesh_free(&m);
+    /* one band, its heightfield's allocator failing at the band's scratch */
+    check_alloc f = {0};
+    tsr_allocator al = {check_realloc, &f};
+    tsr_heightfield *small = tsr_heightfield_create(40, 40, &al);
+    tsr_heightfield *src = terrain(40, 40, 3);
+    memcpy(tsr_heightfield_data(small), tsr_heightfield_cdata(src), 40 * 40 * sizeof(float));
+    tsr_mesh_init(&m, 0, NULL);
+    o.method = TSR_TIN_DELAUNAY;
+    CHECK(tsr_terrain_mesh(src, &o, &m, &rep, &err) == TSR_OK);
+    long live = f.live;
+    CHECK(tsr_terrain_measure_window(small, 0, 0, 40, 40, &m, NULL, &er) == TSR_OK);
+    long calls = f.calls;
+    CHECK(f.live == live && calls > 0);
+    uint32_t nomem = 0;
+    for (long k = 1; k <= 8; k++) {
+        f.fail_at = f.calls + k;
+        tsr_status st = tsr_terrain_measure_window(small, 0, 0, 40, 40, &m, NULL, &er);
+        CHECK(st == TSR_OK || st == TSR_ERR_NOMEM);
+        nomem += st == TSR_ERR_NOMEM;
+        CHECK_MSG(f.live == live, "failure at allocation %ld: %ld blocks left", k, f.live - live);
+        if (st == TSR_ERR_NOMEM)
+            CHECK(er.covered == 0 && er.max_vertical == 0);
+    }
+    CHECK_MSG(nomem > 0, "no allocation of the measurement failed");
+    f.fail_at = 0;
+    tsr_mesh_free(&m);
+    tsr_heightfield_destroy(small);
+    tsr_heightfield_destroy(src);
+    tsr_heightfield_destroy(hf);
+}
+
+TEST_MAIN(T(error_bound_generated), T(measure_bands_agree_with_brute_force), T(flips_fewer_triangles), T(spacing_and_scale), T(flat_and_planar), T(budgets),
           T(nodata_holes), T(quadtree_leaves_and_tiles), T(window_seams), T(blocks), T(closed_solid), T(bad_options), T(data_real_terrain))
