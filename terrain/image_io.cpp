@@ -222,10 +222,11 @@ tsr_status tsr_io_image_save_check(const char *path, tsr_error *err)
     return tsr_atomic_probe(path, err);
 }
 
-tsr_status tsr_io_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
-                                        const uint8_t *pixels, tsr_error *err)
+tsr_status tsr_io_image_save_u8_rows(const char *path, uint32_t width, uint32_t height, uint32_t channels,
+                                     void (*fill)(void *user, uint32_t y0, uint32_t y1, uint8_t *rows), void *user,
+                                     tsr_error *err)
 {
-    if (!path || !*path || !pixels || width == 0 || height == 0 || channels == 0 || channels > 4)
+    if (!path || !*path || !fill || width == 0 || height == 0 || channels == 0 || channels > 4)
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: nothing to write (%ux%u, %u channels)",
                              path ? path : "(null)", width, height, channels);
     if (width > (uint32_t)INT32_MAX || height > (uint32_t)INT32_MAX)
@@ -245,7 +246,21 @@ tsr_status tsr_io_image_save_u8(const char *path, uint32_t width, uint32_t heigh
         tsr_atomic_abort(tmp);
         return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path, e.c_str());
     }
-    bool ok = out->write_image(TypeDesc::UINT8, pixels);
+    // a band of rows at a time: made by fill, written, the buffer reused
+    std::vector<uint8_t> band;
+    try {
+        band.resize((size_t)TSR_IMAGE_BAND_ROWS * width * channels);
+    } catch (...) {
+        out->close();
+        tsr_atomic_abort(tmp);
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
+    }
+    bool ok = true;
+    for (uint32_t y0 = 0; y0 < height && ok; y0 += TSR_IMAGE_BAND_ROWS) {
+        uint32_t y1 = std::min(height, y0 + (uint32_t)TSR_IMAGE_BAND_ROWS);
+        fill(user, y0, y1, band.data());
+        ok = out->write_scanlines((int)y0, (int)y1, 0, TypeDesc::UINT8, band.data());
+    }
     std::string e = ok ? std::string() : one_line(out->geterror());
     if (!out->close() && ok) {
         ok = false;

@@ -97,11 +97,32 @@ tsr_status tsr_image_save_check(const char *path, tsr_error *err)
     return a ? a->image_save_check(path, err) : TSR_ERR_UNSUPPORTED;
 }
 
+tsr_status tsr_image_save_u8_rows(const char *path, uint32_t width, uint32_t height, uint32_t channels,
+                                  void (*fill)(void *user, uint32_t y0, uint32_t y1, uint8_t *rows), void *user,
+                                  tsr_error *err)
+{
+    const tsr_io_api *a = module(err);
+    return a ? a->image_save_u8_rows(path, width, height, channels, fill, user, err) : TSR_ERR_UNSUPPORTED;
+}
+
+typedef struct whole_image {
+    const uint8_t *pixels;
+    size_t row;
+} whole_image;
+
+static void copy_rows(void *user, uint32_t y0, uint32_t y1, uint8_t *rows)
+{
+    const whole_image *w = user;
+    memcpy(rows, w->pixels + (size_t)y0 * w->row, (size_t)(y1 - y0) * w->row);
+}
+
 tsr_status tsr_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
                              const uint8_t *pixels, tsr_error *err)
 {
-    const tsr_io_api *a = module(err);
-    return a ? a->image_save_u8(path, width, height, channels, pixels, err) : TSR_ERR_UNSUPPORTED;
+    if (!pixels)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: nothing to write (no pixels)", path ? path : "(null)");
+    whole_image w = {pixels, (size_t)width * channels};
+    return tsr_image_save_u8_rows(path, width, height, channels, copy_rows, &w, err);
 }
 
 bool tsr_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g)

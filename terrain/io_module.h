@@ -23,7 +23,7 @@ extern "C" {
 
 #define TSR_IO_MODULE_FILE "libtessera_io.so"
 #define TSR_IO_MODULE_SYMBOL "tsr_io_module_api"
-#define TSR_IO_MODULE_VERSION 1
+#define TSR_IO_MODULE_VERSION 2
 
 typedef struct tsr_io_api {
     int version; /* TSR_IO_MODULE_VERSION */
@@ -33,8 +33,9 @@ typedef struct tsr_io_api {
     tsr_status (*image_write)(const char *path, const char *tmp, uint32_t width, uint32_t height,
                               const float *values, bool as_u16, double scale, double offset, tsr_error *err);
     tsr_status (*image_save_check)(const char *path, tsr_error *err);
-    tsr_status (*image_save_u8)(const char *path, uint32_t width, uint32_t height, uint32_t channels,
-                                const uint8_t *pixels, tsr_error *err);
+    tsr_status (*image_save_u8_rows)(const char *path, uint32_t width, uint32_t height, uint32_t channels,
+                                     void (*fill)(void *user, uint32_t y0, uint32_t y1, uint8_t *rows), void *user,
+                                     tsr_error *err);
     bool (*gdal_georef)(const char *path, uint32_t w, uint32_t h, tsr_georef *g);
     tsr_status (*gdal_read)(const char *path, const tsr_allocator *alloc, uint64_t max_samples, float **pixels,
                             uint32_t *w, uint32_t *h, char format[64], tsr_georef *g, tsr_error *err);
@@ -46,8 +47,9 @@ tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint6
 tsr_status tsr_io_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
                               const float *values, bool as_u16, double scale, double offset, tsr_error *err);
 tsr_status tsr_io_image_save_check(const char *path, tsr_error *err);
-tsr_status tsr_io_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
-                                const uint8_t *pixels, tsr_error *err);
+tsr_status tsr_io_image_save_u8_rows(const char *path, uint32_t width, uint32_t height, uint32_t channels,
+                                     void (*fill)(void *user, uint32_t y0, uint32_t y1, uint8_t *rows), void *user,
+                                     tsr_error *err);
 bool tsr_io_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g);
 tsr_status tsr_io_gdal_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, float **pixels,
                             uint32_t *w, uint32_t *h, char format[64], tsr_georef *g, tsr_error *err);

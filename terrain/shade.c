@@ -22,17 +22,6 @@ static tsr_status check_hf(const tsr_heightfield *hf, const char *path, tsr_erro
     return TSR_OK;
 }
 
-static uint8_t *alloc_pixels(const tsr_heightfield *hf, uint32_t channels)
-{
-    const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
-    return tsr_alloc(a, (size_t)hf->width * hf->height * channels);
-}
-
-static void free_pixels(const tsr_heightfield *hf, uint8_t *p)
-{
-    tsr_free(hf->alloc.realloc ? &hf->alloc : NULL, p);
-}
-
 /* [-1, 1] onto 0..255, nearest. */
 static uint8_t encode_unit(double v)
 {
@@ -40,21 +29,15 @@ static uint8_t encode_unit(double v)
     return (uint8_t)(q < 0 ? 0 : q > 255 ? 255 : q);
 }
 
-tsr_status tsr_heightfield_normal_map(const tsr_heightfield *hf, const char *path, tsr_error *err)
+/* Rows y0 .. y1 - 1 of the normal map: RGB, no-data black. */
+static void normal_rows(void *user, uint32_t y0, uint32_t y1, uint8_t *px)
 {
-    tsr_status s = check_hf(hf, path, err);
-    if (s != TSR_OK)
-        return s;
-    uint8_t *px = alloc_pixels(hf, 3);
-    if (!px)
-        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for a %ux%u normal map", path, hf->width,
-                             hf->height);
+    const tsr_heightfield *hf = user;
     uint32_t w = hf->width;
-    for (uint32_t r = 0; r < hf->height; r++)
+    for (uint32_t r = y0; r < y1; r++)
         for (uint32_t c = 0; c < w; c++) {
-            size_t i = (size_t)r * w + c;
-            uint8_t *p = px + 3 * i;
-            if (isnan(hf->data[i])) {
+            uint8_t *p = px + 3 * ((size_t)(r - y0) * w + c);
+            if (isnan(hf->data[(size_t)r * w + c])) {
                 p[0] = p[1] = p[2] = 0;
                 continue;
             }
@@ -64,9 +47,40 @@ tsr_status tsr_heightfield_normal_map(const tsr_heightfield *hf, const char *pat
             p[1] = encode_unit(-n[1]); /* north is -y */
             p[2] = encode_unit(n[2]);
         }
-    s = tsr_image_save_u8(path, w, hf->height, 3, px, err);
-    free_pixels(hf, px);
-    return s;
+}
+
+tsr_status tsr_heightfield_normal_map(const tsr_heightfield *hf, const char *path, tsr_error *err)
+{
+    tsr_status s = check_hf(hf, path, err);
+    if (s != TSR_OK)
+        return s;
+    return tsr_image_save_u8_rows(path, hf->width, hf->height, 3, normal_rows, (void *)hf, err);
+}
+
+typedef struct shade_user {
+    const tsr_heightfield *hf;
+    double le, ln, lu; /* the light: east, north, up */
+} shade_user;
+
+/* Rows y0 .. y1 - 1 of the hillshade: grey, no-data black. */
+static void shade_rows(void *user, uint32_t y0, uint32_t y1, uint8_t *px)
+{
+    const shade_user *u = user;
+    const tsr_heightfield *hf = u->hf;
+    uint32_t w = hf->width;
+    for (uint32_t r = y0; r < y1; r++)
+        for (uint32_t c = 0; c < w; c++) {
+            uint8_t *p = px + (size_t)(r - y0) * w + c;
+            if (isnan(hf->data[(size_t)r * w + c])) {
+                *p = 0;
+                continue;
+            }
+            float n[3];
+            tsr_heightfield_normal_at(hf, c, r, n);
+            double d = n[0] * u->le + (-n[1]) * u->ln + n[2] * u->lu;
+            double q = floor(255.0 * (d > 0 ? d : 0) + 0.5);
+            *p = (uint8_t)(q > 255 ? 255 : q);
+        }
 }
 
 tsr_status tsr_heightfield_hillshade(const tsr_heightfield *hf, const char *path, double azimuth_deg,
@@ -85,26 +99,6 @@ tsr_status tsr_heightfield_hillshade(const tsr_heightfield *hf, const char *path
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: sun altitude %g is outside 0..90 degrees", path, altitude_deg);
     const double deg = 3.14159265358979323846 / 180.0;
     double az = fmod(azimuth_deg, 360.0) * deg, alt = altitude_deg * deg;
-    double le = cos(alt) * sin(az), ln = cos(alt) * cos(az), lu = sin(alt); /* east, north, up */
-    uint8_t *px = alloc_pixels(hf, 1);
-    if (!px)
-        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for a %ux%u hillshade", path, hf->width,
-                             hf->height);
-    uint32_t w = hf->width;
-    for (uint32_t r = 0; r < hf->height; r++)
-        for (uint32_t c = 0; c < w; c++) {
-            size_t i = (size_t)r * w + c;
-            if (isnan(hf->data[i])) {
-                px[i] = 0;
-                continue;
-            }
-            float n[3];
-            tsr_heightfield_normal_at(hf, c, r, n);
-            double d = n[0] * le + (-n[1]) * ln + n[2] * lu;
-            double q = floor(255.0 * (d > 0 ? d : 0) + 0.5);
-            px[i] = (uint8_t)(q > 255 ? 255 : q);
-        }
-    s = tsr_image_save_u8(path, w, hf->height, 1, px, err);
-    free_pixels(hf, px);
-    return s;
+    shade_user u = {hf, cos(alt) * sin(az), cos(alt) * cos(az), sin(alt)};
+    return tsr_image_save_u8_rows(path, hf->width, hf->height, 1, shade_rows, &u, err);
 }

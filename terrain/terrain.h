@@ -347,6 +347,14 @@ bool tsr_terrain_pick(const tsr_terrain *t, const double origin[3], const double
  * before touching the disk (TSR_ERR_UNSUPPORTED); messages name path. */
 tsr_status tsr_image_save_u8(const char *path, uint32_t width, uint32_t height, uint32_t channels,
                              const uint8_t *pixels, tsr_error *err);
+/* The same, the pixels made a band of rows at a time, so a big image is
+ * never whole in memory: fill(user, y0, y1, rows) writes rows y0 .. y1 - 1
+ * (channels interleaved, width * channels bytes a row) into rows; the
+ * bands come in order, at most TSR_IMAGE_BAND_ROWS rows each. */
+enum { TSR_IMAGE_BAND_ROWS = 64 };
+tsr_status tsr_image_save_u8_rows(const char *path, uint32_t width, uint32_t height, uint32_t channels,
+                                  void (*fill)(void *user, uint32_t y0, uint32_t y1, uint8_t *rows), void *user,
+                                  tsr_error *err);
 /* Whether tsr_image_save_u8 would take path: an image writer for its
  * extension, and a file can be made there (tsr_atomic_probe). */
 tsr_status tsr_image_save_check(const char *path, tsr_error *err);

@@ -323,6 +323,47 @@ TEST(bad_paths_and_arguments)
     tsr_heightfield_destroy(hf);
 }
 
+/* Images made a band of rows at a time (tsr_image_save_u8_rows): taller
+ * than several bands, the last one partial, every pixel lands where it
+ * belongs (RGB: two channels would be grey and alpha, which readers may
+ * unpremultiply); so does a tall normal map's. */
+static void pattern_rows(void *user, uint32_t y0, uint32_t y1, uint8_t *rows)
+{
+    const uint32_t *w = user;
+    for (uint32_t r = y0; r < y1; r++)
+        for (uint32_t c = 0; c < *w; c++)
+            for (uint32_t k = 0; k < 3; k++)
+                rows[((size_t)(r - y0) * *w + c) * 3 + k] = (uint8_t)((r * 7 + c * 3 + k * 101) & 255);
+}
+
+TEST(images_in_bands_of_rows)
+{
+    const char *dir = check_temp_dir();
+    uint32_t w = 9, h = 3 * TSR_IMAGE_BAND_ROWS + 5;
+    const char *p = tmp_path(dir, "bands.png");
+    tsr_error err = {0};
+    CHECK_MSG(tsr_image_save_u8_rows(p, w, h, 3, pattern_rows, &w, &err) == TSR_OK, "%s", err.message);
+    float *px = read_back(p, w, h, 3);
+    uint32_t wrong = 0;
+    for (uint32_t r = 0; px && r < h; r++)
+        for (uint32_t c = 0; c < w; c++)
+            for (uint32_t k = 0; k < 3; k++)
+                wrong += px[((size_t)r * w + c) * 3 + k] != (float)((r * 7 + c * 3 + k * 101) & 255);
+    CHECK_MSG(px && wrong == 0, "%u pixels wrong", wrong);
+    tsr_free(NULL, px);
+    const double k[3] = {0.3, -0.7, 5};
+    tsr_heightfield *hf = make_hf(5, h, 2.0, 3.0, 0.5, plane, k);
+    p = tmp_path(dir, "tall.png");
+    CHECK_MSG(tsr_heightfield_normal_map(hf, p, &err) == TSR_OK, "%s", err.message);
+    px = read_back(p, 5, h, 3);
+    for (uint32_t i = 0; px && i < 5 * h; i++)
+        check_normal_px(px + 3 * i, k[0], k[1], i % 5, i / 5);
+    tsr_free(NULL, px);
+    tsr_heightfield_destroy(hf);
+    CHECK(dir_entries(dir) == 2); /* no temporary left */
+}
+
 TEST_MAIN(T(plane_normal_map_exact), T(flat_normal_map_is_128_128_255), T(paraboloid_normal_map),
           T(nan_height_normal_map), T(hillshade_flat_facing_and_away), T(hillshade_azimuth_convention),
-          T(hillshade_nan_is_zero), T(bad_paths_and_arguments))
+          T(hillshade_nan_is_zero), T(bad_paths_and_arguments),
+          T(images_in_bands_of_rows))
