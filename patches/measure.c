@@ -56,7 +56,6 @@
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 /* A reconstructed dropped triangle: (u, v) corners and welded vertices. */
 typedef struct gap_tri {
@@ -793,7 +792,7 @@ tsr_status tsr_ptess_measure_progress(const tsr_pmodel *m, const tsr_ptess_resul
 
     /* about how many samples: threads where that is worth their start */
     uint64_t work = 3 * (uint64_t)ntri + (uint64_t)info.pieces * per_side * per_side;
-    long ncpu = alloc || info.own_alloc || work < ((uint64_t)1 << 17) ? 1 : sysconf(_SC_NPROCESSORS_ONLN);
+    long ncpu = alloc || info.own_alloc || work < ((uint64_t)1 << 17) ? 1 : (long)tsr_cpu_count();
     uint32_t claims = (info.sources + CLAIM - 1) / CLAIM; /* no more threads than claims */
     uint32_t nthreads = ncpu < 1 ? 1 : ncpu > MAX_THREADS ? MAX_THREADS : (uint32_t)ncpu;
     nthreads = nthreads > claims ? (claims ? claims : 1) : nthreads;

@@ -2,14 +2,12 @@
 #include "terrain_internal.h"
 
 #include <pthread.h>
-#include <unistd.h>
 
 enum { MAX_THREADS = 256 };
 
 uint32_t tsr__thread_count(uint32_t threads)
 {
-    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-    return threads ? threads : ncpu > 0 ? (uint32_t)ncpu : 1;
+    return threads ? threads : tsr_cpu_count();
 }
 
 void tsr__run_threads(void *(*work)(void *), void *arg, uint32_t threads, uint32_t jobs)

@@ -5,7 +5,9 @@
 #include <errno.h>
 #include <stdint.h>
 #include <string.h>
+#include <sched.h>
 #include <sys/mman.h>
+#include <unistd.h>
 
 #include <stdarg.h>
 #include <stdio.h>
@@ -155,6 +157,18 @@ void *tsr_realloc(const tsr_allocator *a, void *ptr, size_t size)
     if (size == 0)
         size = 1;
     return a && a->realloc ? a->realloc(a->user, ptr, size) : default_realloc(NULL, ptr, size);
+}
+
+uint32_t tsr_cpu_count(void)
+{
+    cpu_set_t set;
+    if (sched_getaffinity(0, sizeof set, &set) == 0) {
+        int n = CPU_COUNT(&set);
+        if (n > 0)
+            return (uint32_t)n;
+    }
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n > 0 ? (uint32_t)n : 1;
 }
 
 void tsr_free(const tsr_allocator *a, void *ptr)

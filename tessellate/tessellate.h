@@ -78,6 +78,11 @@ void *tsr_alloc(const tsr_allocator *a, size_t size);
 void *tsr_realloc(const tsr_allocator *a, void *ptr, size_t size);
 void tsr_free(const tsr_allocator *a, void *ptr);
 
+/* The processors this process may run on: its CPU affinity (a Slurm job's
+ * or a container's cpuset), else the online count; at least 1. What
+ * "threads 0: one per processor" means everywhere. */
+uint32_t tsr_cpu_count(void);
+
 /* ---- Mesh -------------------------------------------------------------- */
 
 /* An indexed triangle mesh. positions holds 3 floats per vertex; normals

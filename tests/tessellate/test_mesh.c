@@ -1,8 +1,11 @@
 /* Mesh container, normals, formats, atomic output, and the binary layouts
  * of the writers (read back here byte by byte; the independent readers,
  * assimp and the Khronos validator, run in tests/tools/writers.sh). */
+#define _GNU_SOURCE /* sched_setaffinity, CPU_SET */
 #include "check.h"
 #include "tessellate/tessellate.h"
+
+#include <sched.h>
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -238,6 +241,29 @@ TEST(keymap_clear_keeps_room)
     tsr_keymap_free(&m, NULL);
 }
 
+/* tsr_cpu_count follows the process's CPU affinity (what a Slurm job or
+ * a container is given), not the machine's processor count. */
+TEST(cpu_count_follows_affinity)
+{
+    uint32_t all = tsr_cpu_count();
+    long online = sysconf(_SC_NPROCESSORS_ONLN);
+    CHECK(all >= 1 && (online <= 0 || all <= (uint32_t)online));
+    cpu_set_t was, one;
+    if (sched_getaffinity(0, sizeof was, &was) != 0)
+        SKIP("no CPU affinity here");
+    int first = -1;
+    for (int c = 0; c < CPU_SETSIZE && first < 0; c++)
+        if (CPU_ISSET(c, &was))
+            first = c;
+    CPU_ZERO(&one);
+    CPU_SET(first, &one);
+    if (sched_setaffinity(0, sizeof one, &one) != 0)
+        SKIP("cannot narrow the CPU affinity");
+    CHECK_MSG(tsr_cpu_count() == 1, "%u CPUs on one", tsr_cpu_count());
+    CHECK(sched_setaffinity(0, sizeof was, &was) == 0);
+    CHECK(tsr_cpu_count() == all);
+}
+
 TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing),
           T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced),
-          T(keymap_clear_keeps_room))
+          T(keymap_clear_keeps_room), T(cpu_count_follows_affinity))
