@@ -112,7 +112,7 @@ tsr_status tsr_ptess_crease_normals(const tsr_pmodel *m, const tsr_ptess_result 
     uint32_t *off = tsr_alloc(alloc, ((size_t)nv + 1) * sizeof *off);
     uint32_t *cur = tsr_alloc(alloc, ((size_t)nv + 1) * sizeof *cur);
     uint32_t *idx = tsr_alloc(alloc, (nc + 1) * sizeof *idx);
-    uint32_t *list = NULL, vs_cap = 0, vg_cap = 0;
+    uint32_t *list = NULL, *side = NULL, vs_cap = 0, vg_cap = 0; /* side: a listed corner's entry in vs */
     vsrc *vs = NULL;
     vgroup *vg = NULL;
     tsr_pmodel_info info;
@@ -158,7 +158,9 @@ tsr_status tsr_ptess_crease_normals(const tsr_pmodel *m, const tsr_ptess_result 
     for (uint32_t v = 0; v < nv; v++)
         off[v + 1] += off[v];
     memcpy(cur, off, (size_t)nv * sizeof *cur);
-    if (!(list = tsr_alloc(alloc, ((size_t)off[nv] + 1) * sizeof *list)))
+    list = tsr_alloc(alloc, ((size_t)off[nv] + 1) * sizeof *list);
+    side = tsr_alloc(alloc, ((size_t)off[nv] + 1) * sizeof *side);
+    if (!list || !side)
         goto done;
     for (size_t c = 0; c < nc; c++)
         if (multi[idx[c]])
@@ -183,6 +185,7 @@ tsr_status tsr_ptess_crease_normals(const tsr_pmodel *m, const tsr_ptess_result 
             uint64_t key = corner_key(r, &kk, tol, c);
             while (j < ns && vs[j].key != key)
                 j++;
+            side[k] = j;
             if (j < ns)
                 continue;
             uint32_t s = (uint32_t)(key / 9), su = (uint32_t)(key % 9) / 3, sv = (uint32_t)(key % 3);
@@ -230,13 +233,8 @@ tsr_status tsr_ptess_crease_normals(const tsr_pmodel *m, const tsr_ptess_result 
             if (vg[g].vertex == NONE)
                 goto done;
         }
-        for (uint32_t k = a; k < b; k++) {
-            uint32_t c = list[k], j = 0;
-            uint64_t key = corner_key(r, &kk, tol, c);
-            while (vs[j].key != key)
-                j++;
-            idx[c] = vg[vs[j].group].vertex;
-        }
+        for (uint32_t k = a; k < b; k++)
+            idx[list[k]] = vg[vs[side[k]].group].vertex;
     }
     for (uint32_t t = 0; t < nt; t++)
         if (!tsr_mesh_add_triangle(out, idx[3 * (size_t)t], idx[3 * (size_t)t + 1], idx[3 * (size_t)t + 2]))
@@ -251,6 +249,7 @@ done:
     tsr_free(alloc, cur);
     tsr_free(alloc, idx);
     tsr_free(alloc, list);
+    tsr_free(alloc, side);
     tsr_free(alloc, vs);
     tsr_free(alloc, vg);
     tsr_free(alloc, kk.off);
