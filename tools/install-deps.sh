@@ -2,8 +2,9 @@
 # Installs, from Debian 12 packages only, everything Tessera's build, tests
 # and demo need. Idempotent: when every package is present it does nothing
 # (no apt-get update, no network). Works as root, or through sudo otherwise.
-# The npm test tool (gltf-validator) goes into build/node_modules, not the
-# system, so the script never needs network when it is already there.
+# The npm test and benchmark tools (gltf-validator, and the peer meshers
+# delatin and @mapbox/martini) go into build/node_modules, not the system,
+# so the script never needs network when they are already there.
 set -euo pipefail
 
 PKGS=(
@@ -52,13 +53,20 @@ if ((${#missing[@]})); then
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-# Test-only npm tool: the Khronos glTF validator, installed into the build
-# tree (not committed). Optional for the demo, required by the tests.
+# Test and benchmark npm tools, installed into the build tree (not
+# committed): the Khronos glTF validator (the tests check every .glb with
+# it), and the peer meshers of `tessera bench mesh --peers` and its test,
+# delatin (the JavaScript port of hmm, Garland-Heckbert) and
+# @mapbox/martini (RTIN). Optional for the demo.
 here=$(cd "$(dirname "$0")/.." && pwd)
-if [ "${TSR_SKIP_NPM:-0}" != 1 ] && [ ! -f "$here/build/node_modules/gltf-validator/package.json" ]; then
-  echo "install-deps: installing npm gltf-validator into build/node_modules" >&2
+npm_pkgs=()
+[ -f "$here/build/node_modules/gltf-validator/package.json" ] || npm_pkgs+=(gltf-validator@2.0.0-dev.3.10)
+[ -f "$here/build/node_modules/delatin/package.json" ] || npm_pkgs+=(delatin@0.2.0)
+[ -f "$here/build/node_modules/@mapbox/martini/package.json" ] || npm_pkgs+=(@mapbox/martini@0.2.0)
+if [ "${TSR_SKIP_NPM:-0}" != 1 ] && [ ${#npm_pkgs[@]} -gt 0 ]; then
+  echo "install-deps: installing npm ${npm_pkgs[*]} into build/node_modules" >&2
   mkdir -p "$here/build"
   (cd "$here/build" && { [ -f package.json ] || echo '{"private":true}' > package.json; } \
-     && npm install --no-audit --no-fund --silent gltf-validator@2.0.0-dev.3.10 >/dev/null)
+     && npm install --no-audit --no-fund --silent "${npm_pkgs[@]}" >/dev/null)
 fi
 exit 0
