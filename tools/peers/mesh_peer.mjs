@@ -83,7 +83,7 @@ let martini = null, tile = null, terrain32 = null;
 
 function run(cmd, e, r, out) {
     if (cmd === 'delatin') {
-        if (!Delatin) throw new Error('npm package delatin not installed');
+        if (!Delatin) throw new Error('npm package delatin not found (tools/install-deps.sh installs it in build/node_modules)');
         let best = Infinity, tin = null;
         const base = live();
         for (let k = 0; k < Math.max(r, 1); k++) {
@@ -98,7 +98,7 @@ function run(cmd, e, r, out) {
         return [tin.coords.length / 2, tin.triangles.length / 3, best, held];
     }
     if (cmd === 'martini') {
-        if (!Martini) throw new Error('npm package @mapbox/martini not installed');
+        if (!Martini) throw new Error('npm package @mapbox/martini not found (tools/install-deps.sh installs it in build/node_modules)');
         if (width !== height || ((width - 1) & (width - 2)) !== 0)
             throw new Error(`martini needs a (2^k+1)^2 grid, not ${width}x${height}`);
         if (!terrain32) terrain32 = Float32Array.from(heights);
