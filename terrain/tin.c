@@ -1338,6 +1338,7 @@ static bool ring_nodata(const tsr_heightfield *hf, uint32_t x, uint32_t y, uint3
 
 typedef struct tin_block {
     uint32_t x, y, w, h; /* in the whole heightfield */
+    bool finished;       /* meshed (or failed): may be welded */
     tsr_mesh mesh;       /* window coordinates (x - window x) dx, ... */
     tsr_tin_report rep;
     tsr_status st;
@@ -1356,6 +1357,16 @@ typedef struct tin_job {
     bool clean; /* the heightfield has no no-data at all: no block's ring either */
     double cells; /* in all blocks */
     pthread_mutex_t lock;
+    /* welding, in block order, as the blocks finish (under lock: which
+     * blocks are finished, whether a thread is welding, the next to weld;
+     * the welding thread alone touches the output and the seams) */
+    bool welding;
+    uint32_t next_weld;
+    tsr_status weld_st;
+    tsr_error weld_err;
+    const struct seams *seams;
+    tsr_mesh *out;
+    tsr_tin_report *rep;
 } tin_job;
 
 typedef struct block_progress_user {
@@ -1422,25 +1433,6 @@ static void mesh_block(tin_job *j, uint32_t i)
         block_progress(&pu, 1);
 }
 
-static void *block_worker(void *arg)
-{
-    tin_job *j = arg;
-    for (;;) {
-        pthread_mutex_lock(&j->lock);
-        uint32_t i = j->next++;
-        bool stop = j->failed || i >= j->nb;
-        pthread_mutex_unlock(&j->lock);
-        if (stop)
-            return NULL;
-        mesh_block(j, i);
-        if (j->b[i].st != TSR_OK) {
-            pthread_mutex_lock(&j->lock);
-            j->failed = true;
-            pthread_mutex_unlock(&j->lock);
-        }
-    }
-}
-
 /* The vertex of window sample (c, r) on a seam, or a new one: seam
  * vertices are shared by the blocks on both sides (and at a corner by
  * four). vcol[k]: the column seam k's vertices by row, vrow[k] the row
@@ -1465,6 +1457,92 @@ static uint32_t *seam_slot(const seams *s, uint32_t bi, uint32_t bj, uint32_t c,
     for (uint32_t k = n; k < 4; k++)
         slots[k] = NULL;
     return n ? slots[0] : NULL;
+}
+
+/* Appends block i's mesh to the output, its seam vertices shared with
+ * the blocks welded before it, and frees the block's mesh. */
+static tsr_status weld_block(tin_job *j, uint32_t i)
+{
+    const tsr_heightfield *hf = j->hf;
+    const tsr_allocator *a = hf->alloc.realloc ? &hf->alloc : NULL;
+    const seams *sm = j->seams;
+    tin_block *bk = &j->b[i];
+    uint32_t bi = i % sm->nx, bj = i / sm->nx;
+    tsr_status st = bk->st;
+    if (st != TSR_OK)
+        j->weld_err = bk->err;
+    uint32_t *map = st == TSR_OK ? tsr_alloc(a, ((size_t)bk->mesh.vertex_count + 1) * sizeof *map) : NULL;
+    if (st == TSR_OK && !map)
+        st = tsr_error_set(&j->weld_err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
+    for (uint32_t k = 0; st == TSR_OK && k < bk->mesh.vertex_count; k++) {
+        const float *p = bk->mesh.positions + 3 * (size_t)k;
+        uint32_t c = (uint32_t)lround(p[0] / hf->dx), r = (uint32_t)lround(p[1] / hf->dy);
+        uint32_t *slots[4];
+        uint32_t *first = seam_slot(sm, bi, bj, c, r, slots);
+        uint32_t id = first ? *first : UINT32_MAX;
+        if (id == UINT32_MAX && (id = tsr_mesh_add_vertex(j->out, p, NULL, NULL)) == UINT32_MAX)
+            st = tsr_error_set(&j->weld_err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
+        for (int q = 0; q < 4 && slots[q]; q++)
+            *slots[q] = id;
+        map[k] = id;
+    }
+    for (uint32_t k = 0; st == TSR_OK && k < bk->mesh.triangle_count; k++) {
+        const uint32_t *t = bk->mesh.indices + 3 * (size_t)k;
+        if (!tsr_mesh_add_triangle(j->out, map[t[0]], map[t[1]], map[t[2]]))
+            st = tsr_error_set(&j->weld_err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
+    }
+    tsr_free(a, map);
+    if (st == TSR_OK) {
+        tsr_tin_report *rep = j->rep;
+        rep->border_vertices += bk->rep.border_vertices;
+        rep->insertions += bk->rep.insertions;
+        rep->flips += bk->rep.flips;
+        rep->estimated_error = fmax(rep->estimated_error, bk->rep.estimated_error);
+    }
+    tsr_mesh_free(&bk->mesh);
+    return st;
+}
+
+/* Marks block i finished and, unless another thread is at it, welds the
+ * finished blocks that follow the welded ones, in block order, so that a
+ * block's mesh lives only until the blocks before it are done (at 16k,
+ * all the blocks' meshes and the welded mesh used to coexist). */
+static void block_finished(tin_job *j, uint32_t i)
+{
+    pthread_mutex_lock(&j->lock);
+    j->b[i].finished = true;
+    if (j->b[i].st != TSR_OK)
+        j->failed = true;
+    if (!j->welding) {
+        j->welding = true;
+        while (j->weld_st == TSR_OK && j->next_weld < j->nb && j->b[j->next_weld].finished) {
+            uint32_t k = j->next_weld++;
+            pthread_mutex_unlock(&j->lock);
+            tsr_status st = weld_block(j, k);
+            pthread_mutex_lock(&j->lock);
+            if (st != TSR_OK) {
+                j->weld_st = st;
+                j->failed = true;
+            }
+        }
+        j->welding = false;
+    }
+    pthread_mutex_unlock(&j->lock);
+}
+
+static void *block_worker(void *arg)
+{
+    tin_job *j = arg;
+    for (;;) {
+        pthread_mutex_lock(&j->lock);
+        uint32_t i = j->next++;
+        bool stop = j->failed || i >= j->nb;
+        pthread_mutex_unlock(&j->lock);
+        if (stop)
+            return NULL;
+        mesh_block(j, i);
+        block_finished(j, i);
+    }
 }
 
 /* clean: hf has no no-data sample at all (its stats say so), so no ring
@@ -1513,22 +1591,7 @@ static tsr_status mesh_delaunay_blocks(const tsr_heightfield *hf, const tsr_heig
             bk->x = wx + sx[bx], bk->y = wy + sy[by];
             bk->w = sx[bx + 1] - sx[bx] + 1, bk->h = sy[by + 1] - sy[by] + 1;
         }
-    pthread_mutex_init(&j.lock, NULL);
-    tsr__run_threads(block_worker, &j, o->threads, j.nb);
-    pthread_mutex_destroy(&j.lock);
-    /* the first failure in block order; else the blocks welded along
-     * their seams, in block order (blocks left undone after a failure
-     * are empty) */
-    uint32_t nv = 0, ntri = 0;
-    for (uint32_t i = 0; i < j.nb && st == TSR_OK; i++) {
-        if (b[i].st != TSR_OK) {
-            st = b[i].st;
-            if (err)
-                *err = b[i].err;
-        }
-        nv += b[i].mesh.vertex_count;
-        ntri += b[i].mesh.triangle_count;
-    }
+    /* the seams' vertex arrays first: blocks are welded as they finish */
     for (uint32_t k = 1; k < nx && st == TSR_OK; k++) {
         if (!(vcol[k] = tsr_alloc(a, (size_t)wh * sizeof **vcol)))
             st = TSR_ERR_NOMEM;
@@ -1541,46 +1604,30 @@ static tsr_status mesh_delaunay_blocks(const tsr_heightfield *hf, const tsr_heig
         else
             memset(vrow[k], 0xff, (size_t)ww * sizeof **vrow);
     }
-    if (st == TSR_OK && tsr_mesh_reserve(mesh, nv, ntri) != TSR_OK)
-        st = TSR_ERR_NOMEM;
-    if (st == TSR_ERR_NOMEM && (!err || err->status == TSR_OK))
-        tsr_error_set(err, st, "delaunay mesh: out of memory");
     seams sm = {nx, ny, sx, sy, vcol, vrow};
+    j.seams = &sm;
+    j.out = mesh;
+    j.rep = rep;
+    if (st == TSR_OK) {
+        pthread_mutex_init(&j.lock, NULL);
+        tsr__run_threads(block_worker, &j, o->threads, j.nb);
+        pthread_mutex_destroy(&j.lock);
+        /* the first failure in block order (welding stops there): the
+         * block's own error, or the weld's */
+        st = j.weld_st;
+        if (st != TSR_OK && err)
+            *err = j.weld_err;
+        else if (st == TSR_OK && j.next_weld < j.nb) /* a block failed: the first in order */
+            for (uint32_t i = 0; i < j.nb; i++)
+                if (b[i].finished && b[i].st != TSR_OK) {
+                    st = b[i].st;
+                    if (err)
+                        *err = b[i].err;
+                    break;
+                }
+    } else
+        tsr_error_set(err, st, "delaunay mesh: out of memory");
     rep->blocks = j.nb;
-    for (uint32_t i = 0; i < j.nb && st == TSR_OK; i++) {
-        tin_block *bk = &b[i];
-        uint32_t bi = i % nx, bj = i / nx;
-        uint32_t *map = tsr_alloc(a, ((size_t)bk->mesh.vertex_count + 1) * sizeof *map);
-        if (!map) {
-            st = tsr_error_set(err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
-            break;
-        }
-        for (uint32_t k = 0; k < bk->mesh.vertex_count; k++) {
-            const float *p = bk->mesh.positions + 3 * (size_t)k;
-            uint32_t c = (uint32_t)lround(p[0] / hf->dx), r = (uint32_t)lround(p[1] / hf->dy);
-            uint32_t *slots[4];
-            uint32_t *first = seam_slot(&sm, bi, bj, c, r, slots);
-            uint32_t id = first ? *first : UINT32_MAX;
-            if (id == UINT32_MAX)
-                id = tsr_mesh_add_vertex(mesh, p, NULL, NULL);
-            for (int q = 0; q < 4 && slots[q]; q++)
-                *slots[q] = id;
-            map[k] = id;
-        }
-        for (uint32_t k = 0; k < bk->mesh.triangle_count; k++) {
-            const uint32_t *t = bk->mesh.indices + 3 * (size_t)k;
-            if (!tsr_mesh_add_triangle(mesh, map[t[0]], map[t[1]], map[t[2]])) {
-                st = tsr_error_set(err, TSR_ERR_NOMEM, "delaunay mesh: out of memory");
-                break;
-            }
-        }
-        tsr_free(a, map);
-        rep->border_vertices += bk->rep.border_vertices;
-        rep->insertions += bk->rep.insertions;
-        rep->flips += bk->rep.flips;
-        rep->estimated_error = fmax(rep->estimated_error, bk->rep.estimated_error);
-        tsr_mesh_free(&bk->mesh);
-    }
     for (uint32_t i = 0; i < j.nb; i++)
         tsr_mesh_free(&b[i].mesh);
     for (uint32_t k = 0; k < nx; k++)

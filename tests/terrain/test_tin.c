@@ -692,6 +692,56 @@ TEST(blocks)
     tsr_heightfield_destroy(hf);
 }
 
+/* Blocks are welded into the output as they finish (in block order):
+ * an allocation failing anywhere (a block's mesher, its crop, a weld's
+ * map, the output's growth) gives TSR_ERR_NOMEM with a message and leaves
+ * nothing behind; with no failure the mesh is the one made through the
+ * default allocator. One thread: the test's allocator counts unlocked. */
+TEST(blocks_allocation_failures)
+{
+    tsr_heightfield *src = terrain(150, 131, 9);
+    check_alloc f = {0};
+    tsr_allocator al = {check_realloc, &f};
+    tsr_heightfield *hf = tsr_heightfield_create(150, 131, &al);
+    memcpy(tsr_heightfield_data(hf), tsr_heightfield_cdata(src), 150 * 131 * sizeof(float));
+    tsr_tin_options o = {0};
+    o.max_error = 2;
+    o.block = 37;
+    o.threads = 1;
+    tsr_tin_report rep;
+    tsr_mesh want, m;
+    tsr_mesh_init(&want, 0, NULL);
+    CHECK(tsr_terrain_mesh(src, &o, &want, &rep, NULL) == TSR_OK && rep.blocks == 20);
+    long live = f.live, start = f.calls;
+    tsr_mesh_init(&m, 0, &al);
+    CHECK(tsr_terrain_mesh(hf, &o, &m, &rep, NULL) == TSR_OK);
+    long calls = f.calls - start;
+    CHECK(m.vertex_count == want.vertex_count && m.triangle_count == want.triangle_count &&
+          !memcmp(m.positions, want.positions, 3 * sizeof(float) * want.vertex_count) &&
+          !memcmp(m.indices, want.indices, 3 * sizeof(uint32_t) * want.triangle_count));
+    tsr_mesh_free(&m);
+    CHECK(f.live == live && calls > 40);
+    uint32_t nomem = 0;
+    for (long k = 1; k <= calls; k += k < 40 ? 1 : calls / 60 + 1) {
+        f.fail_at = f.calls + k;
+        tsr_error err = {0};
+        tsr_mesh_init(&m, 0, &al);
+        tsr_status st = tsr_terrain_mesh(hf, &o, &m, &rep, &err);
+        CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "failure at allocation %ld: status %d", k, (int)st);
+        if (st == TSR_ERR_NOMEM) {
+            nomem++;
+            CHECK_MSG(err.message[0], "failure at allocation %ld: no message", k);
+        }
+        tsr_mesh_free(&m);
+        CHECK_MSG(f.live == live, "failure at allocation %ld: %ld blocks left", k, f.live - live);
+    }
+    f.fail_at = 0;
+    CHECK_MSG(nomem > 40, "only %u of the failed allocations were reported", nomem);
+    tsr_mesh_free(&want);
+    tsr_heightfield_destroy(hf);
+    tsr_heightfield_destroy(src);
+}
+
 /* tessera mesh --base: the mesher's output (with no-data holes) closed
  * into a solid: no boundary edge left, every edge used once each way, and
  * the signed volume equal to the prisms under the top. */
@@ -863,4 +913,4 @@ TEST(measure_bands_agree_with_brute_force)
 }
 
 TEST_MAIN(T(error_bound_generated), T(measure_bands_agree_with_brute_force), T(flips_fewer_triangles), T(spacing_and_scale), T(flat_and_planar), T(budgets),
-          T(nodata_holes), T(quadtree_leaves_and_tiles), T(window_seams), T(blocks), T(closed_solid), T(bad_options), T(data_real_terrain))
+          T(nodata_holes), T(quadtree_leaves_and_tiles), T(window_seams), T(blocks), T(blocks_allocation_failures), T(closed_solid), T(bad_options), T(data_real_terrain))
