@@ -385,14 +385,17 @@ static inline int64_t floor_div_fast(int64_t a, int64_t b)
 #define PREFETCH(p) ((void)(p))
 #endif
 
-/* A function compiled twice, for AVX2 and for the baseline, the one for
- * the running processor picked at load time (GCC's ifunc): the scans'
- * four lanes of doubles become one vector. No FMA: the same roundings, so
- * the same results, on either. */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define TSR_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
+/* The scan is compiled twice, for AVX2 and for the baseline, and the
+ * running processor's version is called (a test of the CPU's feature
+ * bits per call, not an ifunc: an ifunc's resolver runs before a
+ * sanitizer's runtime is up, and ThreadSanitizer crashes there). The
+ * scans' four lanes of doubles become one vector. No FMA: the same
+ * roundings, so the same results, on either. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define TSR_AVX2_DISPATCH 1
+#define TSR_ALWAYS_INLINE inline __attribute__((always_inline))
 #else
-#define TSR_SIMD_CLONES
+#define TSR_ALWAYS_INLINE inline
 #endif
 
 /* |rp[x] - (base + ga x)| */
@@ -521,8 +524,8 @@ static inline void prefetch_tri(const tin *t, const int64_t c[3], const int64_t 
  * inside or on the triangle, between its edges' columns stepped exactly
  * in integers (the vertices sorted by row: the long edge from the top to
  * the bottom one on one side, the two short ones on the other). */
-TSR_SIMD_CLONES static void tri_worst(const tin *t, const int64_t c[3], const int64_t r[3], const double z[3], double stop,
-                      double *best_out, uint32_t *best_s_out)
+static TSR_ALWAYS_INLINE void tri_worst_body(const tin *t, const int64_t c[3], const int64_t r[3], const double z[3],
+                                             double stop, double *best_out, uint32_t *best_s_out)
 {
     int64_t det = (c[1] - c[0]) * (r[2] - r[0]) - (c[2] - c[0]) * (r[1] - r[0]);
     double ga = ((z[1] - z[0]) * (double)(r[2] - r[0]) - (z[2] - z[0]) * (double)(r[1] - r[0])) / (double)det;
@@ -624,6 +627,29 @@ TSR_SIMD_CLONES static void tri_worst(const tin *t, const int64_t c[3], const in
             }
     *best_out = best;
     *best_s_out = best_s;
+}
+
+#ifdef TSR_AVX2_DISPATCH
+__attribute__((target("avx2"))) static void tri_worst_avx2(const tin *t, const int64_t c[3], const int64_t r[3],
+                                                          const double z[3], double stop, double *best_out,
+                                                          uint32_t *best_s_out)
+{
+    tri_worst_body(t, c, r, z, stop, best_out, best_s_out);
+}
+#endif
+
+/* The worst candidate sample of the triangle (c, r, z) (none: best -1,
+ * UINT32_MAX), scanning no further once best exceeds stop. */
+static void tri_worst(const tin *t, const int64_t c[3], const int64_t r[3], const double z[3], double stop,
+                      double *best_out, uint32_t *best_s_out)
+{
+#ifdef TSR_AVX2_DISPATCH
+    if (__builtin_cpu_supports("avx2")) {
+        tri_worst_avx2(t, c, r, z, stop, best_out, best_s_out);
+        return;
+    }
+#endif
+    tri_worst_body(t, c, r, z, stop, best_out, best_s_out);
 }
 
 /* Sets slot s's record to error best at sample best_s (none when best_s
