@@ -145,8 +145,9 @@ static bool peer_row(bench_peer *p, const tsr_heightfield *hf, const char *metho
  * the same bound, and the quadtree against martini (RTIN): martini at
  * its error parameter = the bound, then at the largest parameter whose
  * measured max error is within the bound (found by halving, then
- * bisection in log scale, each mesh measured by tsr_terrain_measure). */
-static void bench_input_peers(const char *name, const tsr_heightfield *hf, const double *fr, int nfr, uint32_t repeat)
+ * bisection in log scale, each mesh measured by tsr_terrain_measure).
+ * false when the peers could not start (their columns are left empty). */
+static bool bench_input_peers(const char *name, const tsr_heightfield *hf, const double *fr, int nfr, uint32_t repeat)
 {
     tsr_heightfield_stats st;
     tsr_heightfield_stats_compute(hf, &st);
@@ -182,20 +183,18 @@ static void bench_input_peers(const char *name, const tsr_heightfield *hf, const
         bool mok = p && peer_row(p, hf, "martini", e, 0, &m, &mmax, mwhy, sizeof mwhy);
         if (mok) {
             double lo = e, hi = e, lo_max = mmax;
-            bench_peer_run lo_run = m;
+            bench_peer_run untimed; /* the search's meshes: only their measured error counts */
             while (mok && lo_max > e && lo > e / 4096) {
                 hi = lo;
                 lo *= 0.5;
-                mok = peer_row(p, hf, "martini", lo, 0, &lo_run, &lo_max, mwhy, sizeof mwhy);
+                mok = peer_row(p, hf, "martini", lo, 0, &untimed, &lo_max, mwhy, sizeof mwhy);
             }
             for (int k = 0; mok && k < 8 && hi > lo; k++) {
                 double mid = sqrt(lo * hi), mid_max = INFINITY;
-                bench_peer_run r;
-                mok = peer_row(p, hf, "martini", mid, 0, &r, &mid_max, mwhy, sizeof mwhy);
+                mok = peer_row(p, hf, "martini", mid, 0, &untimed, &mid_max, mwhy, sizeof mwhy);
                 if (mid_max <= e) {
                     lo = mid;
                     lo_max = mid_max;
-                    lo_run = r;
                 } else
                     hi = mid;
             }
@@ -215,12 +214,10 @@ static void bench_input_peers(const char *name, const tsr_heightfield *hf, const
             json_method(jr, "martini_at_bound", m.triangles, mmax, 0, 0, NULL);
             json_method(jr, "martini_within_bound", mt.triangles, best_max, mt.seconds, 0, NULL);
             cJSON_AddNumberToObject(cJSON_GetObjectItem(jr, "martini_within_bound"), "parameter", best_param);
-        }
-        if (mok && best_param >= 0)
             printf(" | %9.4g %6.2fx | %9.4g %10u %9.4g %8.3f | %6.2fx %6.2fx\n", mmax, e > 0 ? mmax / e : 0, best_param,
                    mt.triangles, best_max, mt.seconds, d.triangles ? (double)mt.triangles / d.triangles : 0,
                    mt.triangles ? (double)q.triangles / mt.triangles : 0);
-        else
+        } else
             printf(" | %9s %7s | %9s %10s %9s %8s | %7s %7s\n", "-", "-", "-", "-", "-", "-", "-", "-");
         /* each reason once per input */
         if (p && !hok && strcmp(hwhy, said_h)) {
@@ -234,20 +231,20 @@ static void bench_input_peers(const char *name, const tsr_heightfield *hf, const
         fflush(stdout);
     }
     bench_peer_stop(p);
+    return p != NULL;
 }
 
 static void bench_input(const char *name, const tsr_heightfield *hf, const double *fr, int nfr, uint32_t repeat)
 {
     if (bench_peers) {
-        bench_input_peers(name, hf, fr, nfr, repeat);
+        bool ran = bench_input_peers(name, hf, fr, nfr, repeat);
         /* martini takes (2^k + 1)^2 grids only: also the largest such
-         * window at the input's first sample, every method on it */
-        tsr_heightfield_stats st;
-        tsr_heightfield_stats_compute(hf, &st);
+         * window at the input's first sample, every method on it (not
+         * when the peers could not run, e.g. on no-data) */
         uint32_t w = tsr_heightfield_width(hf), h = tsr_heightfield_height(hf), side = 2;
         while (side * 2 + 1 <= w && side * 2 + 1 <= h)
             side *= 2;
-        if ((w != h || w != side + 1) && side >= 64 && st.nodata == 0) {
+        if (ran && (w != h || w != side + 1) && side >= 64) {
             tsr_heightfield *win = tsr_heightfield_crop(hf, 0, 0, side + 1, side + 1, NULL);
             if (win) {
                 char wname[64];

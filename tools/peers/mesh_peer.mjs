@@ -79,7 +79,7 @@ function writeMesh(out, nv, nt, vx, tri) {
     writeFileSync(out, new Uint8Array(a.buffer));
 }
 
-let martini = null, tile = null, terrain32 = null;
+let tile = null, terrain32 = null; // the last martini tile (it keeps its Martini), the heights as floats
 
 function run(cmd, e, r, out) {
     if (cmd === 'delatin') {
@@ -106,11 +106,9 @@ function run(cmd, e, r, out) {
         if (r > 0 || !tile) {
             best = Infinity;
             tile = null;
-            martini = null;
             for (let k = 0; k < Math.max(r, 1); k++) {
                 const t0 = performance.now();
-                martini = new Martini(width);
-                tile = martini.createTile(terrain32);
+                tile = new Martini(width).createTile(terrain32);
                 mesh = tile.getMesh(e);
                 best = Math.min(best, (performance.now() - t0) / 1000);
             }
