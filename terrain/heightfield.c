@@ -94,12 +94,79 @@ tsr_raw_type tsr_raw_type_parse(const char *s)
     return TSR_RAW_NONE;
 }
 
+/* The eight lanes' minima, maxima, sums and no-data counts over the
+ * first n - n % 8 samples of d (lane k: the samples i = k mod 8), without
+ * branches: a NaN fails both comparisons and adds 0. In vectors of eight
+ * floats (one AVX register in the AVX2 build, two SSE registers
+ * otherwise), each lane the scalar expression, so either build gives the
+ * same sums to the bit. */
+#if defined(__GNUC__) || defined(__clang__)
+typedef float hf_v8f __attribute__((vector_size(32)));
+typedef int32_t hf_v8i __attribute__((vector_size(32)));
+typedef double hf_v4d __attribute__((vector_size(32)));
+typedef float hf_v4f __attribute__((vector_size(16)));
+
+static TSR_ALWAYS_INLINE void stats_lanes_body(const float *d, size_t n, float mn8[8], float mx8[8], double sum8[8],
+                                               uint64_t nan8[8])
+{
+    hf_v8f mn, mx;
+    hf_v4d s0, s1;
+    memcpy(&mn, mn8, sizeof mn);
+    memcpy(&mx, mx8, sizeof mx);
+    memcpy(&s0, sum8, sizeof s0);
+    memcpy(&s1, sum8 + 4, sizeof s1);
+    size_t i = 0;
+    while (i + 8 <= n) {
+        /* no-data counts in 32-bit lanes, added up every 2^24 vectors */
+        hf_v8i cnt = {0, 0, 0, 0, 0, 0, 0, 0};
+        for (size_t e = i + ((size_t)1 << 27) < n ? i + ((size_t)1 << 27) : n; i + 8 <= e; i += 8) {
+            hf_v8f v;
+            memcpy(&v, d + i, sizeof v);
+            hf_v8i ok = v == v, lt = v < mn, gt = v > mx;
+            mn = (hf_v8f)(((hf_v8i)v & lt) | ((hf_v8i)mn & ~lt));
+            mx = (hf_v8f)(((hf_v8i)v & gt) | ((hf_v8i)mx & ~gt));
+            cnt -= ~ok; /* (a lane's mask is -1 where NaN) */
+            hf_v8f z = (hf_v8f)((hf_v8i)v & ok);
+            hf_v4f lo4, hi4;
+            memcpy(&lo4, &z, sizeof lo4);
+            memcpy(&hi4, (const char *)&z + sizeof lo4, sizeof hi4);
+            s0 += __builtin_convertvector(lo4, hf_v4d);
+            s1 += __builtin_convertvector(hi4, hf_v4d);
+        }
+        for (int k = 0; k < 8; k++)
+            nan8[k] += (uint64_t)cnt[k];
+    }
+    memcpy(mn8, &mn, sizeof mn);
+    memcpy(mx8, &mx, sizeof mx);
+    memcpy(sum8, &s0, sizeof s0);
+    memcpy(sum8 + 4, &s1, sizeof s1);
+}
+#else
+static void stats_lanes_body(const float *d, size_t n, float mn8[8], float mx8[8], double sum8[8], uint64_t nan8[8])
+{
+    for (size_t i = 0; i + 8 <= n; i += 8)
+        for (int k = 0; k < 8; k++) {
+            float v = d[i + k];
+            bool ok = v == v;
+            mn8[k] = v < mn8[k] ? v : mn8[k];
+            mx8[k] = v > mx8[k] ? v : mx8[k];
+            sum8[k] += ok ? (double)v : 0.0;
+            nan8[k] += !ok;
+        }
+}
+#endif
+
+#ifdef TSR_AVX2_DISPATCH
+__attribute__((target("avx2"))) static void stats_lanes_avx2(const float *d, size_t n, float mn8[8], float mx8[8],
+                                                             double sum8[8], uint64_t nan8[8])
+{
+    stats_lanes_body(d, n, mn8, mx8, sum8, nan8);
+}
+#endif
+
 void tsr_heightfield_stats_compute(const tsr_heightfield *hf, tsr_heightfield_stats *st)
 {
     memset(st, 0, sizeof *st);
-    /* eight lanes, without branches, so the loop has no chain of
-     * dependent additions and the compiler may vectorise it: a NaN fails
-     * both comparisons and adds 0 */
     float mn8[8], mx8[8];
     double sum8[8];
     uint64_t nan8[8];
@@ -109,17 +176,14 @@ void tsr_heightfield_stats_compute(const tsr_heightfield *hf, tsr_heightfield_st
         sum8[k] = 0;
         nan8[k] = 0;
     }
-    size_t n = (size_t)hf->width * hf->height, i = 0;
+    size_t n = (size_t)hf->width * hf->height, i = n - n % 8;
     const float *d = hf->data;
-    for (; i + 8 <= n; i += 8)
-        for (int k = 0; k < 8; k++) {
-            float v = d[i + k];
-            bool ok = v == v;
-            mn8[k] = v < mn8[k] ? v : mn8[k];
-            mx8[k] = v > mx8[k] ? v : mx8[k];
-            sum8[k] += ok ? (double)v : 0.0;
-            nan8[k] += !ok;
-        }
+#ifdef TSR_AVX2_DISPATCH
+    if (__builtin_cpu_supports("avx2"))
+        stats_lanes_avx2(d, n, mn8, mx8, sum8, nan8);
+    else
+#endif
+        stats_lanes_body(d, n, mn8, mx8, sum8, nan8);
     for (int k = 0; i < n; i++, k++) {
         float v = d[i];
         bool ok = v == v;

@@ -19,9 +19,9 @@
  * The error is exact. A node is kept as a leaf only when every sample of
  * its closed square lies within the tolerance of its triangles, for every
  * set of midpoints it could get (a side has a midpoint or not depending on
- * neighbours decided later): the triangles of both halves with and without
- * each midpoint are scanned, and the first sample beyond the tolerance
- * rejects the diagonal. So no leaf of the final cut, whatever its
+ * neighbours decided later): every sample of both halves is measured
+ * against the triangles with and without each midpoint, and one beyond
+ * the tolerance rejects the diagonal. So no leaf of the final cut, whatever its
  * neighbours, is farther than the tolerance from any of its samples, and
  * the measured max error is within the bound by construction, not by a
  * conservative estimate (lod.c's pyramid bounds a tile's error by sums
@@ -35,11 +35,11 @@
  * sample never passes, so no-data is refined to single cells, and a cell
  * with a no-data corner is a hole (as for the other methods).
  *
- * Cost: every leaf's square is scanned in full (about 3.5 times, for the
- * sets of midpoints; a midpoint's offset from the plane bounds how much
- * it can change the error, which spares most of those scans), a rejected
- * node until its first sample beyond the tolerance; 2x2-cell nodes, the
- * most numerous, in closed form. Per node only bits are kept (split,
+ * Cost: each half a leaf tries is scanned once, for all four ways its
+ * midpoints may split it at once (half_ok: the split triangles are the
+ * half's plane plus the midpoints' offsets times their hat functions), a
+ * rejected one until every way has a sample beyond the tolerance; 2x2-cell
+ * nodes, the most numerous, in closed form. Per node only bits are kept (split,
  * diagonal, fan, midpoints asked for), plus, on several threads, a byte
  * for the verdict judged ahead (select_cut). */
 #include "terrain_internal.h"
@@ -214,147 +214,277 @@ static void gradient(vtx a, vtx b, vtx c, double *gx, double *gy)
     *gy = ((double)(b.i - a.i) * (c.z - a.z) - (double)(c.i - a.i) * (b.z - a.z)) / det;
 }
 
-/* One row's samples i = lo..hi against the plane value base + gx * i: the
- * largest distance, and whether any is beyond tol or no-data (NaN). The
- * plane is evaluated exactly as base + gx * (double)i in both versions,
- * so they give the same answer to the bit. */
-static double row_err(const float *row, int64_t lo, int64_t hi, double base, double gx, double tol, bool *bad)
+/* A half and its variants. A leaf's half (a, b, c), counter-clockwise,
+ * may get a midpoint p on its side ab and m on bc (where its neighbours
+ * will be finer, or where a leaf asks for them), so it is drawn in one of
+ * four ways: abc itself (variant 0), split at p into (a, p, c), (p, b, c)
+ * (variant 1), split at m into (a, b, m), (a, m, c) (variant 2), or at
+ * both into (a, p, c), (p, b, m), (p, m, c) (variant 3). Each is abc's
+ * plane L plus the midpoints' offsets from it times their hat functions,
+ * which are piecewise linear in the barycentric coordinates (la, lb, lc)
+ * of abc: with p = a + t (b - a) and m = b + s (c - b),
+ *   variant 1: L + op * min(lb / t, la / (1 - t))
+ *   variant 2: L + om * min(lc / s, lb / (1 - s))
+ *   variant 3: L + op * min(lb / t, la / (1 - t))
+ *                + om * max(0, min(lc / s, (lb - t la / (1 - t)) / (1 - s)))
+ * (the hat of m in (p, b, m), (p, m, c), zero in (a, p, c)). One scan of
+ * abc's samples gives all four largest distances, where the triangles of
+ * each variant took a scan of their own. The barycentric coordinates are
+ * kept as their numerators (integers, exact in doubles: the 2x the areas
+ * of the sub-triangles with the sample), variant 0 is the same expression
+ * as the measurement's (base + gx i), and the others differ from a scan
+ * of their own triangles' planes by roundings only.
+ *
+ * A scan stops at the first row after which every variant has a sample
+ * beyond the tolerance, or at a no-data sample (NaN), where none passes. */
+enum { V_NONE = 1, V_P = 2, V_M = 4, V_PM = 8 };
+
+/* The parameter of p on the segment from a to b (an axis-parallel side). */
+static double edge_param(vtx a, vtx b, vtx p)
 {
-    double mx = 0;
-    int64_t i = lo;
-#ifdef __SSE2__
-    if (hi - lo >= 15) { /* long rows: short ones are faster scalar */
-        __m128d vb = _mm_set1_pd(base), vg = _mm_set1_pd(gx), vt = _mm_set1_pd(tol);
-        __m128d sign = _mm_set1_pd(-0.0), four = _mm_set1_pd(4.0);
-        __m128d i0 = _mm_set_pd((double)(i + 1), (double)i), i1 = _mm_set_pd((double)(i + 3), (double)(i + 2));
-        __m128d m0 = _mm_setzero_pd(), m1 = _mm_setzero_pd(), out = _mm_setzero_pd();
-        for (; i + 3 <= hi; i += 4) {
-            __m128 h = _mm_loadu_ps(row + i);
-            __m128d h0 = _mm_cvtps_pd(h), h1 = _mm_cvtps_pd(_mm_movehl_ps(h, h));
-            __m128d d0 = _mm_andnot_pd(sign, _mm_sub_pd(h0, _mm_add_pd(vb, _mm_mul_pd(vg, i0))));
-            __m128d d1 = _mm_andnot_pd(sign, _mm_sub_pd(h1, _mm_add_pd(vb, _mm_mul_pd(vg, i1))));
-            /* not within tol: beyond it, or NaN */
-            out = _mm_or_pd(out, _mm_or_pd(_mm_cmpnle_pd(d0, vt), _mm_cmpnle_pd(d1, vt)));
-            m0 = _mm_max_pd(d0, m0);
-            m1 = _mm_max_pd(d1, m1);
-            i0 = _mm_add_pd(i0, four);
-            i1 = _mm_add_pd(i1, four);
-        }
-        if (_mm_movemask_pd(out))
-            *bad = true;
-        m0 = _mm_max_pd(m0, m1);
-        mx = fmax(_mm_cvtsd_f64(m0), _mm_cvtsd_f64(_mm_unpackhi_pd(m0, m0)));
-    }
-#endif
-    for (; i <= hi; i++) {
-        double p = gx * (double)i; /* (two statements: never fused into an FMA, as the SSE2 path is not) */
-        double d = fabs((double)row[i] - (base + p));
-        *bad |= !(d <= tol);
-        mx = d > mx ? d : mx;
-    }
-    return mx;
+    return b.i != a.i ? (double)(p.i - a.i) / (double)(b.i - a.i) : (double)(p.j - a.j) / (double)(b.j - a.j);
 }
 
-/* The largest distance of a sample of the closed triangle abc
- * (counter-clockwise, lattice vertices) from its plane, or INFINITY as
- * soon as a row has one beyond tol or a no-data sample (or vertex). Each
- * row's span is found exactly from the edges. */
-static double tri_err(const rqt *q, vtx a, vtx b, vtx c)
+/* One half's coefficients: the plane, the hats' factors (0 where the
+ * midpoint is absent) and the midpoints' offsets. */
+typedef struct half_k {
+    double gx, gy, kpa, kpb, op, kmc, kmb, kab, om;
+} half_k;
+
+#if defined(__GNUC__) || defined(__clang__)
+#define RQT_VECTORS 1
+typedef double rqt_v4d __attribute__((vector_size(32)));
+typedef int64_t rqt_v4l __attribute__((vector_size(32)));
+typedef float rqt_v4f __attribute__((vector_size(16)));
+/* lane-wise max and min of a and b (neither NaN), and |a| */
+#define V4_SEL(m, a, b) ((rqt_v4d)(((rqt_v4l)(a) & (m)) | ((rqt_v4l)(b) & ~(m))))
+#define V4_MAX(a, b) V4_SEL((a) > (b), a, b)
+#define V4_MIN(a, b) V4_SEL((a) < (b), a, b)
+#define V4_ABS(a) ((rqt_v4d)((rqt_v4l)(a) & (rqt_v4l){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}))
+#endif
+
+/* The distances of sample x of a row from the four variants, into the
+ * running maxima mx (the scalar form of the vector loop below, with the
+ * same operations in the same order). */
+static TSR_ALWAYS_INLINE void sample_err(const half_k *k, double h, double base, double x, double na, double nb,
+                                         double nc, double mx[4], bool *nan)
 {
-    double gx, gy;
-    gradient(a, b, c, &gx, &gy);
-    if (!isfinite(gx) || !isfinite(gy) || !isfinite(a.z))
-        return INFINITY;
+    double px = k->gx * x;
+    double r = h - (base + px);
+    double u = nb * k->kpb, v = na * k->kpa, phi = u < v ? u : v;
+    double w = nc * k->kmc, y = nb * k->kmb, psi = w < y ? w : y;
+    double z = y - na * k->kab, psi2 = w < z ? w : z;
+    psi2 = psi2 > 0 ? psi2 : 0;
+    double t1 = r - k->op * phi;
+    double e[4] = {fabs(r), fabs(t1), fabs(r - k->om * psi), fabs(t1 - k->om * psi2)};
+    *nan |= r != r;
+    for (int v4 = 0; v4 < 4; v4++)
+        mx[v4] = e[v4] > mx[v4] ? e[v4] : mx[v4];
+}
+
+/* The variants of half (a, b, c) within the tolerance: a set of V_*
+ * bits, V_P and V_PM only with p, V_M and V_PM only with m. */
+static TSR_ALWAYS_INLINE unsigned half_ok_body(const rqt *q, vtx a, vtx b, vtx c, const vtx *p, const vtx *m)
+{
+    half_k k = {0};
+    gradient(a, b, c, &k.gx, &k.gy);
+    if (!isfinite(k.gx) || !isfinite(k.gy) || !isfinite(a.z))
+        return 0;
+    double det = (double)((b.i - a.i) * (c.j - a.j) - (c.i - a.i) * (b.j - a.j));
+    unsigned want = V_NONE;
+    double t = 0;
+    if (p) {
+        t = edge_param(a, b, *p);
+        k.kpa = 1 / ((1 - t) * det);
+        k.kpb = 1 / (t * det);
+        k.op = p->z - ((1 - t) * a.z + t * b.z);
+        if (isfinite(k.op))
+            want |= V_P;
+        else
+            k.op = 0; /* (no-data: the variants with p fail) */
+    }
+    if (m) {
+        double s = edge_param(b, c, *m);
+        k.kmc = 1 / (s * det);
+        k.kmb = 1 / ((1 - s) * det);
+        k.om = m->z - ((1 - s) * b.z + s * c.z);
+        if (isfinite(k.om)) {
+            want |= V_M;
+            if (want & V_P)
+                want |= V_PM;
+        } else
+            k.om = 0;
+        if (p)
+            k.kab = t / ((1 - t) * (1 - s) * det);
+    }
     int64_t j0 = a.j < b.j ? a.j : b.j, j1 = a.j > b.j ? a.j : b.j;
     j0 = c.j < j0 ? c.j : j0;
     j1 = c.j > j1 ? c.j : j1;
     int64_t imin = a.i < b.i ? a.i : b.i, imax = a.i > b.i ? a.i : b.i;
     imin = c.i < imin ? c.i : imin;
     imax = c.i > imax ? c.i : imax;
+    /* each sloped edge's column at row j: p.i + F(j) bounding the row
+     * from above (dy > 0) or p.i - F(j) from below (dy < 0), with F(j) =
+     * floor(dx (j - p.j) / |dy|), stepped from row to row as a quotient
+     * and remainder (no division per row) */
     const vtx *e[3][2] = {{&a, &b}, {&b, &c}, {&c, &a}};
-    double tol = q->tol, worst = 0;
+    int64_t col[3], quo[3], rem[3], den[3] = {1, 1, 1}, step_q[3] = {0, 0, 0}, step_r[3] = {0, 0, 0};
+    int sign[3];
+    for (int n = 0; n < 3; n++) {
+        const vtx *u = e[n][0], *v = e[n][1];
+        int64_t dx = v->i - u->i, dy = v->j - u->j;
+        sign[n] = dy > 0 ? 1 : dy < 0 ? -1 : 0;
+        col[n] = u->i;
+        if (!dy) { /* a horizontal edge: rows on its outer side are empty */
+            quo[n] = dx;
+            rem[n] = u->j;
+            continue;
+        }
+        den[n] = dy > 0 ? dy : -dy;
+        int64_t num = dx * (j0 - u->j);
+        quo[n] = floor_div(num, den[n]);
+        rem[n] = num - quo[n] * den[n];
+        step_q[n] = floor_div(dx, den[n]);
+        step_r[n] = dx - step_q[n] * den[n];
+    }
+    double tol = q->tol, mx[4] = {0, 0, 0, 0};
+    bool nan = false;
+#ifdef RQT_VECTORS
+    /* the vector rows' running maxima, folded into mx every few rows */
+    rqt_v4d m0 = {0, 0, 0, 0}, m1 = m0, m2 = m0, m3 = m0;
+    rqt_v4l bad = {0, 0, 0, 0};
+#endif
+    /* the numerators of (la, lb, lc) at (i, j): (c - b) x (s - b),
+     * (a - c) x (s - c), (b - a) x (s - a); each steps by -(dj) in i */
+    int64_t dna = -(c.j - b.j), dnb = -(a.j - c.j), dnc = -(b.j - a.j);
     for (int64_t j = j0; j <= j1; j++) {
         int64_t lo = imin, hi = imax;
-        for (int k = 0; k < 3; k++) {
-            const vtx *p = e[k][0], *r = e[k][1];
-            int64_t dx = r->i - p->i, dy = r->j - p->j, num = dx * (j - p->j);
-            if (dy > 0) {
-                int64_t v = p->i + floor_div(num, dy);
+        for (int n = 0; n < 3; n++) {
+            if (sign[n] > 0) {
+                int64_t v = col[n] + quo[n];
                 hi = v < hi ? v : hi;
-            } else if (dy < 0) {
-                int64_t v = p->i - floor_div(num, -dy);
+            } else if (sign[n] < 0) {
+                int64_t v = col[n] - quo[n];
                 lo = v > lo ? v : lo;
-            } else if (num < 0)
-                hi = lo - 1;
+            } else {
+                if (quo[n] * (j - rem[n]) < 0)
+                    hi = lo - 1;
+                continue;
+            }
+            quo[n] += step_q[n];
+            rem[n] += step_r[n];
+            if (rem[n] >= den[n]) {
+                rem[n] -= den[n];
+                quo[n]++;
+            }
         }
-        bool bad = false;
-        double mx = row_err(q->h + (size_t)j * q->w, lo, hi, a.z + gy * (double)(j - a.j) - gx * (double)a.i, gx,
-                            tol, &bad);
-        if (bad)
-            return INFINITY;
-        worst = mx > worst ? mx : worst;
+        if (lo <= hi) {
+            const float *row = q->h + (size_t)j * q->w;
+            double base = a.z + k.gy * (double)(j - a.j) - k.gx * (double)a.i;
+            double na0 = (double)((c.i - b.i) * (j - b.j) + dna * (lo - b.i));
+            double nb0 = (double)((a.i - c.i) * (j - c.j) + dnb * (lo - c.i));
+            double nc0 = (double)((b.i - a.i) * (j - a.j) + dnc * (lo - a.i));
+            int64_t n = hi - lo + 1;
+#ifdef RQT_VECTORS
+            if (n >= 4) {
+                const rqt_v4d lane = {0, 1, 2, 3}, zero = {0, 0, 0, 0};
+                for (int64_t x = 0;; x += 4) {
+                    if (x + 4 > n)
+                        x = n - 4; /* (the last four overlap the ones before) */
+                    rqt_v4f f;
+                    memcpy(&f, row + lo + x, sizeof f);
+                    rqt_v4d xs = (double)x + lane;
+                    rqt_v4d px = k.gx * ((double)(lo + x) + lane);
+                    rqt_v4d r = __builtin_convertvector(f, rqt_v4d) - (base + px);
+                    rqt_v4d na = na0 + (double)dna * xs, nb = nb0 + (double)dnb * xs, nc = nc0 + (double)dnc * xs;
+                    rqt_v4d u = nb * k.kpb, v = na * k.kpa, phi = V4_MIN(u, v);
+                    rqt_v4d w = nc * k.kmc, y = nb * k.kmb, psi = V4_MIN(w, y);
+                    rqt_v4d z = y - na * k.kab, psi2 = V4_MIN(w, z);
+                    psi2 = V4_MAX(psi2, zero);
+                    rqt_v4d t1 = r - k.op * phi;
+                    rqt_v4d e0 = V4_ABS(r), e1 = V4_ABS(t1), e2 = V4_ABS(r - k.om * psi),
+                            e3 = V4_ABS(t1 - k.om * psi2);
+                    bad |= r != r;
+                    m0 = V4_MAX(e0, m0);
+                    m1 = V4_MAX(e1, m1);
+                    m2 = V4_MAX(e2, m2);
+                    m3 = V4_MAX(e3, m3);
+                    if (x + 4 >= n)
+                        break;
+                }
+            } else
+#endif
+                for (int64_t x = 0; x < n; x++)
+                    sample_err(&k, row[lo + x], base, (double)(lo + x), na0 + (double)dna * (double)x,
+                               nb0 + (double)dnb * (double)x, nc0 + (double)dnc * (double)x, mx, &nan);
+        }
+        if ((j - j0) % 4 != 3 && j != j1)
+            continue;
+        /* every fourth row and the last: a no-data sample fails every
+         * variant, and so does a scan after which none is left */
+#ifdef RQT_VECTORS
+        nan |= (bad[0] | bad[1] | bad[2] | bad[3]) != 0;
+        const rqt_v4d *mv[4] = {&m0, &m1, &m2, &m3};
+        for (int v4 = 0; v4 < 4; v4++) {
+            const rqt_v4d *mm = mv[v4];
+            double s01 = (*mm)[0] > (*mm)[1] ? (*mm)[0] : (*mm)[1], s23 = (*mm)[2] > (*mm)[3] ? (*mm)[2] : (*mm)[3];
+            double sv = s01 > s23 ? s01 : s23;
+            mx[v4] = sv > mx[v4] ? sv : mx[v4];
+        }
+#endif
+        if (nan)
+            return 0;
+        unsigned alive = want & ((mx[0] <= tol ? V_NONE : 0) | (mx[1] <= tol ? V_P : 0) | (mx[2] <= tol ? V_M : 0) |
+                                 (mx[3] <= tol ? V_PM : 0));
+        if (!alive || j == j1)
+            return alive;
     }
-    return worst;
+    return 0; /* (no row: not reached for a triangle) */
 }
 
-/* How far p's sample lies from the plane of abc. */
-static double off_plane(vtx a, vtx b, vtx c, vtx p)
+#ifdef TSR_AVX2_DISPATCH
+__attribute__((target("avx2"))) static unsigned half_ok_avx2(const rqt *q, vtx a, vtx b, vtx c, const vtx *p,
+                                                             const vtx *m)
 {
-    double gx, gy;
-    gradient(a, b, c, &gx, &gy);
-    return fabs(p.z - (a.z + gx * (double)(p.i - a.i) + gy * (double)(p.j - a.j)));
+    return half_ok_body(q, a, b, c, p, m);
+}
+#endif
+
+static unsigned half_ok(const rqt *q, vtx a, vtx b, vtx c, const vtx *p, const vtx *m)
+{
+#ifdef TSR_AVX2_DISPATCH
+    if (__builtin_cpu_supports("avx2"))
+        return half_ok_avx2(q, a, b, c, p, m);
+#endif
+    return half_ok_body(q, a, b, c, p, m);
 }
 
-/* Whether triangle abc, and the triangles it becomes with midpoints p of
- * ab and m of bc where those may come (NULL: never), are all within the
- * tolerance. The triangles with midpoints interpolate abc's plane plus a
- * piecewise linear function that is 0 at a, b and c and the midpoints'
- * own offsets from the plane at p and m, so it never exceeds the larger
- * offset: when abc's error plus that offset is within the tolerance, so
- * are they all, and they need no scan. */
-static bool tri_ok(const rqt *q, vtx a, vtx b, vtx c, const vtx *p, const vtx *m)
+unsigned tsr__rqt_half_variants(const tsr_heightfield *hf, double tol, const int64_t v[3][2], const int64_t *p,
+                                const int64_t *m)
 {
-    double e0 = tri_err(q, a, b, c);
-    if (!(e0 <= q->tol))
-        return false;
-    double off = 0;
+    rqt q = {.h = hf->data, .w = hf->width, .cx = (int64_t)hf->width - 1, .cy = (int64_t)hf->height - 1, .tol = tol};
+    vtx t[3], pv, mv;
+    for (int k = 0; k < 3; k++)
+        t[k] = at(&q, v[k][0], v[k][1]);
     if (p)
-        off = off_plane(a, b, c, *p);
-    if (m) {
-        double o = off_plane(a, b, c, *m);
-        off = o > off ? o : off;
-    }
-    if (e0 + off <= q->tol)
-        return true;
-    if (p && (!(tri_err(q, a, *p, c) <= q->tol) || !(tri_err(q, *p, b, c) <= q->tol)))
-        return false;
-    if (m && (!(tri_err(q, a, b, *m) <= q->tol) || !(tri_err(q, a, *m, c) <= q->tol)))
-        return false;
-    if (p && m && (!(tri_err(q, *p, b, *m) <= q->tol) || !(tri_err(q, *p, *m, c) <= q->tol)))
-        return false;
-    return true;
+        pv = at(&q, p[0], p[1]);
+    if (m)
+        mv = at(&q, m[0], m[1]);
+    return half_ok(&q, t[0], t[1], t[2], p ? &pv : NULL, m ? &mv : NULL);
 }
 
-/* tri_ok with the midpoint p (np) or m (nm) always there. */
-static bool tri_ok_v(const rqt *q, vtx a, vtx b, vtx c, const vtx *p, const vtx *m, bool np, bool nm)
+/* From a half's variants within the tolerance (ok), whether it passes
+ * with any midpoints that may come (hp: p may, hm: m may), those asked
+ * for always there (np, nm). */
+static bool half_passes(unsigned ok, bool hp, bool hm, bool np, bool nm)
 {
-    double t = q->tol;
-    if (!np && !nm)
-        return tri_ok(q, a, b, c, p, m);
     if (np && nm)
-        return tri_err(q, a, *p, c) <= t && tri_err(q, *p, b, *m) <= t && tri_err(q, *p, *m, c) <= t;
-    if (np) {
-        double e1 = fmax(tri_err(q, a, *p, c), tri_err(q, *p, b, c));
-        if (!(e1 <= t))
-            return false;
-        if (!m || e1 + off_plane(a, b, c, *m) <= t)
-            return true;
-        return tri_err(q, *p, b, *m) <= t && tri_err(q, *p, *m, c) <= t;
-    }
-    /* (with p, the triangles are no refinement of those without: scanned) */
-    if (!(tri_err(q, a, b, *m) <= t) || !(tri_err(q, a, *m, c) <= t))
-        return false;
-    return !p || (tri_err(q, a, *p, c) <= t && tri_err(q, *p, b, *m) <= t && tri_err(q, *p, *m, c) <= t);
+        return ok & V_PM;
+    if (np)
+        return (ok & V_P) && (!hm || (ok & V_PM));
+    if (nm)
+        return (ok & V_M) && (!hp || (ok & V_PM));
+    return (ok & V_NONE) && (!hp || (ok & V_P)) && (!hm || (ok & V_M)) && (!(hp && hm) || (ok & V_PM));
 }
 
 /* The corners and midpoints of a box. */
@@ -379,42 +509,40 @@ static corners corners_of(const rqt *q, const box *b)
 /* Whether the two triangles on diagonal d (0: from south-west to
  * north-east, 1: from south-east to north-west) are within the tolerance
  * with any midpoints, those of the sides in need (bit k: S, E, N, W)
- * always there. The answer for each half and its two sides' needs is
- * kept in memo (-1: not known yet), as sets share halves. */
-static bool diag_ok_v(const rqt *q, const box *b, const corners *c, int d, unsigned need, signed char memo[2][2][4])
+ * always there. Each half's variants are kept in memo (-1: not scanned
+ * yet), as the sets of midpoints share halves. */
+static bool diag_ok_v(const rqt *q, const box *b, const corners *c, int d, unsigned need, signed char memo[2][2])
 {
     const vtx *s = b->ms ? &c->s : NULL, *e = b->me ? &c->e : NULL, *n = b->mn ? &c->n : NULL,
               *w = b->mw ? &c->w : NULL;
     bool ns = need & 1, ne = need & 2, nn = need & 4, nw = need & 8;
-    /* the halves: (a, b, c) with the sides ab and bc, and their needs */
+    /* the halves: (a, b, c) with the midpoints p of ab and m of bc, and
+     * their needs */
+    const vtx *hv[2][3], *hp[2], *hm[2];
     bool np[2], nm[2];
     if (d == 0) {
+        hv[0][0] = &c->sw, hv[0][1] = &c->se, hv[0][2] = &c->ne, hp[0] = s, hm[0] = e;
+        hv[1][0] = &c->ne, hv[1][1] = &c->nw, hv[1][2] = &c->sw, hp[1] = n, hm[1] = w;
         np[0] = ns, nm[0] = ne, np[1] = nn, nm[1] = nw;
     } else {
+        hv[0][0] = &c->se, hv[0][1] = &c->ne, hv[0][2] = &c->nw, hp[0] = e, hm[0] = n;
+        hv[1][0] = &c->nw, hv[1][1] = &c->sw, hv[1][2] = &c->se, hp[1] = w, hm[1] = s;
         np[0] = ne, nm[0] = nn, np[1] = nw, nm[1] = ns;
     }
     for (int h = 0; h < 2; h++) {
-        signed char *r = &memo[d][h][np[h] | nm[h] << 1];
-        if (*r < 0) {
-            bool ok;
-            if (d == 0)
-                ok = h == 0 ? tri_ok_v(q, c->sw, c->se, c->ne, s, e, np[0], nm[0])
-                            : tri_ok_v(q, c->ne, c->nw, c->sw, n, w, np[1], nm[1]);
-            else
-                ok = h == 0 ? tri_ok_v(q, c->se, c->ne, c->nw, e, n, np[0], nm[0])
-                            : tri_ok_v(q, c->nw, c->sw, c->se, w, s, np[1], nm[1]);
-            *r = ok;
-        }
-        if (!*r)
+        signed char *r = &memo[d][h];
+        if (*r < 0)
+            *r = (signed char)half_ok(q, *hv[h][0], *hv[h][1], *hv[h][2], hp[h], hm[h]);
+        if (!half_passes((unsigned)*r, hp[h] != NULL, hm[h] != NULL, np[h], nm[h]))
             return false;
     }
     return true;
 }
 
-/* The fan from the centre c: a triangle (c, a, b) per side, split at the
- * side's midpoint m in (c, a, m), (c, m, b) where one may come; each
- * side's answer is kept (-1: not known yet), as fan_ok and fan_need ask
- * the same. */
+/* The fan from the centre c: a triangle (a, b, c) per side, split at the
+ * side's midpoint m in (a, m, c), (m, b, c) where one may come; each
+ * side's variants are kept (-1: not scanned yet), as fan_ok and fan_need
+ * ask the same. */
 typedef struct fan {
     const vtx *ring[4][3]; /* a, b, m (NULL: no midpoint can come) */
     vtx c;
@@ -432,13 +560,19 @@ static fan fan_of(const box *b, const corners *k, vtx c)
     return f;
 }
 
+/* Side i's triangle's variants (V_NONE, and V_P split at its midpoint). */
+static unsigned fan_variants(const rqt *q, fan *f, int i)
+{
+    if (f->ok[i] < 0)
+        f->ok[i] = (signed char)half_ok(q, *f->ring[i][0], *f->ring[i][1], f->c, f->ring[i][2], NULL);
+    return (unsigned)f->ok[i];
+}
+
 /* Whether side i's triangle is within the tolerance with or without its
  * midpoint. */
 static bool fan_side(const rqt *q, fan *f, int i)
 {
-    if (f->ok[i] < 0)
-        f->ok[i] = tri_ok(q, *f->ring[i][0], *f->ring[i][1], f->c, f->ring[i][2], NULL);
-    return f->ok[i];
+    return half_passes(fan_variants(q, f, i), f->ring[i][2] != NULL, false, false, false);
 }
 
 static bool fan_ok(const rqt *q, fan *f)
@@ -458,9 +592,7 @@ static unsigned fan_need(const rqt *q, fan *f)
     unsigned need = 0;
     for (int i = 0; i < 4; i++)
         if (!fan_side(q, f, i)) {
-            const vtx *a = f->ring[i][0], *b = f->ring[i][1], *m = f->ring[i][2];
-            if (!m || __builtin_popcount(need) == 2 || !(tri_err(q, *a, *m, f->c) <= q->tol) ||
-                !(tri_err(q, *m, *b, f->c) <= q->tol))
+            if (!f->ring[i][2] || __builtin_popcount(need) == 2 || !(fan_variants(q, f, i) & V_P))
                 return 0;
             need |= 1u << i;
         }
@@ -530,7 +662,7 @@ static verdict judge(const rqt *q, rnode n)
     int first = 0;
     if (centred)
         first = fabs(centre.z - 0.5 * (c.sw.z + c.ne.z)) <= fabs(centre.z - 0.5 * (c.se.z + c.nw.z)) ? 0 : 1;
-    signed char memo[2][2][4]; /* halves' answers, shared with the sets of midpoints below */
+    signed char memo[2][2]; /* halves' variants, shared with the sets of midpoints below */
     memset(memo, -1, sizeof memo);
     for (int t = 0; t < 2; t++) {
         int d = first ^ t;

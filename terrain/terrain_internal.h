@@ -8,6 +8,19 @@
 extern "C" {
 #endif
 
+/* Hot scans are compiled twice, for AVX2 and for the baseline, and the
+ * running processor's version is called after a test of the CPU's
+ * feature bits per call (__builtin_cpu_supports), not through an ifunc
+ * (target_clones): an ifunc's resolver runs before a sanitizer's runtime
+ * is up, and ThreadSanitizer crashes there. The body is an always-inline
+ * function, so each caller's copy is built for its own target. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define TSR_AVX2_DISPATCH 1
+#define TSR_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define TSR_ALWAYS_INLINE inline
+#endif
+
 struct tsr_heightfield {
     uint32_t width, height;
     double dx, dy, dz;
@@ -100,6 +113,16 @@ bool tsr_terrain_pick_view(const tsr_terrain *t, pick_view *v);
  * one per online processor); the mesh is the same whatever the count. */
 tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, double range, bool full_border, uint32_t max_tri,
                          uint32_t max_vert, uint32_t threads, tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err);
+
+/* For tests: half_ok of rqt.c on hf's samples at tolerance tol (file
+ * units): triangle v (three lattice points (i, j), counter-clockwise),
+ * with p (NULL: none) a lattice point inside side v0 v1 and m (NULL:
+ * none) inside side v1 v2. Returns the ways of drawing it within tol, a
+ * set of bits: 1 the triangle, 2 split at p, 4 split at m, 8 split at
+ * both (into (v0, p, v2), (p, v1, m), (p, m, v2)); bits 2 and 8 only with
+ * p, 4 and 8 only with m; 0 where a sample is no-data. */
+unsigned tsr__rqt_half_variants(const tsr_heightfield *hf, double tol, const int64_t v[3][2], const int64_t *p,
+                                const int64_t *m);
 
 /* The budget search of both quadtree methods: the smallest tolerance in
  * [lo, hi], bisected in log scale (40 steps), at which the cut has at

@@ -386,17 +386,9 @@ static inline int64_t floor_div_fast(int64_t a, int64_t b)
 #endif
 
 /* The scan is compiled twice, for AVX2 and for the baseline, and the
- * running processor's version is called (a test of the CPU's feature
- * bits per call, not an ifunc: an ifunc's resolver runs before a
- * sanitizer's runtime is up, and ThreadSanitizer crashes there). The
- * scans' four lanes of doubles become one vector. No FMA: the same
- * roundings, so the same results, on either. */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define TSR_AVX2_DISPATCH 1
-#define TSR_ALWAYS_INLINE inline __attribute__((always_inline))
-#else
-#define TSR_ALWAYS_INLINE inline
-#endif
+ * running processor's version is called (TSR_AVX2_DISPATCH,
+ * terrain_internal.h). The scans' four lanes of doubles become one
+ * vector. No FMA: the same roundings, so the same results, on either. */
 
 /* |rp[x] - (base + ga x)| */
 static inline double err_at(const float *rp, int64_t x, double base, double ga)

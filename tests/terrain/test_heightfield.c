@@ -379,7 +379,52 @@ TEST(nodata_becomes_hole)
     tsr_heightfield_destroy(hf);
 }
 
+/* tsr_heightfield_stats_compute (eight lanes in vectors) against a plain
+ * scan: minimum, maximum and no-data count exactly, the mean within
+ * rounding of a long double sum; sizes of every remainder mod 8, NaN,
+ * negative zero, all no-data. */
+TEST(stats_against_a_plain_scan)
+{
+    srand(11);
+    for (int t = 0; t < 300; t++) {
+        uint32_t w = 2 + (uint32_t)(rand() % 200), h = 2 + (uint32_t)(rand() % 120);
+        tsr_heightfield *hf = tsr_heightfield_create(w, h, NULL);
+        float *d = tsr_heightfield_data(hf);
+        size_t n = (size_t)w * h, nan = 0;
+        int kind = t % 10;
+        float mn = INFINITY, mx = -INFINITY;
+        long double sum = 0;
+        for (size_t i = 0; i < n; i++) {
+            int r = rand() % 100;
+            float v = kind == 0 ? NAN : r < 6 ? NAN : r < 8 ? -0.0f : (float)((rand() - RAND_MAX / 2) * 1e-3 * (kind + 1));
+            d[i] = v;
+            if (v != v) {
+                nan++;
+                continue;
+            }
+            mn = v < mn ? v : mn;
+            mx = v > mx ? v : mx;
+            sum += v;
+        }
+        tsr_heightfield_stats st;
+        tsr_heightfield_stats_compute(hf, &st);
+        CHECK_MSG(st.nodata == nan && st.valid == n - nan, "%ux%u: %llu no-data counted, %zu there", w, h,
+                  (unsigned long long)st.nodata, nan);
+        if (nan == n)
+            CHECK(isnan(st.min) && isnan(st.max) && isnan(st.mean));
+        else {
+            CHECK_MSG(st.min == mn && st.max == mx, "%ux%u: min %g max %g, a plain scan %g %g", w, h, st.min, st.max,
+                      mn, mx);
+            double mean = (double)(sum / (long double)(n - nan));
+            CHECK_MSG(fabs(st.mean - mean) <= 1e-12 * (fabs(mean) + 1000), "%ux%u: mean %.17g, a plain scan %.17g", w, h,
+                      st.mean, mean);
+        }
+        tsr_heightfield_destroy(hf);
+    }
+}
+
 TEST_MAIN(T(save_and_load_float_formats), T(png16_keeps_scale_and_offset), T(pgm_16bit_written_by_hand), T(raw_types),
           T(nan_height_is_nodata_and_inf_height_is_refused), T(size_limits), T(data_terrain_rgb_real_tile),
           T(data_real_float_tiffs), T(generator_is_deterministic_and_terrain_like),
-          T(generator_same_on_any_thread_count_with_progress), T(grid_mesh_is_valid_and_exact), T(nodata_becomes_hole))
+          T(generator_same_on_any_thread_count_with_progress), T(grid_mesh_is_valid_and_exact), T(nodata_becomes_hole),
+          T(stats_against_a_plain_scan))

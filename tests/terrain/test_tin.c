@@ -7,6 +7,7 @@
  * covered), and adjacent windows share their border vertices exactly. */
 #include "check.h"
 #include "terrain/terrain.h"
+#include "terrain/terrain_internal.h" /* tsr__rqt_half_variants */
 
 /* ---- the oracle ----------------------------------------------------------- */
 
@@ -590,6 +591,147 @@ static void seam_nodata_case(const tsr_heightfield *hf, double e, uint32_t split
     tsr_mesh_free(&b);
 }
 
+/* ---- the quadtree's halves ------------------------------------------------ */
+
+/* The largest distance of a sample of hf in the closed triangles tri[0..n)
+ * (lattice points, counter-clockwise) from the triangle's own plane
+ * through its corners' samples; NaN where one is no-data. Membership by
+ * exact integer orientations, the plane by barycentric weights in long
+ * double. */
+static double subtri_max(const tsr_heightfield *hf, const int64_t (*tri)[3][2], int n)
+{
+    const float *d = tsr_heightfield_cdata(hf);
+    int64_t w = tsr_heightfield_width(hf);
+    double mx = 0;
+    for (int t = 0; t < n; t++) {
+        const int64_t(*v)[2] = tri[t];
+        int64_t i0 = v[0][0], i1 = v[0][0], j0 = v[0][1], j1 = v[0][1];
+        for (int k = 1; k < 3; k++) {
+            i0 = v[k][0] < i0 ? v[k][0] : i0, i1 = v[k][0] > i1 ? v[k][0] : i1;
+            j0 = v[k][1] < j0 ? v[k][1] : j0, j1 = v[k][1] > j1 ? v[k][1] : j1;
+        }
+        int64_t det = (v[1][0] - v[0][0]) * (v[2][1] - v[0][1]) - (v[2][0] - v[0][0]) * (v[1][1] - v[0][1]);
+        for (int64_t j = j0; j <= j1; j++)
+            for (int64_t i = i0; i <= i1; i++) {
+                int64_t nw[3];
+                bool in = true;
+                for (int k = 0; k < 3; k++) { /* the weight of corner k: the sample against the opposite side */
+                    const int64_t *a = v[(k + 1) % 3], *b = v[(k + 2) % 3];
+                    nw[k] = (b[0] - a[0]) * (j - a[1]) - (b[1] - a[1]) * (i - a[0]);
+                    in = in && nw[k] >= 0;
+                }
+                if (!in)
+                    continue;
+                long double z = 0;
+                for (int k = 0; k < 3; k++)
+                    z += (long double)nw[k] * d[v[k][1] * w + v[k][0]];
+                double e = fabsl((long double)d[j * w + i] - z / det);
+                if (e != e)
+                    return NAN;
+                mx = e > mx ? e : mx;
+            }
+    }
+    return mx;
+}
+
+/* tsr__rqt_half_variants (the quadtree's test of a leaf's half, all four
+ * ways its midpoints may split it in one scan, from hat functions) against
+ * each way's triangles scanned on their own planes, on halves and fan
+ * triangles of random boxes, clipped ones (midpoints off the sides'
+ * middles) included, with and without no-data, at tolerances around the
+ * largest distances. */
+TEST(quadtree_half_variants_against_their_triangles)
+{
+    tsr_heightfield *hf = terrain(70, 70, 5);
+    float *d = tsr_heightfield_data(hf);
+    srand(17);
+    uint64_t cases = 0, pass = 0, fail = 0, nans = 0;
+    for (int it = 0; it < 3000; it++) {
+        if (it == 2500) /* a few no-data samples for the last cases */
+            for (int k = 0; k < 40; k++)
+                d[(rand() % 70) * 70 + rand() % 70] = NAN;
+        int64_t s = (int64_t)2 << (rand() % 5); /* 2..32 */
+        int64_t x0 = rand() % (69 - s / 2), y0 = rand() % (69 - s / 2);
+        int64_t x1 = x0 + 1 + rand() % s, y1 = y0 + 1 + rand() % s; /* clipped or whole */
+        x1 = x1 > 69 ? 69 : x1, y1 = y1 > 69 ? 69 : y1;
+        int64_t xm = x0 + s / 2, ym = y0 + s / 2;
+        int64_t sw[2] = {x0, y0}, se[2] = {x1, y0}, ne[2] = {x1, y1}, nw[2] = {x0, y1};
+        int64_t ms[2] = {xm, y0}, me[2] = {x1, ym}, mn[2] = {xm, y1}, mw[2] = {x0, ym}, cc[2] = {xm, ym};
+        bool hs = xm < x1, hn = xm < x1, he = ym < y1, hw = ym < y1;
+        /* (a, b, c) and the midpoints of ab and bc: the four halves, and a
+         * fan triangle (a, b, centre) with ab's midpoint */
+        const int64_t *tv[3], *p = NULL, *m = NULL;
+        int kind = rand() % 6;
+        if (kind == 0)
+            tv[0] = sw, tv[1] = se, tv[2] = ne, p = hs ? ms : NULL, m = he ? me : NULL;
+        else if (kind == 1)
+            tv[0] = ne, tv[1] = nw, tv[2] = sw, p = hn ? mn : NULL, m = hw ? mw : NULL;
+        else if (kind == 2)
+            tv[0] = se, tv[1] = ne, tv[2] = nw, p = he ? me : NULL, m = hn ? mn : NULL;
+        else if (kind == 3)
+            tv[0] = nw, tv[1] = sw, tv[2] = se, p = hw ? mw : NULL, m = hs ? ms : NULL;
+        else {
+            if (!(xm < x1 && ym < y1))
+                continue;
+            tv[0] = kind == 4 ? sw : ne, tv[1] = kind == 4 ? se : nw, tv[2] = cc;
+            p = kind == 4 ? (hs ? ms : NULL) : (hn ? mn : NULL);
+        }
+        if (rand() % 4 == 0)
+            p = NULL;
+        if (rand() % 4 == 0)
+            m = NULL;
+        int64_t v[3][2], P[2], M[2];
+        for (int k = 0; k < 3; k++)
+            v[k][0] = tv[k][0], v[k][1] = tv[k][1];
+        if (p)
+            P[0] = p[0], P[1] = p[1];
+        if (m)
+            M[0] = m[0], M[1] = m[1];
+        /* each way's triangles */
+        int64_t w0[1][3][2] = {{{v[0][0], v[0][1]}, {v[1][0], v[1][1]}, {v[2][0], v[2][1]}}};
+        int64_t w1[2][3][2] = {{{v[0][0], v[0][1]}, {P[0], P[1]}, {v[2][0], v[2][1]}},
+                               {{P[0], P[1]}, {v[1][0], v[1][1]}, {v[2][0], v[2][1]}}};
+        int64_t w2[2][3][2] = {{{v[0][0], v[0][1]}, {v[1][0], v[1][1]}, {M[0], M[1]}},
+                               {{v[0][0], v[0][1]}, {M[0], M[1]}, {v[2][0], v[2][1]}}};
+        int64_t w3[3][3][2] = {{{v[0][0], v[0][1]}, {P[0], P[1]}, {v[2][0], v[2][1]}},
+                               {{P[0], P[1]}, {v[1][0], v[1][1]}, {M[0], M[1]}},
+                               {{P[0], P[1]}, {M[0], M[1]}, {v[2][0], v[2][1]}}};
+        double e[4] = {subtri_max(hf, w0, 1), p ? subtri_max(hf, w1, 2) : NAN, m ? subtri_max(hf, w2, 2) : NAN,
+                       p && m ? subtri_max(hf, w3, 3) : NAN};
+        bool nodata = e[0] != e[0];
+        /* tolerances a hair above and below each largest distance, so a
+         * way measured wrong by more than 1e-6 of it gets the wrong bit */
+        for (int t = 0; t < 9; t++) {
+            double tol = t == 8 ? 1.0 : e[t / 2] * (t % 2 ? 1 + 1e-6 : 1 - 1e-6);
+            if (tol != tol || !(tol > 0))
+                continue;
+            bool near = false;
+            for (int k = 0; k < 4; k++)
+                near = near || (e[k] == e[k] && fabs(e[k] - tol) <= 1e-9 * tol);
+            if (near)
+                continue;
+            unsigned want = 0;
+            if (!nodata)
+                want = (e[0] <= tol ? 1u : 0) | (p && e[1] <= tol ? 2u : 0) | (m && e[2] <= tol ? 4u : 0) |
+                       (p && m && e[3] <= tol ? 8u : 0);
+            unsigned got = tsr__rqt_half_variants(hf, tol, (const int64_t(*)[2])v, p ? P : NULL, m ? M : NULL);
+            CHECK_MSG(got == want,
+                      "box %lld,%lld-%lld,%lld side %lld kind %d p %d m %d tol %.9g: variants %#x, their triangles "
+                      "%#x (largest distances %.9g %.9g %.9g %.9g)",
+                      (long long)x0, (long long)y0, (long long)x1, (long long)y1, (long long)s, kind, p != NULL,
+                      m != NULL, tol, got, want, e[0], e[1], e[2], e[3]);
+            cases++;
+            pass += (unsigned)__builtin_popcount(want);
+            fail += (unsigned)(1 + (p != NULL) + (m != NULL) + (p && m)) - (unsigned)__builtin_popcount(want);
+            nans += nodata;
+        }
+    }
+    /* the cases cover passing and failing ways, and no-data */
+    CHECK_MSG(cases > 8000 && pass > 8000 && fail > 8000 && nans > 50, "%llu cases, %llu ways passing, %llu failing, %llu with no-data",
+              (unsigned long long)cases, (unsigned long long)pass, (unsigned long long)fail, (unsigned long long)nans);
+    tsr_heightfield_destroy(hf);
+}
+
 TEST(window_seams)
 {
     tsr_heightfield *hf = terrain(120, 97, 6);
@@ -913,4 +1055,5 @@ TEST(measure_bands_agree_with_brute_force)
 }
 
 TEST_MAIN(T(error_bound_generated), T(measure_bands_agree_with_brute_force), T(flips_fewer_triangles), T(spacing_and_scale), T(flat_and_planar), T(budgets),
-          T(nodata_holes), T(quadtree_leaves_and_tiles), T(window_seams), T(blocks), T(blocks_allocation_failures), T(closed_solid), T(bad_options), T(data_real_terrain))
+          T(nodata_holes), T(quadtree_leaves_and_tiles),
+          T(quadtree_half_variants_against_their_triangles), T(window_seams), T(blocks), T(blocks_allocation_failures), T(closed_solid), T(bad_options), T(data_real_terrain))
