@@ -1918,8 +1918,11 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
     else
         st = mesh_grid(src, o.grid_step ? o.grid_step : 1, o.max_triangles, o.max_vertices, mesh, rep, err);
     /* into the whole heightfield's coordinates, with normals from its
-     * gradients (the same on both sides of a seam), in place */
-    for (uint32_t i = 0; st == TSR_OK && i < mesh->vertex_count; i++) {
+     * gradients (the same on both sides of a seam), in place (nothing to
+     * do without a window or normals: every method writes a sample's
+     * position as this loop would) */
+    bool place = crop || mesh->normals;
+    for (uint32_t i = 0; place && st == TSR_OK && i < mesh->vertex_count; i++) {
         float *p = mesh->positions + 3 * (size_t)i;
         uint32_t c = (uint32_t)lround(p[0] / hf->dx), r = (uint32_t)lround(p[1] / hf->dy);
         if (c >= ww)
