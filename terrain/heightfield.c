@@ -100,17 +100,22 @@ tsr_raw_type tsr_raw_type_parse(const char *s)
  * floats (one AVX register in the AVX2 build, two SSE registers
  * otherwise), each lane the scalar expression, so either build gives the
  * same sums to the bit. */
-#if defined(__GNUC__) || defined(__clang__)
-typedef float hf_v8f __attribute__((vector_size(32)));
-typedef int32_t hf_v8i __attribute__((vector_size(32)));
-typedef double hf_v4d __attribute__((vector_size(32)));
-typedef float hf_v4f __attribute__((vector_size(16)));
+/* Sample v into lane k. */
+static inline void stats_add(float v, int k, float mn8[8], float mx8[8], double sum8[8], uint64_t nan8[8])
+{
+    bool ok = v == v;
+    mn8[k] = v < mn8[k] ? v : mn8[k];
+    mx8[k] = v > mx8[k] ? v : mx8[k];
+    sum8[k] += ok ? (double)v : 0.0;
+    nan8[k] += !ok;
+}
 
+#ifdef TSR_VECTORS
 static TSR_ALWAYS_INLINE void stats_lanes_body(const float *d, size_t n, float mn8[8], float mx8[8], double sum8[8],
                                                uint64_t nan8[8])
 {
-    hf_v8f mn, mx;
-    hf_v4d s0, s1;
+    tsr_v8f mn, mx;
+    tsr_v4d s0, s1;
     memcpy(&mn, mn8, sizeof mn);
     memcpy(&mx, mx8, sizeof mx);
     memcpy(&s0, sum8, sizeof s0);
@@ -118,20 +123,20 @@ static TSR_ALWAYS_INLINE void stats_lanes_body(const float *d, size_t n, float m
     size_t i = 0;
     while (i + 8 <= n) {
         /* no-data counts in 32-bit lanes, added up every 2^24 vectors */
-        hf_v8i cnt = {0, 0, 0, 0, 0, 0, 0, 0};
+        tsr_v8i cnt = {0, 0, 0, 0, 0, 0, 0, 0};
         for (size_t e = i + ((size_t)1 << 27) < n ? i + ((size_t)1 << 27) : n; i + 8 <= e; i += 8) {
-            hf_v8f v;
+            tsr_v8f v;
             memcpy(&v, d + i, sizeof v);
-            hf_v8i ok = v == v, lt = v < mn, gt = v > mx;
-            mn = (hf_v8f)(((hf_v8i)v & lt) | ((hf_v8i)mn & ~lt));
-            mx = (hf_v8f)(((hf_v8i)v & gt) | ((hf_v8i)mx & ~gt));
+            tsr_v8i ok = v == v, lt = v < mn, gt = v > mx;
+            mn = (tsr_v8f)(((tsr_v8i)v & lt) | ((tsr_v8i)mn & ~lt));
+            mx = (tsr_v8f)(((tsr_v8i)v & gt) | ((tsr_v8i)mx & ~gt));
             cnt -= ~ok; /* (a lane's mask is -1 where NaN) */
-            hf_v8f z = (hf_v8f)((hf_v8i)v & ok);
-            hf_v4f lo4, hi4;
+            tsr_v8f z = (tsr_v8f)((tsr_v8i)v & ok);
+            tsr_v4f lo4, hi4;
             memcpy(&lo4, &z, sizeof lo4);
             memcpy(&hi4, (const char *)&z + sizeof lo4, sizeof hi4);
-            s0 += __builtin_convertvector(lo4, hf_v4d);
-            s1 += __builtin_convertvector(hi4, hf_v4d);
+            s0 += __builtin_convertvector(lo4, tsr_v4d);
+            s1 += __builtin_convertvector(hi4, tsr_v4d);
         }
         for (int k = 0; k < 8; k++)
             nan8[k] += (uint64_t)cnt[k];
@@ -145,14 +150,8 @@ static TSR_ALWAYS_INLINE void stats_lanes_body(const float *d, size_t n, float m
 static void stats_lanes_body(const float *d, size_t n, float mn8[8], float mx8[8], double sum8[8], uint64_t nan8[8])
 {
     for (size_t i = 0; i + 8 <= n; i += 8)
-        for (int k = 0; k < 8; k++) {
-            float v = d[i + k];
-            bool ok = v == v;
-            mn8[k] = v < mn8[k] ? v : mn8[k];
-            mx8[k] = v > mx8[k] ? v : mx8[k];
-            sum8[k] += ok ? (double)v : 0.0;
-            nan8[k] += !ok;
-        }
+        for (int k = 0; k < 8; k++)
+            stats_add(d[i + k], k, mn8, mx8, sum8, nan8);
 }
 #endif
 
@@ -184,14 +183,8 @@ void tsr_heightfield_stats_compute(const tsr_heightfield *hf, tsr_heightfield_st
     else
 #endif
         stats_lanes_body(d, n, mn8, mx8, sum8, nan8);
-    for (int k = 0; i < n; i++, k++) {
-        float v = d[i];
-        bool ok = v == v;
-        mn8[k] = v < mn8[k] ? v : mn8[k];
-        mx8[k] = v > mx8[k] ? v : mx8[k];
-        sum8[k] += ok ? (double)v : 0.0;
-        nan8[k] += !ok;
-    }
+    for (int k = 0; i < n; i++, k++)
+        stats_add(d[i], k, mn8, mx8, sum8, nan8);
     double mn = INFINITY, mx = -INFINITY, sum = 0;
     for (int k = 0; k < 8; k++) {
         mn = mn8[k] < mn ? mn8[k] : mn;

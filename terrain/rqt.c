@@ -46,9 +46,6 @@
 
 #include <math.h>
 #include <stdatomic.h>
-#ifdef __SSE2__
-#include <emmintrin.h>
-#endif
 #include <stdlib.h>
 #include <string.h>
 
@@ -251,16 +248,12 @@ typedef struct half_k {
     double gx, gy, kpa, kpb, op, kmc, kmb, kab, om;
 } half_k;
 
-#if defined(__GNUC__) || defined(__clang__)
-#define RQT_VECTORS 1
-typedef double rqt_v4d __attribute__((vector_size(32)));
-typedef int64_t rqt_v4l __attribute__((vector_size(32)));
-typedef float rqt_v4f __attribute__((vector_size(16)));
+#ifdef TSR_VECTORS
 /* lane-wise max and min of a and b (neither NaN), and |a| */
-#define V4_SEL(m, a, b) ((rqt_v4d)(((rqt_v4l)(a) & (m)) | ((rqt_v4l)(b) & ~(m))))
+#define V4_SEL(m, a, b) ((tsr_v4d)(((tsr_v4l)(a) & (m)) | ((tsr_v4l)(b) & ~(m))))
 #define V4_MAX(a, b) V4_SEL((a) > (b), a, b)
 #define V4_MIN(a, b) V4_SEL((a) < (b), a, b)
-#define V4_ABS(a) ((rqt_v4d)((rqt_v4l)(a) & (rqt_v4l){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}))
+#define V4_ABS(a) ((tsr_v4d)((tsr_v4l)(a) & (tsr_v4l){INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX}))
 #endif
 
 /* The distances of sample x of a row from the four variants, into the
@@ -349,10 +342,10 @@ static TSR_ALWAYS_INLINE unsigned half_ok_body(const rqt *q, vtx a, vtx b, vtx c
     }
     double tol = q->tol, mx[4] = {0, 0, 0, 0};
     bool nan = false;
-#ifdef RQT_VECTORS
+#ifdef TSR_VECTORS
     /* the vector rows' running maxima, folded into mx every few rows */
-    rqt_v4d m0 = {0, 0, 0, 0}, m1 = m0, m2 = m0, m3 = m0;
-    rqt_v4l bad = {0, 0, 0, 0};
+    tsr_v4d m0 = {0, 0, 0, 0}, m1 = m0, m2 = m0, m3 = m0;
+    tsr_v4l bad = {0, 0, 0, 0};
 #endif
     /* the numerators of (la, lb, lc) at (i, j): (c - b) x (s - b),
      * (a - c) x (s - c), (b - a) x (s - a); each steps by -(dj) in i */
@@ -385,24 +378,24 @@ static TSR_ALWAYS_INLINE unsigned half_ok_body(const rqt *q, vtx a, vtx b, vtx c
             double nb0 = (double)((a.i - c.i) * (j - c.j) + dnb * (lo - c.i));
             double nc0 = (double)((b.i - a.i) * (j - a.j) + dnc * (lo - a.i));
             int64_t n = hi - lo + 1;
-#ifdef RQT_VECTORS
+#ifdef TSR_VECTORS
             if (n >= 4) {
-                const rqt_v4d lane = {0, 1, 2, 3}, zero = {0, 0, 0, 0};
+                const tsr_v4d lane = {0, 1, 2, 3}, zero = {0, 0, 0, 0};
                 for (int64_t x = 0;; x += 4) {
                     if (x + 4 > n)
                         x = n - 4; /* (the last four overlap the ones before) */
-                    rqt_v4f f;
+                    tsr_v4f f;
                     memcpy(&f, row + lo + x, sizeof f);
-                    rqt_v4d xs = (double)x + lane;
-                    rqt_v4d px = k.gx * ((double)(lo + x) + lane);
-                    rqt_v4d r = __builtin_convertvector(f, rqt_v4d) - (base + px);
-                    rqt_v4d na = na0 + (double)dna * xs, nb = nb0 + (double)dnb * xs, nc = nc0 + (double)dnc * xs;
-                    rqt_v4d u = nb * k.kpb, v = na * k.kpa, phi = V4_MIN(u, v);
-                    rqt_v4d w = nc * k.kmc, y = nb * k.kmb, psi = V4_MIN(w, y);
-                    rqt_v4d z = y - na * k.kab, psi2 = V4_MIN(w, z);
+                    tsr_v4d xs = (double)x + lane;
+                    tsr_v4d px = k.gx * ((double)(lo + x) + lane);
+                    tsr_v4d r = __builtin_convertvector(f, tsr_v4d) - (base + px);
+                    tsr_v4d na = na0 + (double)dna * xs, nb = nb0 + (double)dnb * xs, nc = nc0 + (double)dnc * xs;
+                    tsr_v4d u = nb * k.kpb, v = na * k.kpa, phi = V4_MIN(u, v);
+                    tsr_v4d w = nc * k.kmc, y = nb * k.kmb, psi = V4_MIN(w, y);
+                    tsr_v4d z = y - na * k.kab, psi2 = V4_MIN(w, z);
                     psi2 = V4_MAX(psi2, zero);
-                    rqt_v4d t1 = r - k.op * phi;
-                    rqt_v4d e0 = V4_ABS(r), e1 = V4_ABS(t1), e2 = V4_ABS(r - k.om * psi),
+                    tsr_v4d t1 = r - k.op * phi;
+                    tsr_v4d e0 = V4_ABS(r), e1 = V4_ABS(t1), e2 = V4_ABS(r - k.om * psi),
                             e3 = V4_ABS(t1 - k.om * psi2);
                     bad |= r != r;
                     m0 = V4_MAX(e0, m0);
@@ -422,11 +415,11 @@ static TSR_ALWAYS_INLINE unsigned half_ok_body(const rqt *q, vtx a, vtx b, vtx c
             continue;
         /* every fourth row and the last: a no-data sample fails every
          * variant, and so does a scan after which none is left */
-#ifdef RQT_VECTORS
+#ifdef TSR_VECTORS
         nan |= (bad[0] | bad[1] | bad[2] | bad[3]) != 0;
-        const rqt_v4d *mv[4] = {&m0, &m1, &m2, &m3};
+        const tsr_v4d *mv[4] = {&m0, &m1, &m2, &m3};
         for (int v4 = 0; v4 < 4; v4++) {
-            const rqt_v4d *mm = mv[v4];
+            const tsr_v4d *mm = mv[v4];
             double s01 = (*mm)[0] > (*mm)[1] ? (*mm)[0] : (*mm)[1], s23 = (*mm)[2] > (*mm)[3] ? (*mm)[2] : (*mm)[3];
             double sv = s01 > s23 ? s01 : s23;
             mx[v4] = sv > mx[v4] ? sv : mx[v4];

@@ -21,6 +21,17 @@ extern "C" {
 #define TSR_ALWAYS_INLINE inline
 #endif
 
+/* Vectors of the scans (GCC's and clang's vector extensions): each
+ * operation lane by lane, as the scalar expression would be. */
+#if defined(__GNUC__) || defined(__clang__)
+#define TSR_VECTORS 1
+typedef double tsr_v4d __attribute__((vector_size(32)));
+typedef int64_t tsr_v4l __attribute__((vector_size(32)));
+typedef float tsr_v4f __attribute__((vector_size(16)));
+typedef float tsr_v8f __attribute__((vector_size(32)));
+typedef int32_t tsr_v8i __attribute__((vector_size(32)));
+#endif
+
 struct tsr_heightfield {
     uint32_t width, height;
     double dx, dy, dz;

@@ -400,11 +400,7 @@ static inline double err_at(const float *rp, int64_t x, double base, double ga)
  * of doubles (two SSE2 registers, or one AVX register in the AVX2 clone
  * of the caller); the last four overlap the previous ones rather than a
  * scalar tail. Each lane computes exactly err_at's expression. */
-#if defined(__GNUC__) || defined(__clang__)
-typedef double tsr_v4d __attribute__((vector_size(32)));
-typedef float tsr_v4f __attribute__((vector_size(16)));
-typedef int64_t tsr_v4l __attribute__((vector_size(32)));
-
+#ifdef TSR_VECTORS
 static inline double row_max(const float *restrict rp, int64_t n, double base, double ga)
 {
     if (n < 4) {
