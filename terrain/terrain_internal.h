@@ -134,6 +134,11 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, double range, bo
  * p, 4 and 8 only with m; 0 where a sample is no-data. */
 unsigned tsr__rqt_half_variants(const tsr_heightfield *hf, double tol, const int64_t v[3][2], const int64_t *p,
                                 const int64_t *m);
+/* The same half's probe (a lattice of its samples, for halves of 16 cells
+ * a side or more; the full scan below that): a set of bits holding every
+ * one tsr__rqt_half_variants gives. */
+unsigned tsr__rqt_half_probe(const tsr_heightfield *hf, double tol, const int64_t v[3][2], const int64_t *p,
+                             const int64_t *m);
 
 /* The budget search of both quadtree methods: the smallest tolerance in
  * [lo, hi], bisected in log scale (40 steps), at which the cut has at

@@ -634,26 +634,35 @@ static double subtri_max(const tsr_heightfield *hf, const int64_t (*tri)[3][2], 
     return mx;
 }
 
-/* tsr__rqt_half_variants (the quadtree's test of a leaf's half, all four
- * ways its midpoints may split it in one scan, from hat functions) against
- * each way's triangles scanned on their own planes, on halves and fan
- * triangles of random boxes, clipped ones (midpoints off the sides'
- * middles) included, with and without no-data, at tolerances around the
- * largest distances. */
-TEST(quadtree_half_variants_against_their_triangles)
+/* Random halves and fan triangles of boxes of 2^pmin .. 2^pmax cells a
+ * side in hf (w x w samples), clipped ones (midpoints off the sides'
+ * middles) included, with no-data from iteration nodata_from on, each at
+ * tolerances a hair above and below its ways' largest distances (each
+ * way's triangles scanned on their own planes, in long double). Without
+ * probe, tsr__rqt_half_variants must give exactly the ways within the
+ * tolerance; with it, tsr__rqt_half_probe must give every one of them
+ * (and may give more). Counts the cases, the ways within and beyond the
+ * tolerance, the cases with no-data and, for the probe, the ways it
+ * rejected. */
+typedef struct half_counts {
+    uint64_t cases, pass, fail, nans, rejected;
+} half_counts;
+
+static half_counts half_cases(tsr_heightfield *hf, int64_t w, int pmin, int pmax, int iterations, int nodata_from,
+                              bool probe)
 {
-    tsr_heightfield *hf = terrain(70, 70, 5);
+    half_counts k = {0};
     float *d = tsr_heightfield_data(hf);
-    srand(17);
-    uint64_t cases = 0, pass = 0, fail = 0, nans = 0;
-    for (int it = 0; it < 3000; it++) {
-        if (it == 2500) /* a few no-data samples for the last cases */
-            for (int k = 0; k < 40; k++)
-                d[(rand() % 70) * 70 + rand() % 70] = NAN;
-        int64_t s = (int64_t)2 << (rand() % 5); /* 2..32 */
-        int64_t x0 = rand() % (69 - s / 2), y0 = rand() % (69 - s / 2);
+    for (int it = 0; it < iterations; it++) {
+        if (it == nodata_from) /* a few no-data samples for the last cases */
+            for (int n = 0; n < 40; n++)
+                d[(rand() % w) * w + rand() % w] = NAN;
+        int64_t s = (int64_t)1 << (pmin + rand() % (pmax - pmin + 1));
+        int64_t x0 = rand() % (w - 1 - s / 2), y0 = rand() % (w - 1 - s / 2);
         int64_t x1 = x0 + 1 + rand() % s, y1 = y0 + 1 + rand() % s; /* clipped or whole */
-        x1 = x1 > 69 ? 69 : x1, y1 = y1 > 69 ? 69 : y1;
+        if (probe && rand() % 2) /* (the probe needs 32 cells or more both ways) */
+            x1 = x0 + s, y1 = y0 + s;
+        x1 = x1 > w - 1 ? w - 1 : x1, y1 = y1 > w - 1 ? w - 1 : y1;
         int64_t xm = x0 + s / 2, ym = y0 + s / 2;
         int64_t sw[2] = {x0, y0}, se[2] = {x1, y0}, ne[2] = {x1, y1}, nw[2] = {x0, y1};
         int64_t ms[2] = {xm, y0}, me[2] = {x1, ym}, mn[2] = {xm, y1}, mw[2] = {x0, ym}, cc[2] = {xm, ym};
@@ -681,8 +690,8 @@ TEST(quadtree_half_variants_against_their_triangles)
         if (rand() % 4 == 0)
             m = NULL;
         int64_t v[3][2], P[2], M[2];
-        for (int k = 0; k < 3; k++)
-            v[k][0] = tv[k][0], v[k][1] = tv[k][1];
+        for (int n = 0; n < 3; n++)
+            v[n][0] = tv[n][0], v[n][1] = tv[n][1];
         if (p)
             P[0] = p[0], P[1] = p[1];
         if (m)
@@ -699,6 +708,7 @@ TEST(quadtree_half_variants_against_their_triangles)
         double e[4] = {subtri_max(hf, w0, 1), p ? subtri_max(hf, w1, 2) : NAN, m ? subtri_max(hf, w2, 2) : NAN,
                        p && m ? subtri_max(hf, w3, 3) : NAN};
         bool nodata = e[0] != e[0];
+        unsigned ways = 1u | (p ? 2u : 0) | (m ? 4u : 0) | (p && m ? 8u : 0);
         /* tolerances a hair above and below each largest distance, so a
          * way measured wrong by more than 1e-6 of it gets the wrong bit */
         for (int t = 0; t < 9; t++) {
@@ -706,29 +716,61 @@ TEST(quadtree_half_variants_against_their_triangles)
             if (tol != tol || !(tol > 0))
                 continue;
             bool near = false;
-            for (int k = 0; k < 4; k++)
-                near = near || (e[k] == e[k] && fabs(e[k] - tol) <= 1e-9 * tol);
+            for (int n = 0; n < 4; n++)
+                near = near || (e[n] == e[n] && fabs(e[n] - tol) <= 1e-9 * tol);
             if (near)
                 continue;
             unsigned want = 0;
             if (!nodata)
                 want = (e[0] <= tol ? 1u : 0) | (p && e[1] <= tol ? 2u : 0) | (m && e[2] <= tol ? 4u : 0) |
                        (p && m && e[3] <= tol ? 8u : 0);
-            unsigned got = tsr__rqt_half_variants(hf, tol, (const int64_t(*)[2])v, p ? P : NULL, m ? M : NULL);
-            CHECK_MSG(got == want,
-                      "box %lld,%lld-%lld,%lld side %lld kind %d p %d m %d tol %.9g: variants %#x, their triangles "
+            unsigned got = probe ? tsr__rqt_half_probe(hf, tol, (const int64_t(*)[2])v, p ? P : NULL, m ? M : NULL)
+                                 : tsr__rqt_half_variants(hf, tol, (const int64_t(*)[2])v, p ? P : NULL, m ? M : NULL);
+            CHECK_MSG(probe ? (want & ~got) == 0 && (got & ~ways) == 0 : got == want,
+                      "box %lld,%lld-%lld,%lld side %lld kind %d p %d m %d tol %.9g: %s %#x, their triangles "
                       "%#x (largest distances %.9g %.9g %.9g %.9g)",
                       (long long)x0, (long long)y0, (long long)x1, (long long)y1, (long long)s, kind, p != NULL,
-                      m != NULL, tol, got, want, e[0], e[1], e[2], e[3]);
-            cases++;
-            pass += (unsigned)__builtin_popcount(want);
-            fail += (unsigned)(1 + (p != NULL) + (m != NULL) + (p && m)) - (unsigned)__builtin_popcount(want);
-            nans += nodata;
+                      m != NULL, tol, probe ? "probe" : "variants", got, want, e[0], e[1], e[2], e[3]);
+            k.cases++;
+            k.pass += (unsigned)__builtin_popcount(want);
+            k.fail += (unsigned)__builtin_popcount(ways) - (unsigned)__builtin_popcount(want);
+            k.rejected += (unsigned)__builtin_popcount(ways & ~got);
+            k.nans += nodata;
         }
     }
+    return k;
+}
+
+/* tsr__rqt_half_variants (the quadtree's test of a leaf's half, all four
+ * ways its midpoints may split it in one scan, from hat functions) against
+ * each way's triangles scanned on their own planes, on halves and fan
+ * triangles of random boxes of 2 to 32 cells. */
+TEST(quadtree_half_variants_against_their_triangles)
+{
+    tsr_heightfield *hf = terrain(70, 70, 5);
+    srand(17);
+    half_counts k = half_cases(hf, 70, 1, 5, 3000, 2500, false);
     /* the cases cover passing and failing ways, and no-data */
-    CHECK_MSG(cases > 8000 && pass > 8000 && fail > 8000 && nans > 50, "%llu cases, %llu ways passing, %llu failing, %llu with no-data",
-              (unsigned long long)cases, (unsigned long long)pass, (unsigned long long)fail, (unsigned long long)nans);
+    CHECK_MSG(k.cases > 8000 && k.pass > 8000 && k.fail > 8000 && k.nans > 50,
+              "%llu cases, %llu ways passing, %llu failing, %llu with no-data", (unsigned long long)k.cases,
+              (unsigned long long)k.pass, (unsigned long long)k.fail, (unsigned long long)k.nans);
+    tsr_heightfield_destroy(hf);
+}
+
+/* The probe of a big half (a lattice of its samples, which lets a failing
+ * half fail without its full scan) never rejects a way that is within the
+ * tolerance, and does reject ways beyond it: halves of 32 to 128 cells. */
+TEST(quadtree_half_probe_holds_the_variants)
+{
+    tsr_heightfield *hf = terrain(260, 260, 9);
+    srand(23);
+    half_counts k = half_cases(hf, 260, 5, 7, 600, 500, true);
+    /* the probe rejects a good share of the failing ways (the tolerances
+     * a hair below a largest distance are the ones it cannot see) */
+    CHECK_MSG(k.cases > 1500 && k.pass > 1500 && k.rejected > k.fail / 4 && k.nans > 10,
+              "%llu cases, %llu ways passing, %llu failing, %llu rejected by the probe, %llu with no-data",
+              (unsigned long long)k.cases, (unsigned long long)k.pass, (unsigned long long)k.fail,
+              (unsigned long long)k.rejected, (unsigned long long)k.nans);
     tsr_heightfield_destroy(hf);
 }
 
@@ -880,6 +922,63 @@ TEST(blocks_allocation_failures)
     f.fail_at = 0;
     CHECK_MSG(nomem > 40, "only %u of the failed allocations were reported", nomem);
     tsr_mesh_free(&want);
+    tsr_heightfield_destroy(hf);
+    tsr_heightfield_destroy(src);
+}
+
+/* The quadtree method's allocations (its block of per-node bits, its
+ * stack, the mesh) failing one at a time: TSR_ERR_NOMEM with a message
+ * and nothing left behind; with none failing, the mesh made through the
+ * default allocator, with a bound and with a budget (which selects cuts
+ * again in the same block), on one thread and on two (the workers judge
+ * only: they allocate nothing). */
+TEST(quadtree_allocation_failures)
+{
+    tsr_heightfield *src = terrain(150, 131, 9);
+    check_alloc f = {0};
+    tsr_allocator al = {check_realloc, &f};
+    tsr_heightfield *hf = tsr_heightfield_create(150, 131, &al);
+    memcpy(tsr_heightfield_data(hf), tsr_heightfield_cdata(src), 150 * 131 * sizeof(float));
+    for (int c = 0; c < 4; c++) {
+        tsr_tin_options o = {0};
+        o.method = TSR_TIN_QUADTREE;
+        o.threads = 1 + (uint32_t)(c & 1);
+        if (c < 2)
+            o.max_error = 2;
+        else
+            o.max_triangles = 3000;
+        tsr_mesh want, m;
+        tsr_mesh_init(&want, 0, NULL);
+        CHECK(tsr_terrain_mesh(src, &o, &want, NULL, NULL) == TSR_OK);
+        long live = f.live, start = f.calls;
+        tsr_mesh_init(&m, 0, &al);
+        CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, NULL) == TSR_OK);
+        long calls = f.calls - start;
+        CHECK_MSG(m.vertex_count == want.vertex_count && m.triangle_count == want.triangle_count &&
+                      !memcmp(m.positions, want.positions, 3 * sizeof(float) * want.vertex_count) &&
+                      !memcmp(m.indices, want.indices, 3 * sizeof(uint32_t) * want.triangle_count),
+                  "case %d: the mesh differs from the default allocator's", c);
+        tsr_mesh_free(&m);
+        CHECK(f.live == live && calls >= 3);
+        uint32_t nomem = 0;
+        for (long k = 1; k <= calls; k++) {
+            f.fail_at = f.calls + k;
+            tsr_error err = {0};
+            tsr_mesh_init(&m, 0, &al);
+            tsr_status st = tsr_terrain_mesh(hf, &o, &m, NULL, &err);
+            CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "case %d, failure at allocation %ld: status %d", c, k,
+                      (int)st);
+            if (st == TSR_ERR_NOMEM) {
+                nomem++;
+                CHECK_MSG(err.message[0], "case %d, failure at allocation %ld: no message", c, k);
+            }
+            tsr_mesh_free(&m);
+            CHECK_MSG(f.live == live, "case %d, failure at allocation %ld: %ld blocks left", c, k, f.live - live);
+        }
+        f.fail_at = 0;
+        CHECK_MSG(nomem >= 3, "case %d: only %u of %ld failed allocations were reported", c, nomem, calls);
+        tsr_mesh_free(&want);
+    }
     tsr_heightfield_destroy(hf);
     tsr_heightfield_destroy(src);
 }
@@ -1056,4 +1155,5 @@ TEST(measure_bands_agree_with_brute_force)
 
 TEST_MAIN(T(error_bound_generated), T(measure_bands_agree_with_brute_force), T(flips_fewer_triangles), T(spacing_and_scale), T(flat_and_planar), T(budgets),
           T(nodata_holes), T(quadtree_leaves_and_tiles),
-          T(quadtree_half_variants_against_their_triangles), T(window_seams), T(blocks), T(blocks_allocation_failures), T(closed_solid), T(bad_options), T(data_real_terrain))
+          T(quadtree_half_variants_against_their_triangles),
+          T(quadtree_half_probe_holds_the_variants), T(window_seams), T(blocks), T(blocks_allocation_failures), T(quadtree_allocation_failures), T(closed_solid), T(bad_options), T(data_real_terrain))
