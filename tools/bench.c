@@ -2,25 +2,32 @@
 #include "bench.h"
 
 #include <pthread.h>
+#include <stdint.h>
 #include <stdlib.h>
 
 /* The mesher calls it from several threads (tsr_tin_options.threads). */
 static pthread_mutex_t counting_lock = PTHREAD_MUTEX_INITIALIZER;
 
+/* Each block carries its size in front, 32 bytes, which keeps the
+ * default allocator's alignment. */
+enum { PREFIX = 32 / sizeof(size_t) };
+
 static void *counting_realloc(void *user, void *ptr, size_t size)
 {
     bench_counting *c = user;
-    size_t old = ptr ? ((size_t *)ptr)[-2] : 0;
+    size_t old = ptr ? ((size_t *)ptr)[-PREFIX] : 0;
     if (size == 0) {
         if (ptr) {
             pthread_mutex_lock(&counting_lock);
             c->now -= old;
             pthread_mutex_unlock(&counting_lock);
-            free((size_t *)ptr - 2);
+            tsr_free(NULL, (size_t *)ptr - PREFIX);
         }
         return NULL;
     }
-    size_t *p = realloc(ptr ? (size_t *)ptr - 2 : NULL, size + 2 * sizeof(size_t));
+    if (size > SIZE_MAX - PREFIX * sizeof(size_t))
+        return NULL;
+    size_t *p = tsr_realloc(NULL, ptr ? (size_t *)ptr - PREFIX : NULL, size + PREFIX * sizeof(size_t));
     if (!p)
         return NULL;
     p[0] = size;
@@ -29,7 +36,7 @@ static void *counting_realloc(void *user, void *ptr, size_t size)
     if (c->now > c->peak)
         c->peak = c->now;
     pthread_mutex_unlock(&counting_lock);
-    return p + 2;
+    return p + PREFIX;
 }
 
 tsr_allocator bench_counting_allocator(bench_counting *c)
