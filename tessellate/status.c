@@ -159,16 +159,128 @@ void *tsr_realloc(const tsr_allocator *a, void *ptr, size_t size)
     return a && a->realloc ? a->realloc(a->user, ptr, size) : default_realloc(NULL, ptr, size);
 }
 
+uint32_t tsr__cpu_quota(const char *text)
+{
+    /* "QUOTA PERIOD" in microseconds; "max" or a negative quota: none */
+    char *end;
+    errno = 0;
+    long long quota = strtoll(text, &end, 10);
+    if (end == text || errno || quota <= 0)
+        return 0;
+    long long period = strtoll(end, &end, 10);
+    if (errno || period <= 0)
+        return 0;
+    while (*end == ' ' || *end == '\t' || *end == '\n')
+        end++;
+    if (*end)
+        return 0;
+    long long n = quota / period + (quota % period != 0);
+    return n > UINT32_MAX ? UINT32_MAX : (uint32_t)n;
+}
+
+/* The first line of a file, NUL-terminated; false when unreadable. */
+static bool read_line(const char *path, char *buf, size_t size)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return false;
+    bool ok = fgets(buf, (int)size, f) != NULL;
+    fclose(f);
+    return ok;
+}
+
+/* The smallest CPU limit (tsr__cpu_quota) of the cgroup at path under
+ * the mount at base and of its ancestors up to base: v2's cpu.max, or
+ * v1's cfs quota and period; 0 where none is set. */
+static uint32_t quota_up(const char *base, const char *path, bool v2)
+{
+    char dir[512], file[600], a[64], b[64], text[160];
+    if (snprintf(dir, sizeof dir, "%s%s", base, strcmp(path, "/") ? path : "") >= (int)sizeof dir)
+        return 0;
+    uint32_t best = 0;
+    size_t root = strlen(base);
+    for (;;) {
+        uint32_t n = 0;
+        if (v2) {
+            snprintf(file, sizeof file, "%s/cpu.max", dir);
+            if (read_line(file, text, sizeof text))
+                n = tsr__cpu_quota(text);
+        } else {
+            snprintf(file, sizeof file, "%s/cpu.cfs_quota_us", dir);
+            bool got = read_line(file, a, sizeof a);
+            snprintf(file, sizeof file, "%s/cpu.cfs_period_us", dir);
+            if (got && read_line(file, b, sizeof b)) {
+                a[strcspn(a, "\n")] = 0;
+                snprintf(text, sizeof text, "%s %s", a, b);
+                n = tsr__cpu_quota(text);
+            }
+        }
+        if (n && (!best || n < best))
+            best = n;
+        char *slash = strrchr(dir, '/');
+        if (!slash || (size_t)(slash - dir) < root)
+            break;
+        *slash = 0;
+    }
+    return best;
+}
+
+uint32_t tsr__cgroup_cpus(const char *cgroups, const char *root)
+{
+    FILE *f = fopen(cgroups, "r");
+    if (!f)
+        return 0;
+    char line[512];
+    uint32_t best = 0;
+    while (fgets(line, sizeof line, f)) {
+        line[strcspn(line, "\n")] = 0;
+        /* "ID:CONTROLLERS:PATH"; v2's is "0::PATH" */
+        char *c1 = strchr(line, ':'), *c2 = c1 ? strchr(c1 + 1, ':') : NULL;
+        if (!c2 || c2[1] != '/')
+            continue;
+        *c2 = 0;
+        const char *ctl = c1 + 1, *path = c2 + 1;
+        uint32_t n = 0;
+        char base[256];
+        if (!*ctl) { /* at the root (v2 alone) or under unified/ (hybrid) */
+            n = quota_up(root, path, true);
+            snprintf(base, sizeof base, "%s/unified", root);
+            uint32_t u = quota_up(base, path, true);
+            n = u && (!n || u < n) ? u : n;
+        } else {
+            bool cpu = false; /* "cpu" among the comma-separated controllers */
+            for (const char *t = ctl; *t;) {
+                size_t len = strcspn(t, ",");
+                cpu = cpu || (len == 3 && !strncmp(t, "cpu", 3));
+                t += len + (t[len] == ',');
+            }
+            if (!cpu)
+                continue;
+            static const char *const mounts[] = {"cpu", "cpu,cpuacct", "cpuacct,cpu"};
+            for (size_t k = 0; k < sizeof mounts / sizeof mounts[0]; k++) {
+                snprintf(base, sizeof base, "%s/%s", root, mounts[k]);
+                uint32_t u = quota_up(base, path, false);
+                n = u && (!n || u < n) ? u : n;
+            }
+        }
+        best = n && (!best || n < best) ? n : best;
+    }
+    fclose(f);
+    return best;
+}
+
 uint32_t tsr_cpu_count(void)
 {
+    uint32_t n = 0;
     cpu_set_t set;
-    if (sched_getaffinity(0, sizeof set, &set) == 0) {
-        int n = CPU_COUNT(&set);
-        if (n > 0)
-            return (uint32_t)n;
+    if (sched_getaffinity(0, sizeof set, &set) == 0)
+        n = (uint32_t)CPU_COUNT(&set);
+    if (n == 0) {
+        long online = sysconf(_SC_NPROCESSORS_ONLN);
+        n = online > 0 ? (uint32_t)online : 1;
     }
-    long n = sysconf(_SC_NPROCESSORS_ONLN);
-    return n > 0 ? (uint32_t)n : 1;
+    uint32_t quota = tsr__cgroup_cpus("/proc/self/cgroup", "/sys/fs/cgroup");
+    return quota && quota < n ? quota : n;
 }
 
 void tsr_free(const tsr_allocator *a, void *ptr)

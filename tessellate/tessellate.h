@@ -79,9 +79,26 @@ void *tsr_realloc(const tsr_allocator *a, void *ptr, size_t size);
 void tsr_free(const tsr_allocator *a, void *ptr);
 
 /* The processors this process may run on: its CPU affinity (a Slurm job's
- * or a container's cpuset), else the online count; at least 1. What
- * "threads 0: one per processor" means everywhere. */
+ * or a container's cpuset), else the online count, and no more than its
+ * cgroups' CPU bandwidth limit allows (a container's --cpus, a systemd
+ * CPUQuota: cgroup v2's cpu.max or v1's cfs quota, rounded up); at least
+ * 1. What "threads 0: one per processor" means everywhere. */
 uint32_t tsr_cpu_count(void);
+
+/* (Internal, tested on its own.) The CPUs a CPU bandwidth limit allows,
+ * from text as cgroup v2's cpu.max holds it, "QUOTA PERIOD" (v1's quota
+ * and period files joined by a space read the same): QUOTA / PERIOD
+ * rounded up; 0 for no limit ("max", a negative quota) or text that is
+ * not two positive numbers. */
+uint32_t tsr__cpu_quota(const char *text);
+
+/* (Internal, tested on its own.) The smallest CPU bandwidth limit, in
+ * CPUs (tsr__cpu_quota), of the cgroups a file like /proc/self/cgroup
+ * names and of their ancestors, found under root as under /sys/fs/cgroup:
+ * v2's cpu.max at root or root/unified, v1's cpu.cfs_quota_us and
+ * cpu.cfs_period_us under root/cpu (or cpu,cpuacct); 0 when none is set
+ * or nothing is readable. tsr_cpu_count calls it with those two paths. */
+uint32_t tsr__cgroup_cpus(const char *cgroups, const char *root);
 
 /* ---- Mesh -------------------------------------------------------------- */
 

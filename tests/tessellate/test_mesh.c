@@ -264,6 +264,102 @@ TEST(cpu_count_follows_affinity)
     CHECK(tsr_cpu_count() == all);
 }
 
+/* tsr__cpu_quota reads a CPU bandwidth limit as cgroups write it: whole
+ * CPUs rounded up, 0 for none or for anything malformed. */
+TEST(cpu_quota_text)
+{
+    static const struct {
+        const char *text;
+        uint32_t cpus;
+    } cases[] = {
+        {"max 100000\n", 0},      {"200000 100000\n", 2},     {"150000 100000", 2},   {"50000 100000\n", 1},
+        {"100000 100000", 1},     {"1 100000", 1},            {"400000 50000\n", 8}, {"-1 100000", 0},
+        {"", 0},                  {"abc", 0},                 {"100000", 0},          {"100000 0", 0},
+        {"100000 -5", 0},         {"100000 100000 x", 0},     {"0 100000", 0},        {"12x 100000", 0},
+        {"9223372036854775807 1", UINT32_MAX},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++)
+        CHECK_MSG(tsr__cpu_quota(cases[k].text) == cases[k].cpus, "\"%s\": %u, want %u", cases[k].text,
+                  tsr__cpu_quota(cases[k].text), cases[k].cpus);
+}
+
+/* Writes text to root/rel, making its folders. */
+static void put_file(const char *root, const char *rel, const char *text)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", root, rel);
+    for (char *c = path + strlen(root) + 1; *c; c++)
+        if (*c == '/') {
+            *c = 0;
+            mkdir(path, 0700);
+            *c = '/';
+        }
+    FILE *f = fopen(path, "w");
+    CHECK_MSG(f != NULL, "cannot write %s", path);
+    if (f) {
+        fputs(text, f);
+        fclose(f);
+    }
+}
+
+/* tsr__cgroup_cpus on made-up cgroup trees: the smallest limit on the
+ * way from the process's cgroup up to the mount's root, for v2 alone,
+ * v2 under unified/ beside v1, v1's cpu controller (and not cpuset's or
+ * cpuacct's files), a path that is not there (a container's namespace
+ * shows the host's path: the limit at the root counts). */
+TEST(cgroup_cpu_limits)
+{
+    char root[] = "/tmp/tsr_cgroupXXXXXX";
+    if (!mkdtemp(root))
+        SKIP("no temporary folder");
+    char cg[600], cmd[700];
+    snprintf(cg, sizeof cg, "%s/self_cgroup", root);
+    static const struct {
+        const char *cgroup, *files[4][2];
+        uint32_t cpus;
+    } cases[] = {
+        /* v2: the tightest of the ancestors (3 at /a, none above or below) */
+        {"0::/a/b\n", {{"v2/cpu.max", "max 100000\n"}, {"v2/a/cpu.max", "300000 100000\n"},
+                       {"v2/a/b/cpu.max", "max 100000\n"}}, 3},
+        {"0::/a/b\n", {{"v2/cpu.max", "100000 100000\n"}, {"v2/a/cpu.max", "300000 100000\n"}}, 1},
+        /* hybrid: v2 under unified/, v1 lines without cpu */
+        {"5:memory:/x\n0::/s\n", {{"v2/unified/s/cpu.max", "150000 100000\n"}}, 2},
+        /* v1 cpu,cpuacct: half a CPU at /k8s, none at the pod */
+        {"4:memory:/x\n3:cpu,cpuacct:/k8s/pod\n0::/\n",
+         {{"v2/cpu,cpuacct/k8s/cpu.cfs_quota_us", "50000\n"}, {"v2/cpu,cpuacct/k8s/cpu.cfs_period_us", "100000\n"},
+          {"v2/cpu,cpuacct/k8s/pod/cpu.cfs_quota_us", "-1\n"}, {"v2/cpu,cpuacct/k8s/pod/cpu.cfs_period_us", "100000\n"}},
+         1},
+        {"2:cpu:/j\n", {{"v2/cpu/j/cpu.cfs_quota_us", "250000\n"}, {"v2/cpu/j/cpu.cfs_period_us", "100000\n"}}, 3},
+        /* cpuset's and cpuacct's folders are not the cpu controller's */
+        {"2:cpuset:/j\n1:cpuacct:/j\n",
+         {{"v2/cpuset/j/cpu.cfs_quota_us", "50000\n"}, {"v2/cpuset/j/cpu.cfs_period_us", "100000\n"},
+          {"v2/cpuacct/j/cpu.cfs_quota_us", "50000\n"}, {"v2/cpuacct/j/cpu.cfs_period_us", "100000\n"}},
+         0},
+        /* the host's path, not in this mount: the root's limit */
+        {"0::/docker/abc\n", {{"v2/cpu.max", "200000 100000\n"}}, 2},
+        /* no limit anywhere, or an unreadable limit */
+        {"0::/a\n", {{"v2/cpu.max", "max 100000\n"}, {"v2/a/cpu.max", "max 100000\n"}}, 0},
+        {"0::/a\n", {{"v2/a/cpu.max", "lots\n"}}, 0},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        snprintf(cmd, sizeof cmd, "rm -rf '%s/v2'", root);
+        CHECK(system(cmd) == 0);
+        put_file(root, "self_cgroup", cases[k].cgroup);
+        for (int f = 0; f < 4 && cases[k].files[f][0]; f++)
+            put_file(root, cases[k].files[f][0], cases[k].files[f][1]);
+        char base[600];
+        snprintf(base, sizeof base, "%s/v2", root);
+        mkdir(base, 0700);
+        uint32_t got = tsr__cgroup_cpus(cg, base);
+        CHECK_MSG(got == cases[k].cpus, "case %zu (%s): %u CPUs, want %u", k, cases[k].cgroup, got, cases[k].cpus);
+    }
+    snprintf(cmd, sizeof cmd, "%s/none", root);
+    CHECK(tsr__cgroup_cpus(cmd, root) == 0); /* no such file */
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", root);
+    CHECK(system(cmd) == 0);
+}
+
 TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing),
           T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced),
-          T(keymap_clear_keeps_room), T(cpu_count_follows_affinity))
+          T(keymap_clear_keeps_room), T(cpu_count_follows_affinity), T(cpu_quota_text),
+          T(cgroup_cpu_limits))
