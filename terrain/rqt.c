@@ -601,37 +601,47 @@ static corners corners_of(const rqt *q, const box *b)
     return c;
 }
 
-/* Whether the two triangles on diagonal d (0: from south-west to
- * north-east, 1: from south-east to north-west) are within the tolerance
- * with any midpoints, those of the sides in need (bit k: S, E, N, W)
- * always there. Each half's variants are kept in memo (-1: not scanned
- * yet), as the sets of midpoints share halves. */
-static bool diag_ok_v(const rqt *q, const box *b, const corners *c, int d, unsigned need, signed char memo[2][2])
+/* The halves of diagonal d (0: from south-west to north-east, 1: from
+ * south-east to north-west): (a, b, c) with the midpoints p of ab and m
+ * of bc where they may come, and the bits of their sides (S 1, E 2, N 4,
+ * W 8) in a set of midpoints asked for. */
+typedef struct halves {
+    const vtx *v[2][3], *p[2], *m[2];
+    unsigned char pbit[2], mbit[2];
+} halves;
+
+static halves diag_halves(const box *b, const corners *c, int d)
 {
     const vtx *s = b->ms ? &c->s : NULL, *e = b->me ? &c->e : NULL, *n = b->mn ? &c->n : NULL,
               *w = b->mw ? &c->w : NULL;
-    bool ns = need & 1, ne = need & 2, nn = need & 4, nw = need & 8;
-    /* the halves: (a, b, c) with the midpoints p of ab and m of bc, and
-     * their needs */
-    const vtx *hv[2][3], *hp[2], *hm[2];
-    bool np[2], nm[2];
-    if (d == 0) {
-        hv[0][0] = &c->sw, hv[0][1] = &c->se, hv[0][2] = &c->ne, hp[0] = s, hm[0] = e;
-        hv[1][0] = &c->ne, hv[1][1] = &c->nw, hv[1][2] = &c->sw, hp[1] = n, hm[1] = w;
-        np[0] = ns, nm[0] = ne, np[1] = nn, nm[1] = nw;
-    } else {
-        hv[0][0] = &c->se, hv[0][1] = &c->ne, hv[0][2] = &c->nw, hp[0] = e, hm[0] = n;
-        hv[1][0] = &c->nw, hv[1][1] = &c->sw, hv[1][2] = &c->se, hp[1] = w, hm[1] = s;
-        np[0] = ne, nm[0] = nn, np[1] = nw, nm[1] = ns;
-    }
-    for (int full = 0; full < 2; full++)
-        for (int h = 0; h < 2; h++) {
-            signed char *r = &memo[d][h];
-            unsigned ok = full ? memo_full(q, r, *hv[h][0], *hv[h][1], *hv[h][2], hp[h], hm[h])
-                               : memo_probe(q, r, *hv[h][0], *hv[h][1], *hv[h][2], hp[h], hm[h]);
-            if (!half_passes(ok, hp[h] != NULL, hm[h] != NULL, np[h], nm[h]))
+    if (d == 0)
+        return (halves){{{&c->sw, &c->se, &c->ne}, {&c->ne, &c->nw, &c->sw}}, {s, n}, {e, w}, {1, 4}, {2, 8}};
+    return (halves){{{&c->se, &c->ne, &c->nw}, {&c->nw, &c->sw, &c->se}}, {e, w}, {n, s}, {2, 8}, {4, 1}};
+}
+
+/* Whether half h of hv passes with the variants ok (any midpoints, those
+ * in need always there). */
+static bool halves_pass(const halves *hv, int h, unsigned ok, unsigned need)
+{
+    return half_passes(ok, hv->p[h] != NULL, hv->m[h] != NULL, need & hv->pbit[h], need & hv->mbit[h]);
+}
+
+/* Whether the two triangles of a diagonal's halves hv are within the
+ * tolerance with any midpoints, those of the sides in need always there.
+ * Each half's variants are kept in memo (memo_probe), as the sets of
+ * midpoints share halves; with probe, both halves are probed before
+ * either is scanned in full. */
+static bool diag_ok_v(const rqt *q, const halves *hv, unsigned need, signed char memo[2], bool probe)
+{
+    if (probe)
+        for (int h = 0; h < 2; h++)
+            if (!halves_pass(hv, h, memo_probe(q, &memo[h], *hv->v[h][0], *hv->v[h][1], *hv->v[h][2], hv->p[h], hv->m[h]),
+                             need))
                 return false;
-        }
+    for (int h = 0; h < 2; h++)
+        if (!halves_pass(hv, h, memo_full(q, &memo[h], *hv->v[h][0], *hv->v[h][1], *hv->v[h][2], hv->p[h], hv->m[h]),
+                         need))
+            return false;
     return true;
 }
 
@@ -671,9 +681,9 @@ static bool fan_side(const rqt *q, fan *f, int i, bool full)
     return half_passes(fan_variants(q, f, i, full), f->ring[i][2] != NULL, false, false, false);
 }
 
-static bool fan_ok(const rqt *q, fan *f)
+static bool fan_ok(const rqt *q, fan *f, bool probe)
 {
-    for (int full = 0; full < 2; full++)
+    for (int full = !probe; full < 2; full++)
         for (int i = 0; i < 4; i++)
             if (!fan_side(q, f, i, full))
                 return false;
@@ -700,9 +710,9 @@ static unsigned fan_need_of(const rqt *q, fan *f, bool full)
  * asks for them): the sides whose triangle fails without its midpoint,
  * when they can have one, are no more than two, and pass split at it; 0
  * when there is no such set. Called after fan_ok failed. */
-static unsigned fan_need(const rqt *q, fan *f)
+static unsigned fan_need(const rqt *q, fan *f, bool probe)
 {
-    return fan_need_of(q, f, false) ? fan_need_of(q, f, true) : 0;
+    return !probe || fan_need_of(q, f, false) ? fan_need_of(q, f, true) : 0;
 }
 
 /* n asks for the midpoints of the sides in need: the node of its level
@@ -768,17 +778,20 @@ static verdict judge(const rqt *q, rnode n)
     int first = 0;
     if (centred)
         first = fabs(centre.z - 0.5 * (c.sw.z + c.ne.z)) <= fabs(centre.z - 0.5 * (c.se.z + c.nw.z)) ? 0 : 1;
+    /* (halves probed first only in nodes big enough for a probe) */
+    bool probe = b.x1 - b.x0 >= PROBE_MIN && b.y1 - b.y0 >= PROBE_MIN;
     signed char memo[2][2]; /* halves' variants, shared with the sets of midpoints below */
+    halves hv[2] = {diag_halves(&b, &c, 0), diag_halves(&b, &c, 1)};
     memset(memo, -1, sizeof memo);
     for (int t = 0; t < 2; t++) {
         int d = first ^ t;
-        if (diag_ok_v(q, &b, &c, d, 0, memo))
+        if (diag_ok_v(q, &hv[d], 0, memo[d], probe))
             return (verdict){1, (unsigned char)d, 0, 0};
     }
     /* four triangles from the centre: half a level between the two
      * triangles and the four children */
     fan f = fan_of(&b, &c, centre);
-    if (centred && fan_ok(q, &f))
+    if (centred && fan_ok(q, &f, probe))
         return (verdict){1, 0, 1, 0};
     /* two triangles with the midpoints of one or two sides, which the
      * neighbours there (of this level: they allow any midpoint) share */
@@ -789,14 +802,14 @@ static verdict judge(const rqt *q, rnode n)
             continue;
         for (int t = 0; t < 2; t++) {
             int d = first ^ t;
-            if (diag_ok_v(q, &b, &c, d, sets[k], memo))
+            if (diag_ok_v(q, &hv[d], sets[k], memo[d], probe))
                 return (verdict){1, (unsigned char)d, 0, (unsigned char)sets[k]};
         }
     }
     /* the fan with one or two midpoints asked for (6 or 8 triangles with
      * the neighbours' share, against 8 or more for a split) */
     unsigned need;
-    if (centred && (need = fan_need(q, &f)) != 0)
+    if (centred && (need = fan_need(q, &f, probe)) != 0)
         return (verdict){1, 0, 1, (unsigned char)need};
     return no;
 }
