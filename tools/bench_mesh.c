@@ -9,6 +9,9 @@
 #include "bench.h"
 
 #include <cjson/cJSON.h>
+#ifdef __GLIBC__
+#include <malloc.h> /* malloc_trim */
+#endif
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -102,6 +105,13 @@ static row one(const tsr_heightfield *src, tsr_tin_method m, double e, bool no_f
         o.block = block;
         o.threads = block == UINT32_MAX ? 1 : bench_threads;
         tsr_error err;
+#ifdef __GLIBC__
+        /* each run as in a fresh process: the heap's free pages go back to
+         * the system, so the run faults its pages in as `tessera mesh`
+         * does (else whether a repeat finds them mapped depends on what ran
+         * before it) */
+        malloc_trim(0);
+#endif
         double t0 = cli_now();
         tsr_status st = tsr_terrain_mesh(hf, &o, &mesh, NULL, &err);
         double secs = cli_now() - t0;
