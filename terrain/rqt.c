@@ -391,6 +391,14 @@ static TSR_ALWAYS_INLINE unsigned half_ok_body(const rqt *q, vtx a, vtx b, vtx c
             continue;
         }
         den[n] = dy > 0 ? dy : -dy;
+        if (dx == 0 || dx == den[n] || dx == -den[n]) {
+            /* upright or at 45 degrees, as every edge of an unclipped
+             * node's triangles: whole columns a row, no division */
+            step_q[n] = dx == 0 ? 0 : dx > 0 ? 1 : -1;
+            quo[n] = step_q[n] * (j0 - u->j);
+            rem[n] = 0;
+            continue;
+        }
         int64_t num = dx * (j0 - u->j);
         quo[n] = floor_div(num, den[n]);
         rem[n] = num - quo[n] * den[n];
@@ -1134,8 +1142,8 @@ static tsr_status emit_cut(rqt *q, const tsr_heightfield *hf, tsr_mesh *m, uint6
     /* dense: up to 2^25 samples (a 4097^2 terrain), a vertex for at most
      * 16 samples (filling the array costs more than the sparse walks) */
     if (lattice <= (1u << 25) && lattice <= 16 * vertices) {
-        if (tsr_mesh_reserve(m, (uint32_t)vertices, 0) != TSR_OK ||
-            !(e.dense = tsr_alloc(q->a, (size_t)lattice * sizeof *e.dense)))
+        if (tsr_mesh_reserve_dense(m, (uint32_t)vertices, 0) != TSR_OK ||
+            !(e.dense = tsr_alloc_dense(q->a, (size_t)lattice * sizeof *e.dense)))
             return TSR_ERR_NOMEM;
         memset(e.dense, 0xff, (size_t)lattice * sizeof *e.dense);
         walk(&e, (rnode){0, 0, 0});
@@ -1152,7 +1160,7 @@ static tsr_status emit_cut(rqt *q, const tsr_heightfield *hf, tsr_mesh *m, uint6
         e.rank[w] = (uint32_t)n;
         n += (uint64_t)__builtin_popcountll(e.bits[w]);
     }
-    if (n >= UINT32_MAX || tsr_mesh_reserve(m, (uint32_t)n, 0) != TSR_OK)
+    if (n >= UINT32_MAX || tsr_mesh_reserve_dense(m, (uint32_t)n, 0) != TSR_OK)
         return TSR_ERR_NOMEM;
     for (uint64_t w = 0; w < words; w++)
         for (uint64_t b = e.bits[w]; b; b &= b - 1) {
@@ -1201,7 +1209,7 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, double range, bo
         q.words[l] = ((size_t)q.nx[l] * q.ny[l] + 63) / 64;
         bytes += 7 * q.words[l] * sizeof(uint64_t) + (ahead ? q.words[l] * 64 : 0);
     }
-    unsigned char *arena = q.arena = tsr_alloc(q.a, bytes);
+    unsigned char *arena = q.arena = tsr_alloc_dense(q.a, bytes);
     if (!arena)
         return tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
     for (uint32_t l = 0; l < q.levels; l++) {
@@ -1239,7 +1247,7 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, double range, bo
          * out), and by Euler about half as many vertices plus the border
          * (counted exactly for a sparse mesh) */
         uint64_t nt = 2 * q.leaves + 2 * q.fans + q.mids + q.vols, nv = nt / 2 + 2 * (uint64_t)(q.cx + q.cy) + 4096;
-        if (nt < UINT32_MAX / 2 && tsr_mesh_reserve(mesh, 0, (uint32_t)nt) != TSR_OK) {
+        if (nt < UINT32_MAX / 2 && tsr_mesh_reserve_dense(mesh, 0, (uint32_t)nt) != TSR_OK) {
             st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
             goto done;
         }

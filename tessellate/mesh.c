@@ -26,27 +26,36 @@ void tsr_mesh_free(tsr_mesh *m)
     m->attributes = attributes;
 }
 
-static bool grow(const tsr_allocator *a, void **p, size_t count, size_t elem)
+static bool grow(const tsr_allocator *a, void **p, size_t count, size_t elem, bool dense)
 {
-    void *q = tsr_realloc(a, *p, count * elem);
+    void *q = !*p && dense ? tsr_alloc_dense(a, count * elem) : tsr_realloc(a, *p, count * elem);
     if (!q)
         return false;
     *p = q;
     return true;
 }
 
-tsr_status tsr_mesh_reserve(tsr_mesh *m, uint32_t vertices, uint32_t triangles)
+static tsr_status reserve(tsr_mesh *m, uint32_t vertices, uint32_t triangles, bool dense)
 {
     const tsr_allocator *a = m->alloc.realloc ? &m->alloc : NULL;
+    /* dense: arrays holding nothing yet are made anew rather than grown */
+    if (dense && m->vertex_count == 0 && vertices > m->vertex_capacity) {
+        tsr_free(a, m->positions), tsr_free(a, m->normals), tsr_free(a, m->uvs);
+        m->positions = m->normals = m->uvs = NULL;
+    }
+    if (dense && m->triangle_count == 0 && triangles > m->triangle_capacity) {
+        tsr_free(a, m->indices);
+        m->indices = NULL;
+    }
     if (vertices > m->vertex_capacity || !m->positions) {
         size_t cap = vertices > m->vertex_capacity ? vertices : m->vertex_capacity;
         if (cap == 0)
             cap = 16;
-        if (!grow(a, (void **)&m->positions, cap, 3 * sizeof(float)))
+        if (!grow(a, (void **)&m->positions, cap, 3 * sizeof(float), dense))
             return TSR_ERR_NOMEM;
-        if ((m->attributes & TSR_MESH_NORMALS) && !grow(a, (void **)&m->normals, cap, 3 * sizeof(float)))
+        if ((m->attributes & TSR_MESH_NORMALS) && !grow(a, (void **)&m->normals, cap, 3 * sizeof(float), dense))
             return TSR_ERR_NOMEM;
-        if ((m->attributes & TSR_MESH_UVS) && !grow(a, (void **)&m->uvs, cap, 2 * sizeof(float)))
+        if ((m->attributes & TSR_MESH_UVS) && !grow(a, (void **)&m->uvs, cap, 2 * sizeof(float), dense))
             return TSR_ERR_NOMEM;
         m->vertex_capacity = (uint32_t)cap;
     }
@@ -54,11 +63,21 @@ tsr_status tsr_mesh_reserve(tsr_mesh *m, uint32_t vertices, uint32_t triangles)
         size_t cap = triangles > m->triangle_capacity ? triangles : m->triangle_capacity;
         if (cap == 0)
             cap = 16;
-        if (!grow(a, (void **)&m->indices, cap, 3 * sizeof(uint32_t)))
+        if (!grow(a, (void **)&m->indices, cap, 3 * sizeof(uint32_t), dense))
             return TSR_ERR_NOMEM;
         m->triangle_capacity = (uint32_t)cap;
     }
     return TSR_OK;
+}
+
+tsr_status tsr_mesh_reserve(tsr_mesh *m, uint32_t vertices, uint32_t triangles)
+{
+    return reserve(m, vertices, triangles, false);
+}
+
+tsr_status tsr_mesh_reserve_dense(tsr_mesh *m, uint32_t vertices, uint32_t triangles)
+{
+    return reserve(m, vertices, triangles, true);
 }
 
 uint32_t tsr_mesh_add_vertex(tsr_mesh *m, const float p[3], const float *n, const float *uv)

@@ -48,8 +48,9 @@ tsr_status tsr_error_set(tsr_error *err, tsr_status status, const char *fmt, ...
     return status;
 }
 
-/* The default allocator. Blocks of 8 MiB and more (pyramids, heightfields,
- * meshes) are mapped and populated at once: on virtual machines a
+/* The default allocator. Blocks of 8 MiB and more (pyramids,
+ * heightfields, meshes), and from 1 MiB blocks made to be written at once
+ * (tsr_alloc_dense), are mapped and populated at once: on virtual machines a
  * first-touch page fault can cost ~10 us per 4 KiB page, which made
  * faults, not work, dominate the pyramid build. Where the kernel allows,
  * the mapping asks for transparent huge pages first and is then populated
@@ -61,10 +62,16 @@ tsr_status tsr_error_set(tsr_error *err, tsr_status status, const char *fmt, ...
 typedef struct block_header {
     size_t size;   /* usable bytes */
     size_t mapped; /* mapping length when mmap'd, else 0 */
-    size_t pad[2]; /* keeps the user pointer 32-byte aligned */
+    size_t pad[2]; /* the user pointer: 32-byte aligned in a mapping, as malloc's (16) otherwise */
 } block_header;
 
 #define BIG_BLOCK ((size_t)8 << 20)
+/* A new block its caller will write at once (tsr_alloc_dense) is mapped
+ * from this size on, saving a fault per 4 KiB page; others stay with
+ * malloc up to BIG_BLOCK (mapping and populating every new block from 1
+ * MiB made the patch tessellator 1.5x slower: its big tables are mostly
+ * empty, and blocks freed and made again per run lost the heap's reuse). */
+#define MEDIUM_BLOCK ((size_t)1 << 20)
 
 static void *map_populated(size_t len)
 {
@@ -84,12 +91,13 @@ static void *map_populated(size_t len)
     return p == MAP_FAILED ? NULL : p;
 }
 
-static void *block_new(size_t size)
+/* A block of size bytes, mapped from map_from on. */
+static void *block_new(size_t size, size_t map_from)
 {
     if (size > SIZE_MAX - sizeof(block_header) - 4096)
         return NULL;
     block_header *h;
-    if (size >= BIG_BLOCK) {
+    if (size >= map_from) {
         size_t len = (size + sizeof *h + 4095) & ~(size_t)4095;
         void *m = map_populated(len);
         if (!m)
@@ -124,7 +132,7 @@ static void *default_realloc(void *user, void *ptr, size_t size)
         return NULL;
     }
     if (!ptr)
-        return block_new(size);
+        return block_new(size, BIG_BLOCK);
     block_header *h = (block_header *)ptr - 1;
     if (!h->mapped && size < BIG_BLOCK) {
         block_header *n = realloc(h, sizeof *n + size);
@@ -133,11 +141,31 @@ static void *default_realloc(void *user, void *ptr, size_t size)
         n->size = size;
         return n + 1;
     }
-    if (h->mapped && size + sizeof *h <= h->mapped && size >= BIG_BLOCK / 2) {
+    if (h->mapped && size + sizeof *h <= h->mapped && size >= h->mapped / 2) {
         h->size = size; /* fits in the mapping */
         return ptr;
     }
-    void *q = block_new(size);
+#ifdef MREMAP_MAYMOVE
+    if (h->mapped && size > h->size) { /* grown in the page tables, not copied */
+        size_t len = (size + sizeof *h + 4095) & ~(size_t)4095;
+        void *m = mremap(h, h->mapped, len, MREMAP_MAYMOVE);
+        if (m != MAP_FAILED) {
+            char *tail = (char *)m + ((block_header *)m)->mapped;
+            size_t more = len - ((block_header *)m)->mapped;
+#if defined(MADV_HUGEPAGE) && defined(MADV_POPULATE_WRITE)
+            (void)madvise(tail, more, MADV_HUGEPAGE);
+            (void)madvise(tail, more, MADV_POPULATE_WRITE); /* (else faulted as written) */
+#else
+            (void)tail, (void)more;
+#endif
+            h = m;
+            h->mapped = len;
+            h->size = size;
+            return h + 1;
+        }
+    }
+#endif
+    void *q = block_new(size, BIG_BLOCK);
     if (!q)
         return NULL;
     memcpy(q, ptr, h->size < size ? h->size : size);
@@ -150,6 +178,13 @@ void *tsr_alloc(const tsr_allocator *a, size_t size)
     if (size == 0)
         size = 1;
     return a && a->realloc ? a->realloc(a->user, NULL, size) : default_realloc(NULL, NULL, size);
+}
+
+void *tsr_alloc_dense(const tsr_allocator *a, size_t size)
+{
+    if (size == 0)
+        size = 1;
+    return a && a->realloc ? a->realloc(a->user, NULL, size) : block_new(size, MEDIUM_BLOCK);
 }
 
 void *tsr_realloc(const tsr_allocator *a, void *ptr, size_t size)

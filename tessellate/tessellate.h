@@ -76,6 +76,12 @@ typedef struct tsr_allocator {
 
 void *tsr_alloc(const tsr_allocator *a, size_t size);
 void *tsr_realloc(const tsr_allocator *a, void *ptr, size_t size);
+/* As tsr_alloc, for a block the caller will write all of at once (a mesh
+ * reserved to the size it will have, a table it clears first): the
+ * default allocator maps such a block with its pages from 1 MiB on (one
+ * fault per 4 KiB saved; it does so for every block from 8 MiB). Freed and
+ * resized as any other. */
+void *tsr_alloc_dense(const tsr_allocator *a, size_t size);
 void tsr_free(const tsr_allocator *a, void *ptr);
 
 /* The processors this process may run on: its CPU affinity (a Slurm job's
@@ -129,6 +135,9 @@ void tsr_mesh_init(tsr_mesh *m, unsigned attributes, const tsr_allocator *alloc)
 void tsr_mesh_free(tsr_mesh *m);
 /* Grows capacity to at least the counts given (never shrinks). */
 tsr_status tsr_mesh_reserve(tsr_mesh *m, uint32_t vertices, uint32_t triangles);
+/* The same, for a mesh that will fill what it reserves now: an array
+ * made here (not grown) comes from tsr_alloc_dense. */
+tsr_status tsr_mesh_reserve_dense(tsr_mesh *m, uint32_t vertices, uint32_t triangles);
 /* Appends a vertex (normal and uv may be NULL, read only when the mesh
  * has them) and returns its index, or UINT32_MAX when out of memory. */
 uint32_t tsr_mesh_add_vertex(tsr_mesh *m, const float p[3], const float *n, const float *uv);

@@ -283,6 +283,65 @@ TEST(cpu_quota_text)
                   tsr__cpu_quota(cases[k].text), cases[k].cpus);
 }
 
+/* The default allocator's three kinds of block (malloc'd, mapped when new
+ * from 1 MiB, mapped from 8 MiB) keep their contents through every growth
+ * and shrink between kinds (a mapped block grows in place or by mremap),
+ * come back aligned to 16 bytes (malloc's) at least, and can be written to
+ * the last byte; so do blocks from tsr_alloc_dense. A mesh reserved dense
+ * after a small reserve (its arrays made anew) keeps what it holds. */
+TEST(default_allocator_kinds)
+{
+    static const size_t sizes[] = {24, 4000, 700000, (size_t)1 << 20, 3000000, (size_t)9 << 20, 5000000, 100, 40 << 20,
+                                   2 << 20, 1};
+    size_t n = sizeof sizes / sizeof sizes[0];
+    /* a block made at each size, then grown or shrunk through the others */
+    for (size_t start = 0; start < 2 * n; start++) {
+        size_t have = sizes[start % n];
+        /* (the second round's first blocks from tsr_alloc_dense) */
+        unsigned char *p = start < n ? tsr_alloc(NULL, have) : tsr_alloc_dense(NULL, have);
+        CHECK_MSG(p && ((uintptr_t)p & 15) == 0, "alloc %zu", have);
+        if (!p)
+            continue;
+        for (size_t i = 0; i < have; i++)
+            p[i] = (unsigned char)(i * 7 + start);
+        for (size_t k = 1; k < n; k++) {
+            size_t want = sizes[(start + k) % n];
+            unsigned char *q = tsr_realloc(NULL, p, want);
+            CHECK_MSG(q && ((uintptr_t)q & 15) == 0, "realloc %zu -> %zu", have, want);
+            if (!q)
+                break;
+            size_t keep = have < want ? have : want, bad = 0;
+            for (size_t i = 0; i < keep; i++)
+                bad += q[i] != (unsigned char)(i * 7 + start);
+            CHECK_MSG(bad == 0, "realloc %zu -> %zu (start %zu): %zu bytes changed", have, want, start, bad);
+            for (size_t i = keep; i < want; i++)
+                q[i] = (unsigned char)(i * 7 + start);
+            p = q;
+            have = want;
+        }
+        tsr_free(NULL, p);
+    }
+    tsr_mesh m;
+    tsr_mesh_init(&m, TSR_MESH_NORMALS, NULL);
+    CHECK(tsr_mesh_reserve(&m, 4, 4) == TSR_OK && m.vertex_capacity == 4 && m.triangle_capacity == 4);
+    CHECK(tsr_mesh_reserve_dense(&m, 200000, 300000) == TSR_OK && m.vertex_capacity == 200000 &&
+          m.triangle_capacity == 300000);
+    for (uint32_t i = 0; i < 200000; i++) {
+        float p[3] = {(float)i, 1, 2}, nn[3] = {0, 0, 1};
+        CHECK(tsr_mesh_add_vertex(&m, p, nn, NULL) == i);
+    }
+    for (uint32_t i = 0; i + 2 < 200000; i += 2)
+        tsr_mesh_add_triangle(&m, i, i + 1, i + 2);
+    CHECK(tsr_mesh_reserve_dense(&m, 400000, 600000) == TSR_OK); /* (grown: it holds vertices now) */
+    bool same = m.vertex_count == 200000 && m.triangle_count == 99999;
+    for (uint32_t i = 0; same && i < m.vertex_count; i++)
+        same = m.positions[3 * i] == (float)i && m.normals[3 * i + 2] == 1;
+    for (uint32_t t = 0; same && t < m.triangle_count; t++)
+        same = m.indices[3 * t] == 2 * t && m.indices[3 * t + 2] == 2 * t + 2;
+    CHECK_MSG(same, "the mesh changed when reserved again");
+    tsr_mesh_free(&m);
+}
+
 /* Writes text to root/rel, making its folders. */
 static void put_file(const char *root, const char *rel, const char *text)
 {
@@ -362,4 +421,4 @@ TEST(cgroup_cpu_limits)
 TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing),
           T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced),
           T(keymap_clear_keeps_room), T(cpu_count_follows_affinity), T(cpu_quota_text),
-          T(cgroup_cpu_limits))
+          T(cgroup_cpu_limits), T(default_allocator_kinds))
