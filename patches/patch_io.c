@@ -453,7 +453,7 @@ static tsr_status finish_set(builder *b, const lexer *L, tsr_patch_set *out)
     out->num_skipped = b->skipped, out->first_skipped_line = b->first_skipped;
     out->num_polygons = b->polygons, out->first_polygon_line = b->first_polygon;
     out->values = b->values.data, out->num_values = b->values.n;
-    out->alloc = a ? *a : (tsr_allocator){NULL, NULL};
+    out->alloc = a ? *a : (tsr_allocator){NULL, NULL, NULL};
     b->loops.data = b->segments.data = b->values.data = NULL;
     vec_free(a, &b->patches);
     vec_free(a, &b->curves);
@@ -1396,7 +1396,7 @@ tsr_status tsr_cage_parse(const void *data, size_t size, const char *name, const
         memset(out, 0, sizeof *out);
         return s;
     }
-    out->alloc = alloc ? *alloc : (tsr_allocator){NULL, NULL};
+    out->alloc = alloc ? *alloc : (tsr_allocator){NULL, NULL, NULL};
     out->num_points = (uint32_t)(c.points.n / 3), out->points = c.points.data;
     out->num_faces = (uint32_t)c.face_sizes.n, out->face_sizes = c.face_sizes.data;
     out->num_face_verts = (uint32_t)c.face_verts.n, out->face_verts = c.face_verts.data;

@@ -347,7 +347,7 @@ tsr_status create(const tsr_cage *c, tsr_subd_scheme scheme, const tsr_allocator
         return tsr_error_set(err, TSR_ERR_TOO_LARGE, "subdivision cage: %llu face vertices exceed OpenSubdiv's limits",
                              (unsigned long long)total);
 
-    tsr_allocator a = alloc ? *alloc : tsr_allocator{nullptr, nullptr};
+    tsr_allocator a = alloc ? *alloc : tsr_allocator{nullptr, nullptr, nullptr};
     Alloc<uint32_t> ua(a);
     Vec<uint32_t> valence(c->num_points, 0, ua);
     {

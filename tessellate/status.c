@@ -184,7 +184,9 @@ void *tsr_alloc_dense(const tsr_allocator *a, size_t size)
 {
     if (size == 0)
         size = 1;
-    return a && a->realloc ? a->realloc(a->user, NULL, size) : block_new(size, MEDIUM_BLOCK);
+    if (a && a->realloc)
+        return a->alloc_dense ? a->alloc_dense(a->user, size) : a->realloc(a->user, NULL, size);
+    return block_new(size, MEDIUM_BLOCK);
 }
 
 void *tsr_realloc(const tsr_allocator *a, void *ptr, size_t size)

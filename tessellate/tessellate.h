@@ -68,10 +68,14 @@ tsr_status tsr_error_set(tsr_error *err, tsr_status status, const char *fmt, ...
 
 /* One function in the manner of Lua's lua_Alloc: size 0 frees ptr and
  * returns NULL; otherwise it behaves like realloc (ptr NULL allocates).
- * A NULL tsr_allocator pointer anywhere means the C library's. */
+ * A NULL tsr_allocator pointer anywhere means the library's default (the
+ * C library's, with big blocks mapped at once). alloc_dense (optional,
+ * NULL: realloc(user, NULL, size)) makes a block the caller will write
+ * all of at once (tsr_alloc_dense), to be resized and freed by realloc. */
 typedef struct tsr_allocator {
     void *(*realloc)(void *user, void *ptr, size_t size);
     void *user;
+    void *(*alloc_dense)(void *user, size_t size);
 } tsr_allocator;
 
 void *tsr_alloc(const tsr_allocator *a, size_t size);

@@ -39,9 +39,26 @@ static void *counting_realloc(void *user, void *ptr, size_t size)
     return p + PREFIX;
 }
 
+static void *counting_alloc_dense(void *user, size_t size)
+{
+    bench_counting *c = user;
+    if (size > SIZE_MAX - PREFIX * sizeof(size_t))
+        return NULL;
+    size_t *p = tsr_alloc_dense(NULL, size + PREFIX * sizeof(size_t));
+    if (!p)
+        return NULL;
+    p[0] = size;
+    pthread_mutex_lock(&counting_lock);
+    c->now += size;
+    if (c->now > c->peak)
+        c->peak = c->now;
+    pthread_mutex_unlock(&counting_lock);
+    return p + PREFIX;
+}
+
 tsr_allocator bench_counting_allocator(bench_counting *c)
 {
-    return (tsr_allocator){counting_realloc, c};
+    return (tsr_allocator){counting_realloc, c, counting_alloc_dense};
 }
 
 int bench_cmp_double(const void *a, const void *b)

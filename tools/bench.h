@@ -10,10 +10,10 @@ typedef struct bench_counting {
     size_t now, peak;
 } bench_counting;
 
-/* An allocator over the library's default one (tsr_realloc with no
- * allocator: what the tools use, big blocks mapped with their pages at
- * once) that adds every live byte to c->now and keeps the maximum in
- * c->peak (c must outlive every block). */
+/* An allocator over the library's default one (tsr_realloc and
+ * tsr_alloc_dense with no allocator: what the tools use, big blocks mapped
+ * with their pages at once) that adds every live byte to c->now and keeps
+ * the maximum in c->peak (c must outlive every block). */
 tsr_allocator bench_counting_allocator(bench_counting *c);
 
 /* qsort's comparison of doubles, ascending. */

@@ -52,7 +52,7 @@ TEST(data_teapot_loads)
     if (!teapot_path(path, sizeof path))
         SKIP("no shared data folder with patches/teapot.bpt (set TESSERA_DATA)");
     check_alloc c = {0};
-    tsr_allocator al = {check_realloc, &c};
+    tsr_allocator al = {check_realloc, &c, NULL};
     tsr_patch_set s;
     tsr_error e = {0};
     CHECK_MSG(tsr_patch_set_load(path, TSR_PATCH_FORMAT_UNKNOWN, &al, &s, &e) == TSR_OK, "%s", e.message);
@@ -206,7 +206,7 @@ TEST(obj_freeform_trimmed)
         return;
     const char *path = write_temp(dir, "cyl.obj", freeform_obj);
     check_alloc c = {0};
-    tsr_allocator al = {check_realloc, &c};
+    tsr_allocator al = {check_realloc, &c, NULL};
     tsr_patch_set s;
     tsr_error e = {0};
     CHECK_MSG(tsr_patch_set_load(path, TSR_PATCH_FORMAT_UNKNOWN, &al, &s, &e) == TSR_OK, "%s", e.message);
@@ -393,7 +393,7 @@ TEST(data_osd_cages_load)
         char p[10000];
         snprintf(p, sizeof p, "%s/%s", osd, de->d_name);
         check_alloc cnt = {0};
-        tsr_allocator al = {check_realloc, &cnt};
+        tsr_allocator al = {check_realloc, &cnt, NULL};
         tsr_cage c;
         tsr_error e = {0};
         CHECK_MSG(tsr_cage_load(p, &al, &c, &e) == TSR_OK, "%s", e.message);
@@ -625,7 +625,7 @@ TEST(bad_files_name_the_line)
         if (!strcmp(b->name, "cage_binary_bytes"))
             len = 7; /* a NUL inside */
         check_alloc c = {0};
-        tsr_allocator al = {check_realloc, &c};
+        tsr_allocator al = {check_realloc, &c, NULL};
         tsr_error e = {0};
         tsr_status st;
         if (b->r == CAGE) {

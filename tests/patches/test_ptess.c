@@ -596,7 +596,7 @@ TEST(quarter_cylinder_error)
         return;
     }
     check_alloc lc = {0};
-    tsr_allocator al = {check_realloc, &lc};
+    tsr_allocator al = {check_realloc, &lc, NULL};
     tsr_error e = {0};
     tsr_status st = tsr_pmodel_from_set(&set, &al, &m, &e);
     CHECK_MSG(st == TSR_OK && m, "%s", e.message);
@@ -2897,7 +2897,7 @@ static bool failing_run(const char *what, const tsr_pmodel *m, const tsr_ptess_o
                         const tsr_ptess_result *ref)
 {
     tsr_error e = {0};
-    tsr_allocator al = {check_realloc, &f};
+    tsr_allocator al = {check_realloc, &f, NULL};
     tsr_ptess_result r;
     tsr_status st = tsr_ptess_run(m, o, &al, &r, &e);
     char plan[96];
@@ -2931,7 +2931,7 @@ static void check_allocation_failures(const char *what, const tsr_pmodel *m, dou
         o.max_error = E;
         o.normals = normals;
         check_alloc f = {0};
-        tsr_allocator al = {check_realloc, &f};
+        tsr_allocator al = {check_realloc, &f, NULL};
         tsr_ptess_result ref;
         CHECK(tsr_ptess_run(m, &o, &al, &ref, &e) == TSR_OK);
         long calls = f.calls;
@@ -2962,12 +2962,12 @@ static void check_allocation_failures(const char *what, const tsr_pmodel *m, dou
         /* the crease normals' copy: NOMEM and nothing left, or the same copy */
         for (int sticky = 0; normals && sticky < 2; sticky++) {
             check_alloc g = {0};
-            tsr_allocator ga = {check_realloc, &g};
+            tsr_allocator ga = {check_realloc, &g, NULL};
             tsr_mesh want;
             CHECK(tsr_ptess_crease_normals(m, &ref, 1, &ga, &want, NULL, &e) == TSR_OK);
             for (long k = 1; k <= g.calls; k++) {
                 check_alloc h = {.fail_at = k, .sticky = sticky};
-                tsr_allocator ha = {check_realloc, &h};
+                tsr_allocator ha = {check_realloc, &h, NULL};
                 tsr_mesh got;
                 tsr_status st = tsr_ptess_crease_normals(m, &ref, 1, &ha, &got, NULL, &e);
                 CHECK_MSG(st == TSR_ERR_NOMEM || (st == TSR_OK && got.vertex_count == want.vertex_count &&
@@ -3719,7 +3719,7 @@ TEST(small_faces_small_memory)
         tsr_pmodel_get_info(m, &info);
         for (double frac = 3e-3; frac >= 0.9e-3; frac /= 3) {
             byte_count bc = {0, 0};
-            tsr_allocator al = {count_realloc, &bc};
+            tsr_allocator al = {count_realloc, &bc, NULL};
             tsr_ptess_options o = {0};
             o.max_error = frac * dist3(info.lo, info.hi);
             tsr_ptess_result r;
@@ -3774,7 +3774,7 @@ TEST(measure_threads_same_figures)
         if (run_ptess(m, &o, &r)) {
             tsr_ptess_measure_result a, c;
             check_alloc f = {0};
-            tsr_allocator al = {check_realloc, &f};
+            tsr_allocator al = {check_realloc, &f, NULL};
             CHECK(tsr_ptess_measure(m, &r, 32, NULL, true, NULL, &a) == TSR_OK);
             CHECK(tsr_ptess_measure(m, &r, 32, NULL, true, &al, &c) == TSR_OK);
             CHECK_MSG(a.samples >= 32 * 32 * NU * NV, "%llu samples", (unsigned long long)a.samples);
@@ -3805,7 +3805,7 @@ TEST(measure_threads_same_figures)
      * the measurement then keeps to the calling thread) */
     {
         check_alloc f2 = {0};
-        tsr_allocator al2 = {check_realloc, &f2};
+        tsr_allocator al2 = {check_realloc, &f2, NULL};
         tsr_cage c2;
         tsr_subd *s2 = NULL;
         tsr_pmodel *m2 = NULL;

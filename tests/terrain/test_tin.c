@@ -800,6 +800,17 @@ TEST(window_seams)
     tsr_heightfield_destroy(hf);
 }
 
+/* The blocks tsr_terrain_mesh cuts hf into with o (0 when it fails). */
+static uint32_t blocks_of(const tsr_heightfield *hf, const tsr_tin_options *o)
+{
+    tsr_tin_report rep = {0};
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    tsr_status st = tsr_terrain_mesh(hf, o, &m, &rep, NULL);
+    tsr_mesh_free(&m);
+    return st == TSR_OK ? rep.blocks : 0;
+}
+
 /* Blocks (tsr_tin_options.block): the window cut into blocks meshed on
  * their own, on several threads. The welded mesh is within the bound,
  * covers every valid cell, is conforming across the seams (no T-junction,
@@ -845,11 +856,7 @@ TEST(blocks)
     tsr_tin_options o = {0};
     o.max_error = 2;
     o.block = 149;
-    tsr_tin_report rep;
-    tsr_mesh m;
-    tsr_mesh_init(&m, 0, NULL);
-    CHECK(tsr_terrain_mesh(hf, &o, &m, &rep, NULL) == TSR_OK && rep.blocks == 1);
-    tsr_mesh_free(&m);
+    CHECK(blocks_of(hf, &o) == 1);
     /* no-data across the seams. With blocks of 37 cells the 149 x 130
      * cells split into 5 x 4 blocks: column seams at 29, 59, 89, 119 (k
      * 149 / 5), row seams at 32, 65, 97. On one side of a seam only: cells
@@ -876,6 +883,53 @@ TEST(blocks)
     tsr_heightfield_destroy(hf);
 }
 
+/* Meshes a copy of src made through a counting allocator that fails its
+ * k-th call, for every k up to the calls a mesh takes (every one of the
+ * first 40, then about 60 spread over the rest): each run gives TSR_OK or
+ * TSR_ERR_NOMEM with a message and leaves no block behind; with no failure
+ * the mesh is the one made through the default allocator. Returns how
+ * many runs reported TSR_ERR_NOMEM, and the calls in *calls. */
+static uint32_t fail_each_allocation(const tsr_heightfield *src, const tsr_tin_options *o, const char *what,
+                                     long *calls)
+{
+    uint32_t w = tsr_heightfield_width(src), h = tsr_heightfield_height(src);
+    check_alloc f = {0};
+    tsr_allocator al = {check_realloc, &f, NULL};
+    tsr_heightfield *hf = tsr_heightfield_create(w, h, &al);
+    memcpy(tsr_heightfield_data(hf), tsr_heightfield_cdata(src), (size_t)w * h * sizeof(float));
+    tsr_mesh want, m;
+    tsr_mesh_init(&want, 0, NULL);
+    CHECK(tsr_terrain_mesh(src, o, &want, NULL, NULL) == TSR_OK);
+    long live = f.live, start = f.calls;
+    tsr_mesh_init(&m, 0, &al);
+    CHECK(tsr_terrain_mesh(hf, o, &m, NULL, NULL) == TSR_OK);
+    *calls = f.calls - start;
+    CHECK_MSG(m.vertex_count == want.vertex_count && m.triangle_count == want.triangle_count &&
+                  !memcmp(m.positions, want.positions, 3 * sizeof(float) * want.vertex_count) &&
+                  !memcmp(m.indices, want.indices, 3 * sizeof(uint32_t) * want.triangle_count),
+              "%s: the mesh differs from the default allocator's", what);
+    tsr_mesh_free(&m);
+    CHECK(f.live == live);
+    uint32_t nomem = 0;
+    for (long k = 1; k <= *calls; k += k < 40 ? 1 : *calls / 60 + 1) {
+        f.fail_at = f.calls + k;
+        tsr_error err = {0};
+        tsr_mesh_init(&m, 0, &al);
+        tsr_status st = tsr_terrain_mesh(hf, o, &m, NULL, &err);
+        CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "%s, failure at allocation %ld: status %d", what, k, (int)st);
+        if (st == TSR_ERR_NOMEM) {
+            nomem++;
+            CHECK_MSG(err.message[0], "%s, failure at allocation %ld: no message", what, k);
+        }
+        tsr_mesh_free(&m);
+        CHECK_MSG(f.live == live, "%s, failure at allocation %ld: %ld blocks left", what, k, f.live - live);
+    }
+    f.fail_at = 0;
+    tsr_mesh_free(&want);
+    tsr_heightfield_destroy(hf);
+    return nomem;
+}
+
 /* Blocks are welded into the output as they finish (in block order):
  * an allocation failing anywhere (a block's mesher, its crop, a weld's
  * map, the output's growth) gives TSR_ERR_NOMEM with a message and leaves
@@ -884,61 +938,24 @@ TEST(blocks)
 TEST(blocks_allocation_failures)
 {
     tsr_heightfield *src = terrain(150, 131, 9);
-    check_alloc f = {0};
-    tsr_allocator al = {check_realloc, &f};
-    tsr_heightfield *hf = tsr_heightfield_create(150, 131, &al);
-    memcpy(tsr_heightfield_data(hf), tsr_heightfield_cdata(src), 150 * 131 * sizeof(float));
     tsr_tin_options o = {0};
     o.max_error = 2;
     o.block = 37;
     o.threads = 1;
-    tsr_tin_report rep;
-    tsr_mesh want, m;
-    tsr_mesh_init(&want, 0, NULL);
-    CHECK(tsr_terrain_mesh(src, &o, &want, &rep, NULL) == TSR_OK && rep.blocks == 20);
-    long live = f.live, start = f.calls;
-    tsr_mesh_init(&m, 0, &al);
-    CHECK(tsr_terrain_mesh(hf, &o, &m, &rep, NULL) == TSR_OK);
-    long calls = f.calls - start;
-    CHECK(m.vertex_count == want.vertex_count && m.triangle_count == want.triangle_count &&
-          !memcmp(m.positions, want.positions, 3 * sizeof(float) * want.vertex_count) &&
-          !memcmp(m.indices, want.indices, 3 * sizeof(uint32_t) * want.triangle_count));
-    tsr_mesh_free(&m);
-    CHECK(f.live == live && calls > 40);
-    uint32_t nomem = 0;
-    for (long k = 1; k <= calls; k += k < 40 ? 1 : calls / 60 + 1) {
-        f.fail_at = f.calls + k;
-        tsr_error err = {0};
-        tsr_mesh_init(&m, 0, &al);
-        tsr_status st = tsr_terrain_mesh(hf, &o, &m, &rep, &err);
-        CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "failure at allocation %ld: status %d", k, (int)st);
-        if (st == TSR_ERR_NOMEM) {
-            nomem++;
-            CHECK_MSG(err.message[0], "failure at allocation %ld: no message", k);
-        }
-        tsr_mesh_free(&m);
-        CHECK_MSG(f.live == live, "failure at allocation %ld: %ld blocks left", k, f.live - live);
-    }
-    f.fail_at = 0;
-    CHECK_MSG(nomem > 40, "only %u of the failed allocations were reported", nomem);
-    tsr_mesh_free(&want);
-    tsr_heightfield_destroy(hf);
+    CHECK(blocks_of(src, &o) == 20);
+    long calls;
+    uint32_t nomem = fail_each_allocation(src, &o, "blocks", &calls);
+    CHECK_MSG(calls > 40 && nomem > 40, "only %u of the failed allocations were reported (%ld calls)", nomem, calls);
     tsr_heightfield_destroy(src);
 }
 
 /* The quadtree method's allocations (its block of per-node bits, its
- * stack, the mesh) failing one at a time: TSR_ERR_NOMEM with a message
- * and nothing left behind; with none failing, the mesh made through the
- * default allocator, with a bound and with a budget (which selects cuts
- * again in the same block), on one thread and on two (the workers judge
- * only: they allocate nothing). */
+ * stack, the mesh) failing one at a time, as above, with a bound and with
+ * a budget (which selects cuts again in the same block), on one thread and
+ * on two (the workers judge only: they allocate nothing). */
 TEST(quadtree_allocation_failures)
 {
     tsr_heightfield *src = terrain(150, 131, 9);
-    check_alloc f = {0};
-    tsr_allocator al = {check_realloc, &f};
-    tsr_heightfield *hf = tsr_heightfield_create(150, 131, &al);
-    memcpy(tsr_heightfield_data(hf), tsr_heightfield_cdata(src), 150 * 131 * sizeof(float));
     for (int c = 0; c < 4; c++) {
         tsr_tin_options o = {0};
         o.method = TSR_TIN_QUADTREE;
@@ -947,39 +964,13 @@ TEST(quadtree_allocation_failures)
             o.max_error = 2;
         else
             o.max_triangles = 3000;
-        tsr_mesh want, m;
-        tsr_mesh_init(&want, 0, NULL);
-        CHECK(tsr_terrain_mesh(src, &o, &want, NULL, NULL) == TSR_OK);
-        long live = f.live, start = f.calls;
-        tsr_mesh_init(&m, 0, &al);
-        CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, NULL) == TSR_OK);
-        long calls = f.calls - start;
-        CHECK_MSG(m.vertex_count == want.vertex_count && m.triangle_count == want.triangle_count &&
-                      !memcmp(m.positions, want.positions, 3 * sizeof(float) * want.vertex_count) &&
-                      !memcmp(m.indices, want.indices, 3 * sizeof(uint32_t) * want.triangle_count),
-                  "case %d: the mesh differs from the default allocator's", c);
-        tsr_mesh_free(&m);
-        CHECK(f.live == live && calls >= 3);
-        uint32_t nomem = 0;
-        for (long k = 1; k <= calls; k++) {
-            f.fail_at = f.calls + k;
-            tsr_error err = {0};
-            tsr_mesh_init(&m, 0, &al);
-            tsr_status st = tsr_terrain_mesh(hf, &o, &m, NULL, &err);
-            CHECK_MSG(st == TSR_OK || st == TSR_ERR_NOMEM, "case %d, failure at allocation %ld: status %d", c, k,
-                      (int)st);
-            if (st == TSR_ERR_NOMEM) {
-                nomem++;
-                CHECK_MSG(err.message[0], "case %d, failure at allocation %ld: no message", c, k);
-            }
-            tsr_mesh_free(&m);
-            CHECK_MSG(f.live == live, "case %d, failure at allocation %ld: %ld blocks left", c, k, f.live - live);
-        }
-        f.fail_at = 0;
-        CHECK_MSG(nomem >= 3, "case %d: only %u of %ld failed allocations were reported", c, nomem, calls);
-        tsr_mesh_free(&want);
+        char what[32];
+        snprintf(what, sizeof what, "quadtree case %d", c);
+        long calls;
+        uint32_t nomem = fail_each_allocation(src, &o, what, &calls);
+        CHECK_MSG(calls >= 3 && nomem >= 3, "%s: only %u of %ld failed allocations were reported", what, nomem,
+                  calls);
     }
-    tsr_heightfield_destroy(hf);
     tsr_heightfield_destroy(src);
 }
 
@@ -1124,7 +1115,7 @@ TEST(measure_bands_agree_with_brute_force)
     tsr_mesh_free(&m);
     /* one band, its heightfield's allocator failing at the band's scratch */
     check_alloc f = {0};
-    tsr_allocator al = {check_realloc, &f};
+    tsr_allocator al = {check_realloc, &f, NULL};
     tsr_heightfield *small = tsr_heightfield_create(40, 40, &al);
     tsr_heightfield *src = terrain(40, 40, 3);
     memcpy(tsr_heightfield_data(small), tsr_heightfield_cdata(src), 40 * 40 * sizeof(float));

@@ -199,7 +199,7 @@ static void *counting_realloc(void *user, void *p, size_t n)
 
 TEST(custom_allocator_is_used_and_balanced)
 {
-    tsr_allocator a = {counting_realloc, NULL};
+    tsr_allocator a = {counting_realloc, NULL, NULL};
     tsr_mesh m;
     tsr_mesh_init(&m, TSR_MESH_NORMALS, &a);
     float p[3] = {0, 0, 0};
@@ -212,6 +212,39 @@ TEST(custom_allocator_is_used_and_balanced)
     CHECK(counted == 3);
     tsr_mesh_free(&m);
     CHECK(counted == 0);
+}
+
+static size_t dense_calls;
+static void *counting_dense(void *user, size_t n)
+{
+    dense_calls++;
+    return counting_realloc(user, NULL, n);
+}
+
+/* A caller's allocator with alloc_dense gets the blocks made to be
+ * written at once (tsr_alloc_dense, a mesh's reserve_dense), and frees them
+ * through its realloc; without alloc_dense, its realloc makes them. */
+TEST(custom_allocator_dense_blocks)
+{
+    tsr_allocator a = {counting_realloc, NULL, counting_dense}, plain = {counting_realloc, NULL, NULL};
+    size_t before = counted;
+    void *p = tsr_alloc_dense(&a, 5000);
+    CHECK(p && dense_calls == 1 && counted == before + 1);
+    p = tsr_realloc(&a, p, 9000);
+    CHECK(p && dense_calls == 1 && counted == before + 1);
+    tsr_free(&a, p);
+    p = tsr_alloc_dense(&plain, 5000);
+    CHECK(p && dense_calls == 1 && counted == before + 1);
+    tsr_free(&plain, p);
+    tsr_mesh m;
+    tsr_mesh_init(&m, TSR_MESH_NORMALS, &a);
+    CHECK(tsr_mesh_reserve_dense(&m, 1000, 2000) == TSR_OK && dense_calls == 4); /* positions, normals, indices */
+    float q[3] = {0, 0, 0};
+    for (int i = 0; i < 1500; i++) /* (grown by realloc) */
+        CHECK(tsr_mesh_add_vertex(&m, q, q, NULL) == (uint32_t)i);
+    CHECK(dense_calls == 4 && counted == before + 3);
+    tsr_mesh_free(&m);
+    CHECK(counted == before);
 }
 
 /* tsr_keymap_clear empties the map and keeps its room: the same keys go
@@ -421,4 +454,5 @@ TEST(cgroup_cpu_limits)
 TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing),
           T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced),
           T(keymap_clear_keeps_room), T(cpu_count_follows_affinity), T(cpu_quota_text),
-          T(cgroup_cpu_limits), T(default_allocator_kinds))
+          T(cgroup_cpu_limits), T(default_allocator_kinds),
+          T(custom_allocator_dense_blocks))

@@ -1179,7 +1179,7 @@ TEST(allocator_failures)
     tsr_pslg in = {xy, 60, seg, 62, NULL, 0};
     tsr_tri_options o = {.region = TSR_REGION_ENCLOSED};
     check_alloc c = {0};
-    tsr_allocator al = {check_realloc, &c};
+    tsr_allocator al = {check_realloc, &c, NULL};
     tsr_triangulation t;
     const char *why;
     CHECK(tsr__tri_quadtree(&in, &o, &t, &al, &why, NULL) == TSR_OK);
