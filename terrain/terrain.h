@@ -240,7 +240,7 @@ typedef struct tsr_tin_options {
      * once. The blocks depend on the window's size and `block` alone, so
      * the mesh is the same whatever the thread count. block 0: 256;
      * block >= the window's size: one block (the whole window). threads
-     * 0: one per online processor. With a budget (or no bound) the window
+     * 0: tsr_cpu_count(). With a budget (or no bound) the window
      * is one block on one thread: a budget is global. The heightfield's
      * allocator is then called from several threads at once. quadtree
      * (tile_n 0): nodes are tested on up to `threads` threads; the mesh

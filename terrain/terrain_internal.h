@@ -121,7 +121,7 @@ bool tsr_terrain_pick_view(const tsr_terrain *t, pick_view *v);
  * found by bisection up to the height range `range` (file units) and
  * rep->budget_reached set. rep->target_error gets the tolerance used, in
  * world units (h dz). The nodes are tested on up to `threads` threads (0:
- * one per online processor); the mesh is the same whatever the count. */
+ * tsr_cpu_count()); the mesh is the same whatever the count. */
 tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, double range, bool full_border, uint32_t max_tri,
                          uint32_t max_vert, uint32_t threads, tsr_mesh *mesh, tsr_tin_report *rep, tsr_error *err);
 
@@ -156,7 +156,7 @@ tsr_status tsr__budget_tolerance(double lo, double hi, uint64_t budget,
  * (under a lock) until none is left. Where a thread cannot be started,
  * fewer run. */
 void tsr__run_threads(void *(*work)(void *), void *arg, uint32_t threads, uint32_t jobs);
-/* The threads that `threads` asks for (0: one per online processor). */
+/* The threads that `threads` asks for (0: tsr_cpu_count()). */
 uint32_t tsr__thread_count(uint32_t threads);
 
 /* Greyscale Netpbm (P2, P5) read exactly (pnm.c). */
