@@ -69,8 +69,9 @@ typedef struct block_header {
 /* A new block its caller will write at once (tsr_alloc_dense) is mapped
  * from this size on, saving a fault per 4 KiB page; others stay with
  * malloc up to BIG_BLOCK (mapping and populating every new block from 1
- * MiB made the patch tessellator 1.5x slower: its big tables are mostly
- * empty, and blocks freed and made again per run lost the heap's reuse). */
+ * MiB made the patch tessellator 1.5x slower in its bench, whose runs
+ * reuse a warm heap: a few blocks of 1-2 MiB a run were mapped, populated
+ * and unmapped each time instead). */
 #define MEDIUM_BLOCK ((size_t)1 << 20)
 
 static void *map_populated(size_t len)
