@@ -43,8 +43,8 @@
  * ones at once (the nodes near the root, and a leaf's other half); 2x2-cell
  * nodes, the most numerous, in closed form. Per node only bits are kept (split,
  * diagonal, fan, midpoints asked for), plus, on several threads, a byte
- * for the verdict judged ahead (select_cut), all in one block with the
- * emission's bits (its pages mapped at once, not faulted one by one). */
+ * for the verdict judged ahead (select_cut), all in one block (its pages
+ * mapped at once, not faulted one by one). */
 #include "terrain_internal.h"
 
 #include <math.h>
@@ -80,10 +80,7 @@ typedef struct rqt {
      * judged); NULL on one thread */
     unsigned char *verdicts[RQT_MAX_LEVELS];
     uint32_t threads;
-    void *arena; /* the block holding the arrays above and below */
-    uint64_t *ebits; /* the sparse emission's bit per sample, */
-    uint32_t *erank; /* and its marked bits in the words before */
-    size_t ewords;
+    void *arena; /* the block holding the arrays above */
     uint64_t leaves, fans, mids, vols; /* in the cut: leaves, fans among them, midpoints on their sides */
     const tsr_allocator *a;
     bool nomem;
@@ -282,6 +279,28 @@ static TSR_ALWAYS_INLINE void sample_err(const half_k *k, double h, double base,
         mx[v4] = e[v4] > mx[v4] ? e[v4] : mx[v4];
 }
 
+/* Row j's start at column lo: the plane's base (its value minus gx i)
+ * and the barycentric numerators (exact integers) at (lo, j). The probe
+ * and the full scan take the same values from here. */
+typedef struct row_start {
+    double base, na, nb, nc;
+} row_start;
+
+static TSR_ALWAYS_INLINE row_start row_at(const half_k *k, vtx a, vtx b, vtx c, int64_t j, int64_t lo)
+{
+    return (row_start){a.z + k->gy * (double)(j - a.j) - k->gx * (double)a.i,
+                       (double)((c.i - b.i) * (j - b.j) - (c.j - b.j) * (lo - b.i)),
+                       (double)((a.i - c.i) * (j - c.j) - (a.j - c.j) * (lo - c.i)),
+                       (double)((b.i - a.i) * (j - a.j) - (b.j - a.j) * (lo - a.i))};
+}
+
+/* The variants among want whose largest distances mx are within tol. */
+static unsigned within(unsigned want, const double mx[4], double tol)
+{
+    return want & ((mx[0] <= tol ? V_NONE : 0) | (mx[1] <= tol ? V_P : 0) | (mx[2] <= tol ? V_M : 0) |
+                   (mx[3] <= tol ? V_PM : 0));
+}
+
 /* A half is probed (half_probe) when its box is at least PROBE_MIN
  * cells on both sides, at about PROBE_STEPS x PROBE_STEPS samples;
  * PROBED marks a memo holding a probe's answer (memo_probe). */
@@ -361,18 +380,13 @@ static TSR_ALWAYS_INLINE unsigned half_ok_body(const rqt *q, vtx a, vtx b, vtx c
                     hi = lo - 1;
             }
             const float *row = q->h + (size_t)j * q->w;
-            double base = a.z + k.gy * (double)(j - a.j) - k.gx * (double)a.i;
-            double na0 = (double)((c.i - b.i) * (j - b.j) + dna * (lo - b.i));
-            double nb0 = (double)((a.i - c.i) * (j - c.j) + dnb * (lo - c.i));
-            double nc0 = (double)((b.i - a.i) * (j - a.j) + dnc * (lo - a.i));
+            row_start r0 = row_at(&k, a, b, c, j, lo);
+            double base = r0.base, na0 = r0.na, nb0 = r0.nb, nc0 = r0.nc;
             for (int64_t x = si / 2; lo + x <= hi; x += si)
                 sample_err(&k, row[lo + x], base, (double)(lo + x), na0 + (double)dna * (double)x,
                            nb0 + (double)dnb * (double)x, nc0 + (double)dnc * (double)x, mx, &nan);
         }
-        if (nan)
-            return 0;
-        return want & ((mx[0] <= q->tol ? V_NONE : 0) | (mx[1] <= q->tol ? V_P : 0) |
-                       (mx[2] <= q->tol ? V_M : 0) | (mx[3] <= q->tol ? V_PM : 0));
+        return nan ? 0 : within(want, mx, q->tol);
     }
     /* each sloped edge's column at row j: p.i + F(j) bounding the row
      * from above (dy > 0) or p.i - F(j) from below (dy < 0), with F(j) =
@@ -438,10 +452,8 @@ static TSR_ALWAYS_INLINE unsigned half_ok_body(const rqt *q, vtx a, vtx b, vtx c
         }
         if (lo <= hi) {
             const float *row = q->h + (size_t)j * q->w;
-            double base = a.z + k.gy * (double)(j - a.j) - k.gx * (double)a.i;
-            double na0 = (double)((c.i - b.i) * (j - b.j) + dna * (lo - b.i));
-            double nb0 = (double)((a.i - c.i) * (j - c.j) + dnb * (lo - c.i));
-            double nc0 = (double)((b.i - a.i) * (j - a.j) + dnc * (lo - a.i));
+            row_start r0 = row_at(&k, a, b, c, j, lo);
+            double base = r0.base, na0 = r0.na, nb0 = r0.nb, nc0 = r0.nc;
             int64_t n = hi - lo + 1;
 #ifdef TSR_VECTORS
             if (n >= 4) {
@@ -492,8 +504,7 @@ static TSR_ALWAYS_INLINE unsigned half_ok_body(const rqt *q, vtx a, vtx b, vtx c
 #endif
         if (nan)
             return 0;
-        unsigned alive = want & ((mx[0] <= tol ? V_NONE : 0) | (mx[1] <= tol ? V_P : 0) | (mx[2] <= tol ? V_M : 0) |
-                                 (mx[3] <= tol ? V_PM : 0));
+        unsigned alive = within(want, mx, tol);
         if (!alive || j == j1)
             return alive;
     }
@@ -634,6 +645,13 @@ static bool halves_pass(const halves *hv, int h, unsigned ok, unsigned need)
     return half_passes(ok, hv->p[h] != NULL, hv->m[h] != NULL, need & hv->pbit[h], need & hv->mbit[h]);
 }
 
+/* Half h's variants (full: memo_full) or the probe's set (memo_probe). */
+static unsigned diag_half(const rqt *q, const halves *hv, int h, signed char *r, bool full)
+{
+    return full ? memo_full(q, r, *hv->v[h][0], *hv->v[h][1], *hv->v[h][2], hv->p[h], hv->m[h])
+                : memo_probe(q, r, *hv->v[h][0], *hv->v[h][1], *hv->v[h][2], hv->p[h], hv->m[h]);
+}
+
 /* Whether the two triangles of a diagonal's halves hv are within the
  * tolerance with any midpoints, those of the sides in need always there.
  * Each half's variants are kept in memo (memo_probe), as the sets of
@@ -643,12 +661,10 @@ static bool diag_ok_v(const rqt *q, const halves *hv, unsigned need, signed char
 {
     if (probe)
         for (int h = 0; h < 2; h++)
-            if (!halves_pass(hv, h, memo_probe(q, &memo[h], *hv->v[h][0], *hv->v[h][1], *hv->v[h][2], hv->p[h], hv->m[h]),
-                             need))
+            if (!halves_pass(hv, h, diag_half(q, hv, h, &memo[h], false), need))
                 return false;
     for (int h = 0; h < 2; h++)
-        if (!halves_pass(hv, h, memo_full(q, &memo[h], *hv->v[h][0], *hv->v[h][1], *hv->v[h][2], hv->p[h], hv->m[h]),
-                         need))
+        if (!halves_pass(hv, h, diag_half(q, hv, h, &memo[h], true), need))
             return false;
     return true;
 }
@@ -1151,8 +1167,12 @@ static tsr_status emit_cut(rqt *q, const tsr_heightfield *hf, tsr_mesh *m, uint6
         return e.st;
     }
     e.mark = true;
-    e.bits = q->ebits;
-    e.rank = q->erank;
+    e.bits = tsr_alloc_dense(q->a, (size_t)words * sizeof *e.bits);
+    e.rank = tsr_alloc_dense(q->a, (size_t)words * sizeof *e.rank);
+    if (!e.bits || !e.rank) {
+        e.st = TSR_ERR_NOMEM;
+        goto done;
+    }
     memset(e.bits, 0, (size_t)words * sizeof *e.bits);
     walk(&e, (rnode){0, 0, 0});
     uint64_t n = 0;
@@ -1160,8 +1180,10 @@ static tsr_status emit_cut(rqt *q, const tsr_heightfield *hf, tsr_mesh *m, uint6
         e.rank[w] = (uint32_t)n;
         n += (uint64_t)__builtin_popcountll(e.bits[w]);
     }
-    if (n >= UINT32_MAX || tsr_mesh_reserve_dense(m, (uint32_t)n, 0) != TSR_OK)
-        return TSR_ERR_NOMEM;
+    if (n >= UINT32_MAX || tsr_mesh_reserve_dense(m, (uint32_t)n, 0) != TSR_OK) {
+        e.st = TSR_ERR_NOMEM;
+        goto done;
+    }
     for (uint64_t w = 0; w < words; w++)
         for (uint64_t b = e.bits[w]; b; b &= b - 1) {
             uint64_t key = w * 64 + (uint64_t)__builtin_ctzll(b), j = key / cols, i = key - j * cols;
@@ -1170,6 +1192,9 @@ static tsr_status emit_cut(rqt *q, const tsr_heightfield *hf, tsr_mesh *m, uint6
         }
     e.mark = false;
     walk(&e, (rnode){0, 0, 0});
+done:
+    tsr_free(q->a, e.bits);
+    tsr_free(q->a, e.rank);
     return e.st;
 }
 
@@ -1194,17 +1219,14 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, double range, bo
         q.ny[l] = (uint32_t)((q.cy + s - 1) / s);
     }
     tsr_status st = TSR_OK;
-    /* The per-node bits (7 sets a level), with several threads the
+    /* The per-node bits (7 sets a level) and, with several threads, the
      * verdicts judged ahead (a byte per node: a third of a byte per
-     * sample), and the sparse emission's bit and rank per sample, in one
-     * block: the default allocator maps a big one with its pages at once
-     * (huge where the kernel allows), where some twenty blocks of a few
-     * MiB each took a page fault per 4 KiB (on the generated 4097^2 at
-     * 12 m, a third of the time on two threads). */
+     * sample), in one dense block: the default allocator maps it with its
+     * pages at once (huge where the kernel allows), where some twenty
+     * blocks of a few MiB each took a page fault per 4 KiB (on the
+     * generated 4097^2 at 12 m, a third of the time on two threads). */
     bool ahead = tsr__thread_count(threads) > 1 && q.levels > 4;
-    uint64_t lattice = (uint64_t)(q.cx + 1) * (uint64_t)(q.cy + 1);
-    q.ewords = (size_t)((lattice + 63) / 64);
-    size_t bytes = q.ewords * (sizeof(uint64_t) + sizeof(uint32_t));
+    size_t bytes = 0;
     for (uint32_t l = 0; l < q.levels; l++) {
         q.words[l] = ((size_t)q.nx[l] * q.ny[l] + 63) / 64;
         bytes += 7 * q.words[l] * sizeof(uint64_t) + (ahead ? q.words[l] * 64 : 0);
@@ -1223,8 +1245,6 @@ tsr_status tsr__rqt_mesh(const tsr_heightfield *hf, double tol, double range, bo
             arena += n * 8;
         }
     }
-    q.ebits = (uint64_t *)(void *)arena;
-    q.erank = (uint32_t *)(void *)(arena + q.ewords * sizeof(uint64_t));
     if (!select_cut(&q, tol)) {
         st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
         goto done;
