@@ -216,6 +216,12 @@ uint32_t tsr__cpu_quota(const char *text)
     return n > UINT32_MAX ? UINT32_MAX : (uint32_t)n;
 }
 
+/* The tighter of two CPU limits, 0 meaning none. */
+static uint32_t tighter(uint32_t a, uint32_t b)
+{
+    return a && (!b || a < b) ? a : b;
+}
+
 /* The first line of a file, NUL-terminated; false when unreadable. */
 static bool read_line(const char *path, char *buf, size_t size)
 {
@@ -253,8 +259,7 @@ static uint32_t quota_up(const char *base, const char *path, bool v2)
                 n = tsr__cpu_quota(text);
             }
         }
-        if (n && (!best || n < best))
-            best = n;
+        best = tighter(n, best);
         char *slash = strrchr(dir, '/');
         if (!slash || (size_t)(slash - dir) < root)
             break;
@@ -283,8 +288,7 @@ uint32_t tsr__cgroup_cpus(const char *cgroups, const char *root)
         if (!*ctl) { /* at the root (v2 alone) or under unified/ (hybrid) */
             n = quota_up(root, path, true);
             snprintf(base, sizeof base, "%s/unified", root);
-            uint32_t u = quota_up(base, path, true);
-            n = u && (!n || u < n) ? u : n;
+            n = tighter(quota_up(base, path, true), n);
         } else {
             bool cpu = false; /* "cpu" among the comma-separated controllers */
             for (const char *t = ctl; *t;) {
@@ -297,11 +301,10 @@ uint32_t tsr__cgroup_cpus(const char *cgroups, const char *root)
             static const char *const mounts[] = {"cpu", "cpu,cpuacct", "cpuacct,cpu"};
             for (size_t k = 0; k < sizeof mounts / sizeof mounts[0]; k++) {
                 snprintf(base, sizeof base, "%s/%s", root, mounts[k]);
-                uint32_t u = quota_up(base, path, false);
-                n = u && (!n || u < n) ? u : n;
+                n = tighter(quota_up(base, path, false), n);
             }
         }
-        best = n && (!best || n < best) ? n : best;
+        best = tighter(n, best);
     }
     fclose(f);
     return best;
@@ -318,7 +321,7 @@ uint32_t tsr_cpu_count(void)
         n = online > 0 ? (uint32_t)online : 1;
     }
     uint32_t quota = tsr__cgroup_cpus("/proc/self/cgroup", "/sys/fs/cgroup");
-    return quota && quota < n ? quota : n;
+    return tighter(quota, n);
 }
 
 void tsr_free(const tsr_allocator *a, void *ptr)

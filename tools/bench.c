@@ -12,6 +12,21 @@ static pthread_mutex_t counting_lock = PTHREAD_MUTEX_INITIALIZER;
  * default allocator's alignment. */
 enum { PREFIX = 32 / sizeof(size_t) };
 
+/* Block p (NULL: none was made) now holds size bytes where it held old:
+ * its prefix and the counts updated, the user's pointer returned. */
+static void *counted(bench_counting *c, size_t *p, size_t size, size_t old)
+{
+    if (!p)
+        return NULL;
+    p[0] = size;
+    pthread_mutex_lock(&counting_lock);
+    c->now += size - old;
+    if (c->now > c->peak)
+        c->peak = c->now;
+    pthread_mutex_unlock(&counting_lock);
+    return p + PREFIX;
+}
+
 static void *counting_realloc(void *user, void *ptr, size_t size)
 {
     bench_counting *c = user;
@@ -27,33 +42,15 @@ static void *counting_realloc(void *user, void *ptr, size_t size)
     }
     if (size > SIZE_MAX - PREFIX * sizeof(size_t))
         return NULL;
-    size_t *p = tsr_realloc(NULL, ptr ? (size_t *)ptr - PREFIX : NULL, size + PREFIX * sizeof(size_t));
-    if (!p)
-        return NULL;
-    p[0] = size;
-    pthread_mutex_lock(&counting_lock);
-    c->now += size - old;
-    if (c->now > c->peak)
-        c->peak = c->now;
-    pthread_mutex_unlock(&counting_lock);
-    return p + PREFIX;
+    return counted(c, tsr_realloc(NULL, ptr ? (size_t *)ptr - PREFIX : NULL, size + PREFIX * sizeof(size_t)), size,
+                   old);
 }
 
 static void *counting_alloc_dense(void *user, size_t size)
 {
-    bench_counting *c = user;
     if (size > SIZE_MAX - PREFIX * sizeof(size_t))
         return NULL;
-    size_t *p = tsr_alloc_dense(NULL, size + PREFIX * sizeof(size_t));
-    if (!p)
-        return NULL;
-    p[0] = size;
-    pthread_mutex_lock(&counting_lock);
-    c->now += size;
-    if (c->now > c->peak)
-        c->peak = c->now;
-    pthread_mutex_unlock(&counting_lock);
-    return p + PREFIX;
+    return counted(user, tsr_alloc_dense(NULL, size + PREFIX * sizeof(size_t)), size, 0);
 }
 
 tsr_allocator bench_counting_allocator(bench_counting *c)
