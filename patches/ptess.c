@@ -2532,6 +2532,13 @@ typedef struct builder {
     struct pvert *pv;  /* their vertices */
     uint32_t cappv;
     uint8_t *onmask;   /* per tile vertex: bit e set when on the tile's edge e */
+    /* the Bézier piece being emitted: the mesh vertex of each lattice
+     * point inside it (not on its border: no other piece has those), at
+     * the spacing of its finest leaves (UINT32_MAX: none yet); NULL when
+     * such a grid would be too sparse, and the map serves */
+    uint32_t *grid, *grid_mem; /* (grid_mem: the block, grid_cap entries) */
+    size_t grid_cap;
+    uint32_t grid_row, grid_shift, grid_piece;
 } builder;
 
 static uint32_t new_vertex(builder *b, const piece *p, const double pos[3], const double *nrm)
@@ -2637,10 +2644,19 @@ static uint32_t subd_vertex(builder *b, lpoint q, uint32_t qi, const double *pre
  * pre when not NULL (q's own position: the points a link or collapsed edge
  * makes equal differ by rounding only), else evaluated at the canonical
  * point. qi: for a subd piece, q's index in its memo, or UINT32_MAX. */
+static uint32_t bez_vertex(builder *b, lpoint c, const double *pre);
+
 static uint32_t vertex_of(builder *b, lpoint q, const double *pre, uint32_t qi)
 {
     if (b->m->pieces[q.piece].kind == KIND_SUBD)
         return subd_vertex(b, q, qi, pre);
+    uint32_t Z = lattice_size(b->ctx, q.piece);
+    if (b->grid && q.piece == b->grid_piece && q.i > 0 && q.j > 0 && q.i < Z && q.j < Z) { /* its own canonical point */
+        uint32_t *slot = b->grid + (size_t)(q.j >> b->grid_shift) * b->grid_row + (q.i >> b->grid_shift);
+        if (*slot == UINT32_MAX)
+            *slot = bez_vertex(b, q, pre);
+        return *slot;
+    }
     lpoint c;
     if (!canonical(b->m, b->ctx, q, &b->cb, b->a, &c))
         return UINT32_MAX;
@@ -2648,8 +2664,15 @@ static uint32_t vertex_of(builder *b, lpoint q, const double *pre, uint32_t qi)
     uint32_t *slot = tsr_keymap_slot(&b->map, lkey(c), &found, b->a);
     if (!slot)
         return UINT32_MAX;
-    if (found)
-        return *slot;
+    if (!found)
+        *slot = bez_vertex(b, c, pre);
+    return *slot;
+}
+
+/* A new mesh vertex for canonical lattice point c of a Bézier piece: at
+ * pre, else evaluated there (with its normal when the run makes them). */
+static uint32_t bez_vertex(builder *b, lpoint c, const double *pre)
+{
     const piece *p = &b->m->pieces[c.piece];
     bool want_n = b->opt->normals;
     double pos[3], nr[3] = {0, 0, 1};
@@ -2664,8 +2687,7 @@ static uint32_t vertex_of(builder *b, lpoint q, const double *pre, uint32_t qi)
             tsr_patch_eval(&p->bez, s, t, pos, NULL, NULL, nr);
         b->out->evaluations++;
     }
-    *slot = new_vertex(b, p, pos, want_n ? nr : NULL);
-    return *slot;
+    return new_vertex(b, p, pos, want_n ? nr : NULL);
 }
 
 /* The tensor-product sums of tile_positions: per row j the column sums
@@ -2935,6 +2957,35 @@ static bool emit_split(builder *b, uint32_t source, const pvert t[3], const pcha
     return emit_split(b, source, t2, c2);
 }
 
+/* Sets up b->grid for a Bézier piece of lattice size Z with leaves lv:
+ * at the spacing of its finest leaves when that grid has at most 16 times
+ * the points its tiles have (else NULL: the map serves); false when out
+ * of memory. */
+static bool grid_of(builder *b, uint32_t pi, const tsr_qleaf *lv, uint32_t nl, uint32_t Z)
+{
+    const pctx *c = &b->ctx[pi];
+    b->grid_piece = pi;
+    uint32_t deepest = 0, row = c->N + 1;
+    for (uint32_t li = 0; li < nl; li++)
+        deepest = lv[li].node.level > deepest ? lv[li].node.level : deepest;
+    b->grid = NULL;
+    b->grid_shift = c->surf.levels - deepest;
+    b->grid_row = (Z >> b->grid_shift) + 1;
+    size_t n = (size_t)b->grid_row * b->grid_row;
+    if (n > (size_t)16 * nl * row * row || n > ((size_t)1 << 22))
+        return true;
+    if (n > b->grid_cap) {
+        tsr_free(b->a, b->grid_mem);
+        b->grid_cap = 0;
+        if (!(b->grid_mem = tsr_alloc(b->a, n * sizeof *b->grid_mem)))
+            return false;
+        b->grid_cap = n;
+    }
+    b->grid = b->grid_mem;
+    memset(b->grid, 0xff, n * sizeof *b->grid);
+    return true;
+}
+
 static tsr_status emit_piece(builder *b, uint32_t pi, const patcache *pc, uint32_t *local)
 {
     const tsr_tile_patterns *pat = &pc->pat;
@@ -2946,6 +2997,8 @@ static tsr_status emit_piece(builder *b, uint32_t pi, const patcache *pc, uint32
     for (uint32_t j = 0; j <= N; j++)
         for (uint32_t i = 0; i <= N; i++)
             b->onmask[j * row + i] = (uint8_t)tile_onmask(i, j, N);
+    if (p->kind != KIND_SUBD && !grid_of(b, pi, lv, nl, Z))
+        return TSR_ERR_NOMEM;
     for (uint32_t li = 0; li < nl; li++) {
         tsr_qnode n = lv[li].node;
         uint32_t w = N << (c->surf.levels - n.level), step = w / N, x0 = n.x * w, y0 = n.y * w;
@@ -3695,6 +3748,7 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
             continue;
         b.used = pats[ctx[p].N / 2]->used;
         st = emit_piece(&b, p, pats[ctx[p].N / 2], local);
+        b.grid = NULL; /* (a piece's own) */
     }
     /* trimmed sources: the loops sampled finely enough in (u, v) */
     for (uint32_t s = 0; s < m->nsources && st == TSR_OK; s++) {
@@ -3764,6 +3818,7 @@ done:
     tsr_free(a, b.fp);
     tsr_free(a, b.onmask);
     tsr_free(a, b.pv);
+    tsr_free(a, b.grid_mem);
     tsr_keymap_free(&b.map, a);
     tsr_free(a, b.cb.p);
     for (uint32_t p = 0; ctx && p < m->npieces; p++) {
