@@ -245,11 +245,50 @@ typedef struct tsr_keymap {
 /* Makes room for n keys in all without growing again; false when out of
  * memory (the map is unchanged). */
 bool tsr_keymap_reserve(tsr_keymap *m, size_t n, const tsr_allocator *a);
+/* (internal: doubles the room; false when out of memory) */
+bool tsr__keymap_grow(tsr_keymap *m, const tsr_allocator *a);
+
+/* (internal: the hash, a 64-bit finaliser) */
+static inline uint64_t tsr__keymap_mix(uint64_t k)
+{
+    k ^= k >> 33;
+    k *= 0xff51afd7ed558ccdull;
+    k ^= k >> 33;
+    k *= 0xc4ceb9fe1a85ec53ull;
+    k ^= k >> 33;
+    return k;
+}
+
 /* The value slot of key, inserted (uninitialised) when absent; *found
- * says whether it was there. NULL when out of memory. */
-uint32_t *tsr_keymap_slot(tsr_keymap *m, uint64_t key, bool *found, const tsr_allocator *a);
+ * says whether it was there. NULL when out of memory. (Inline: the
+ * tessellators look up a key per tile vertex.) */
+static inline uint32_t *tsr_keymap_slot(tsr_keymap *m, uint64_t key, bool *found, const tsr_allocator *a)
+{
+    if ((m->count + 1) * 2 > m->mask + 1 && !tsr__keymap_grow(m, a))
+        return NULL;
+    uint64_t k = key + 1;
+    size_t h = tsr__keymap_mix(k) & m->mask;
+    while (m->slots[h].key && m->slots[h].key != k)
+        h = (h + 1) & m->mask;
+    *found = m->slots[h].key == k;
+    if (!*found) {
+        m->slots[h].key = k;
+        m->count++;
+    }
+    return &m->slots[h].val;
+}
+
 /* The value of key, or NULL when absent. */
-uint32_t *tsr_keymap_find(const tsr_keymap *m, uint64_t key);
+static inline uint32_t *tsr_keymap_find(const tsr_keymap *m, uint64_t key)
+{
+    if (!m->slots)
+        return NULL;
+    uint64_t k = key + 1;
+    size_t h = tsr__keymap_mix(k) & m->mask;
+    while (m->slots[h].key && m->slots[h].key != k)
+        h = (h + 1) & m->mask;
+    return m->slots[h].key == k ? &m->slots[h].val : NULL;
+}
 /* Removes every key, keeping the room (for a map refilled each frame). */
 void tsr_keymap_clear(tsr_keymap *m);
 void tsr_keymap_free(tsr_keymap *m, const tsr_allocator *a);
