@@ -207,15 +207,25 @@ static double orient(const double a[2], const double b[2], const double c[2])
 
 /* Barycentric coordinates w of (u, v) in the triangle with corners t (6
  * doubles), either orientation; false when outside by more than tol (a
- * distance in (u, v)) or degenerate in (u, v). */
-static bool locate_in(const double *t, double u, double v, double tol, double w[3])
+ * distance in (u, v)) or degenerate in (u, v). exact (when not NULL):
+ * whether inside or on it without the tolerance. */
+static bool locate_in(const double *t, double u, double v, double tol, double w[3], bool *exact)
 {
+    /* within tol of the triangle, so of its box: the test of the edges'
+     * lines below alone would take a point far along a sliver's line */
+    for (int c = 0; c < 2; c++) {
+        double x = c ? v : u, lo = fmin(fmin(t[c], t[2 + c]), t[4 + c]), hi = fmax(fmax(t[c], t[2 + c]), t[4 + c]);
+        if (!(x >= lo - tol && x <= hi + tol))
+            return false;
+    }
     double p[2] = {u, v};
     double d = orient(t, t + 2, t + 4);
     if (!(d != 0))
         return false;
     double sg = d > 0 ? 1 : -1;
     double e[3] = {sg * orient(p, t + 2, t + 4), sg * orient(p, t + 4, t), sg * orient(p, t, t + 2)};
+    if (exact)
+        *exact = e[0] >= 0 && e[1] >= 0 && e[2] >= 0;
     for (int k = 0; k < 3; k++) {
         const double *a = t + 2 * ((k + 1) % 3), *b = t + 2 * ((k + 2) % 3);
         if (e[k] < 0 && e[k] < -tol * sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1])))
@@ -322,24 +332,39 @@ static bool mesh_point(const measurer *M, double u, double v, double p[3])
     cell_of(M, u, v, &ci, &cj);
     size_t c = (size_t)cj * M->gx + ci;
     const uint32_t *ix = M->r->mesh.indices;
-    uint32_t gap = UINT32_MAX;
-    double w[3], gw[3] = {0};
+    uint32_t gap = UINT32_MAX, near = UINT32_MAX;
+    double w[3], nw[3] = {0}, gw[3] = {0};
+    /* a triangle holding (u, v) exactly, else the first within the
+     * tolerance (a sliver's lines pass near points far from it) */
     for (uint32_t k = M->cell_start[c]; k < M->cell_start[c + 1]; k++) {
         uint32_t e = M->entries[k];
         if (e >= M->ntri) {
-            if (gap == UINT32_MAX && locate_in(entry_uv(M, e), u, v, M->tol, gw))
+            if (gap == UINT32_MAX && locate_in(entry_uv(M, e), u, v, M->tol, gw, NULL))
                 gap = e - M->ntri;
             continue;
         }
-        if (!locate_in(entry_uv(M, e), u, v, M->tol, w))
+        bool exact;
+        if (!locate_in(entry_uv(M, e), u, v, M->tol, w, &exact))
             continue;
-        uint32_t t = M->tris[e];
+        if (!exact) {
+            if (near == UINT32_MAX) {
+                near = e;
+                memcpy(nw, w, sizeof nw);
+            }
+            continue;
+        }
+        near = e;
+        memcpy(nw, w, sizeof nw);
+        break;
+    }
+    if (near != UINT32_MAX) {
+        uint32_t t = M->tris[near];
         p[0] = p[1] = p[2] = 0;
         for (int q = 0; q < 3; q++) {
             double x[3];
             vertex_pos(M, ix[3 * (size_t)t + q], x);
             for (int d = 0; d < 3; d++)
-                p[d] += w[q] * x[d];
+                p[d] += nw[q] * x[d];
         }
         return true;
     }

@@ -3170,6 +3170,157 @@ static tsr_status add_lattice_point(builder *b, tsr_keymap *seen, lpoint q, cons
     return TSR_OK;
 }
 
+/* A trimmed source's lattice points, bucketed by cells of its finest
+ * tile spacing, so that its trim loops can meet them: a loop point within
+ * a hair of a lattice point becomes that point, and a loop edge passing
+ * within a hair of one goes through it. Otherwise the triangulation gets
+ * two vertices a rounding apart (a zero-area triangle, the point twice in
+ * the mesh) or a sliver between the edge and the point (a trim edge along
+ * a lattice diagonal, as u + v = 1 from (0.5, 0.5)). */
+typedef struct lat_grid {
+    double *xy;            /* the points (a copy) */
+    double u0, v0, cu, cv; /* the domain's corner, the cells' sizes */
+    tsr_keymap head;       /* cell -> its first point */
+    uint32_t *next;        /* per point: the next in its cell, UINT32_MAX at the end */
+} lat_grid;
+
+static uint64_t lat_cell(const lat_grid *g, double u, double v, int64_t di, int64_t dj)
+{
+    double fu = floor((u - g->u0) / g->cu), fv = floor((v - g->v0) / g->cv);
+    int64_t i = (fu > -1e9 && fu < 1e9 ? (int64_t)fu : 0) + di, j = (fv > -1e9 && fv < 1e9 ? (int64_t)fv : 0) + dj;
+    return (uint64_t)(uint32_t)i << 32 | (uint32_t)j;
+}
+
+static bool lat_build(lat_grid *g, const double *xy, uint32_t n, const double dom[4], double hu, double hv,
+                      const tsr_allocator *a)
+{
+    memset(g, 0, sizeof *g);
+    g->u0 = dom[0];
+    g->v0 = dom[2];
+    g->cu = hu > 0 && isfinite(hu) ? hu : dom[1] - dom[0];
+    g->cv = hv > 0 && isfinite(hv) ? hv : dom[3] - dom[2];
+    g->next = tsr_alloc(a, ((size_t)n + 1) * sizeof *g->next);
+    g->xy = tsr_alloc(a, ((size_t)n + 1) * 2 * sizeof *g->xy);
+    if (!g->next || !g->xy || !tsr_keymap_reserve(&g->head, n, a))
+        return false;
+    memcpy(g->xy, xy, (size_t)n * 2 * sizeof *xy);
+    for (uint32_t k = 0; k < n; k++) {
+        bool found;
+        uint32_t *slot = tsr_keymap_slot(&g->head, lat_cell(g, xy[2 * k], xy[2 * k + 1], 0, 0), &found, a);
+        if (!slot)
+            return false;
+        g->next[k] = found ? *slot : UINT32_MAX;
+        *slot = k;
+    }
+    return true;
+}
+
+static void lat_free(lat_grid *g, const tsr_allocator *a)
+{
+    tsr_free(a, g->next);
+    tsr_free(a, g->xy);
+    tsr_keymap_free(&g->head, a);
+}
+
+/* The lattice point within (eu, ev) of p (each way), or UINT32_MAX. */
+static uint32_t lat_near(const lat_grid *g, const double p[2], double eu, double ev)
+{
+    for (int dj = -1; dj <= 1; dj++)
+        for (int di = -1; di <= 1; di++) {
+            const uint32_t *h = tsr_keymap_find(&g->head, lat_cell(g, p[0], p[1], di, dj));
+            for (uint32_t k = h ? *h : UINT32_MAX; k != UINT32_MAX; k = g->next[k])
+                if (fabs(g->xy[2 * k] - p[0]) <= eu && fabs(g->xy[2 * k + 1] - p[1]) <= ev)
+                    return k;
+        }
+    return UINT32_MAX;
+}
+
+/* A lattice point met by a loop edge: its index and where along the edge. */
+typedef struct lat_hit {
+    double t;
+    uint32_t k;
+} lat_hit;
+
+static int cmp_hit(const void *x, const void *y)
+{
+    double a = ((const lat_hit *)x)->t, b = ((const lat_hit *)y)->t;
+    return a < b ? -1 : a > b;
+}
+
+/* The lattice points within a hair (eu, ev) of edge p0-p1 strictly
+ * between its ends, into hits (at most cap), in order along the edge;
+ * returns how many. Distances in units of (eu, ev). */
+static uint32_t lat_on_edge(const lat_grid *g, const double p0[2], const double p1[2], double eu, double ev,
+                            lat_hit *hits, uint32_t cap)
+{
+    double dx = (p1[0] - p0[0]) / eu, dy = (p1[1] - p0[1]) / ev, len2 = dx * dx + dy * dy;
+    if (!(len2 > 4))
+        return 0;
+    double lo[2] = {dmin(p0[0], p1[0]) - eu, dmin(p0[1], p1[1]) - ev};
+    double hi[2] = {dmax(p0[0], p1[0]) + eu, dmax(p0[1], p1[1]) + ev};
+    uint64_t c0 = lat_cell(g, lo[0], lo[1], 0, 0), c1 = lat_cell(g, hi[0], hi[1], 0, 0);
+    uint32_t i0 = (uint32_t)(c0 >> 32), j0 = (uint32_t)c0, i1 = (uint32_t)(c1 >> 32), j1 = (uint32_t)c1, n = 0;
+    if (i1 - i0 > 64 || j1 - j0 > 64) /* (loop edges are cut to the finest spacing: not met) */
+        return 0;
+    for (uint32_t j = j0; j != j1 + 1; j++)
+        for (uint32_t i = i0; i != i1 + 1; i++) {
+            const uint32_t *h = tsr_keymap_find(&g->head, (uint64_t)i << 32 | j);
+            for (uint32_t k = h ? *h : UINT32_MAX; k != UINT32_MAX; k = g->next[k]) {
+                const double *q = g->xy + 2 * k;
+                double qx = (q[0] - p0[0]) / eu, qy = (q[1] - p0[1]) / ev;
+                double t = (qx * dx + qy * dy) / len2, cross = qx * dy - qy * dx;
+                /* off the ends' own hair, within the edge's */
+                if (t * t * len2 > 1 && (1 - t) * (1 - t) * len2 > 1 && t > 0 && t < 1 && cross * cross <= len2 &&
+                    n < cap)
+                    hits[n++] = (lat_hit){t, k};
+            }
+        }
+    qsort(hits, n, sizeof *hits, cmp_hit);
+    return n;
+}
+
+/* Meets loop pts (cnt points, owned, may be replaced) with the lattice
+ * points of g: see lat_grid. false when out of memory. */
+static bool lat_meet(const lat_grid *g, double **pts, uint32_t *cnt, double eu, double ev, const tsr_allocator *a)
+{
+    double *p = *pts;
+    uint32_t n = *cnt, extra = 0;
+    enum { CAP = 64 };
+    lat_hit hits[CAP];
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t q = lat_near(g, p + 2 * k, eu, ev);
+        if (q != UINT32_MAX)
+            memcpy(p + 2 * k, g->xy + 2 * q, 2 * sizeof *p);
+    }
+    for (uint32_t k = 0; k < n; k++)
+        extra += lat_on_edge(g, p + 2 * k, p + 2 * ((k + 1) % n), eu, ev, hits, CAP);
+    double *out = tsr_alloc(a, ((size_t)n + extra) * 2 * sizeof *out);
+    if (!out)
+        return false;
+    uint32_t m = 0;
+    for (uint32_t k = 0; k < n; k++) {
+        const double *p0 = p + 2 * k, *p1 = p + 2 * ((k + 1) % n);
+        uint32_t h = extra ? lat_on_edge(g, p0, p1, eu, ev, hits, CAP) : 0;
+        memcpy(out + 2 * m++, p0, 2 * sizeof *out);
+        for (uint32_t x = 0; x < h; x++)
+            memcpy(out + 2 * m++, g->xy + 2 * hits[x].k, 2 * sizeof *out);
+    }
+    /* points made equal: once */
+    uint32_t w = 0;
+    for (uint32_t k = 0; k < m; k++)
+        if (!w || out[2 * k] != out[2 * (w - 1)] || out[2 * k + 1] != out[2 * (w - 1) + 1]) {
+            out[2 * w] = out[2 * k];
+            out[2 * w + 1] = out[2 * k + 1];
+            w++;
+        }
+    while (w > 1 && out[0] == out[2 * (w - 1)] && out[1] == out[2 * (w - 1) + 1])
+        w--;
+    tsr_free(a, p);
+    *pts = out;
+    *cnt = w;
+    return true;
+}
+
 /* A trim loop's polyline in (u, v), as the triangulation has it. */
 typedef struct tloop {
     double *p;    /* its n points (owned) */
@@ -3302,7 +3453,12 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
             hv = fmin(hv, f * (p->rect[3] - p->rect[2]));
         }
     }
-    /* the trim loops */
+    /* the trim loops, meeting the lattice points where they pass within
+     * a hair of them (lat_grid) */
+    double hair_u = 1e-9 * (s->domain[1] - s->domain[0]), hair_v = 1e-9 * (s->domain[3] - s->domain[2]);
+    lat_grid lg;
+    if (!lat_build(&lg, xy, (uint32_t)np, s->domain, hu, hv, a) && st == TSR_OK)
+        st = TSR_ERR_NOMEM;
     const tsr_patch_set *set = m->set;
     uint32_t l0 = set->first_loop[s->patch], nloops = set->first_loop[s->patch + 1] - l0, nkept = 0;
     tloop *loops = tsr_alloc(a, (nloops ? nloops : 1) * sizeof *loops);
@@ -3356,17 +3512,24 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
          * the lattice and the linked neighbours' points, and extra points
          * there would open T-junctions with the neighbour. The loop's whole
          * polyline still decides which triangles are kept (trim_keeps). */
-        double snap_u = 1e-9 * (s->domain[1] - s->domain[0]), snap_v = 1e-9 * (s->domain[3] - s->domain[2]);
-        uint8_t *side = tsr_alloc(a, cnt);
-        if (!side) {
+        for (uint32_t k = 0; k < cnt; k++) {
+            double *u = pts + 2 * k, *v = u + 1;
+            *u = *u < s->domain[0] + hair_u ? s->domain[0] : *u > s->domain[1] - hair_u ? s->domain[1] : *u;
+            *v = *v < s->domain[2] + hair_v ? s->domain[2] : *v > s->domain[3] - hair_v ? s->domain[3] : *v;
+        }
+        uint8_t *side = NULL;
+        if (!lat_meet(&lg, &pts, &cnt, hair_u, hair_v, a) || !(side = tsr_alloc(a, cnt ? cnt : 1))) {
             tsr_free(a, pts);
             st = TSR_ERR_NOMEM;
             break;
         }
+        if (cnt < 3) {
+            tsr_free(a, side);
+            tsr_free(a, pts);
+            continue;
+        }
         for (uint32_t k = 0; k < cnt; k++) {
-            double *u = pts + 2 * k, *v = u + 1;
-            *u = *u < s->domain[0] + snap_u ? s->domain[0] : *u > s->domain[1] - snap_u ? s->domain[1] : *u;
-            *v = *v < s->domain[2] + snap_v ? s->domain[2] : *v > s->domain[3] - snap_v ? s->domain[3] : *v;
+            const double *u = pts + 2 * k, *v = u + 1;
             side[k] = (uint8_t)((*u == s->domain[0]) | (*u == s->domain[1]) << 1 | (*v == s->domain[2]) << 2 |
                                 (*v == s->domain[3]) << 3);
         }
@@ -3407,6 +3570,7 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
             tsr_free(a, pts);
     }
 #undef GROW
+    lat_free(&lg, a);
     tsr_triangulation tr = {0};
     if (st == TSR_OK) {
         /* the whole domain, every loop's polyline an edge; the region is

@@ -146,8 +146,13 @@ tsr_status cli_patch_tessellate(const tsr_pmodel *m, const tsr_ptess_options *op
                 double f = scale[si.first_piece + k] * 0.5 * fmax(0.1, fmin(1.0, tol / meas->source_error[s]));
                 scale[si.first_piece + k] = f > 0 ? f : 1e-6;
             }
-            (*tightened)++;
         }
+    }
+    /* the patches tightened, each once whatever the rounds */
+    for (uint32_t s = 0; scale && s < info.sources; s++) {
+        tsr_psource_info si;
+        tsr_pmodel_source_info(m, s, &si);
+        *tightened += si.pieces_u > 0 && si.pieces_v > 0 && scale[si.first_piece] < 1;
     }
     tsr_free(NULL, meas->source_error);
     meas->source_error = NULL;

@@ -1602,6 +1602,180 @@ TEST(trim_loops_keep_exact_areas)
     }
 }
 
+/* A trim loop meeting the lattice: a trim edge along a lattice diagonal
+ * (u + v = 1 from (0.5, 0.5): every lattice point on it is a rounding off
+ * the loop's samples) and a hole whose points lie a rounding from lattice
+ * points (0.49999999999999994 for 0.5, as a circle made with cos and sin
+ * has them). They gave slivers and zero-area triangles, one vertex twice,
+ * and the measurement extrapolated a sliver far along its line (1.77 against
+ * 0.014). The mesh must hold the bound as measured, with no degenerate
+ * triangle and no position twice, and keep the trimmed area (the plate's
+ * x and y are 10 u and 10 v). */
+static int cmp_float3(const void *x, const void *y)
+{
+    const float *a = x, *b = y;
+    for (int k = 0; k < 3; k++)
+        if (a[k] != b[k])
+            return a[k] < b[k] ? -1 : 1;
+    return 0;
+}
+
+/* Vertices at the position of another. */
+static uint32_t same_positions(const tsr_mesh *m)
+{
+    uint32_t n = m->vertex_count, same = 0;
+    float *p = malloc(((size_t)n + 1) * 3 * sizeof *p);
+    if (!p)
+        return UINT32_MAX;
+    memcpy(p, m->positions, (size_t)n * 3 * sizeof *p);
+    qsort(p, n, 3 * sizeof *p, cmp_float3);
+    for (uint32_t k = 1; k < n; k++)
+        same += !memcmp(p + 3 * k, p + 3 * (k - 1), 3 * sizeof *p);
+    free(p);
+    return same;
+}
+
+TEST(trim_loops_meet_the_lattice)
+{
+    static const double hole[9][3] = {{0.75, 0.5, 1},
+                                      {0.75, 0.75, H2},
+                                      {0.5, 0.75, 1},
+                                      {0.25000000000000006, 0.75, H2},
+                                      {0.25, 0.5, 1},
+                                      {0.24999999999999994, 0.25000000000000006, H2},
+                                      {0.49999999999999994, 0.25, 1},
+                                      {0.74999999999999989, 0.24999999999999994, H2},
+                                      {0.75, 0.49999999999999994, 1}};
+    for (int c = 0; c < 2; c++) {
+        sbuf b = {0};
+        double want;
+        if (c == 0) { /* the triangle (0.1, 0.1) (0.5, 0.5) (0.1, 0.9), kept */
+            sb_printf(&b, "vp %.17g %.17g\nvp 0.5 0.5\nvp %.17g %.17g\nvp %.17g %.17g\n", 0.1, 0.1, 0.1, 0.9, 0.1, 0.1);
+            sb_printf(&b, "cstype bspline\ndeg 1\ncurv2 1 2 3 4\nparm u 0 0 1 2 3 3\nend\n");
+            want = 100 * 0.16;
+        } else { /* a hole of radius 0.25 about (0.5, 0.5) */
+            for (int k = 0; k < 9; k++)
+                sb_printf(&b, "vp %.17g %.17g %.17g\n", hole[k][0], hole[k][1], hole[k][2]);
+            sb_printf(&b, "cstype rat bspline\ndeg 2\ncurv2 1 2 3 4 5 6 7 8 9\n"
+                          "parm u 0 0 0 0.25 0.25 0.5 0.5 0.75 0.75 1 1 1\nend\n");
+            want = 100 * (1 - PI / 16);
+        }
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 4; i++)
+                sb_printf(&b, "v %.17g %.17g %.17g\n", 10.0 * i / 3, 10.0 * j / 3, 0.5 * sin(i + 1.0) * cos(0.7 * j));
+        sb_printf(&b, "cstype bezier\ndeg 3 3\nsurf 0 1 0 1 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16\n%s\nend\n",
+                  c ? "hole 0 1 1" : "trim 0 3 1");
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        if (parse_set(&b, c ? "hole_off_lattice.obj" : "trim_on_diagonal.obj", &set) && make_model(&set, &m))
+            for (double E = 0.1; E >= 0.9e-3; E /= 10) {
+                tsr_ptess_options o = {0};
+                o.max_error = E;
+                tsr_ptess_result r;
+                tsr_ptess_measure_result mr = {0};
+                if (run_ptess(m, &o, &r) && tsr_ptess_measure(m, &r, 64, NULL, false, NULL, &mr) == TSR_OK) {
+                    tsr_validation v = validate(&r.mesh);
+                    double area = 0;
+                    const float *P = r.mesh.positions;
+                    for (uint32_t f = 0; f < r.mesh.triangle_count; f++) {
+                        const uint32_t *t = r.mesh.indices + 3 * f;
+                        const float *p0 = P + 3 * t[0], *p1 = P + 3 * t[1], *p2 = P + 3 * t[2];
+                        area += 0.5 * fabs(((double)p1[0] - p0[0]) * ((double)p2[1] - p0[1]) -
+                                           ((double)p1[1] - p0[1]) * ((double)p2[0] - p0[0]));
+                    }
+                    uint32_t same = same_positions(&r.mesh);
+                    CHECK_MSG(mr.max_error <= E && v.degenerate_triangles == 0 && same == 0 &&
+                                  fabs(area - want) <= 40 * E + 1e-3,
+                              "case %d E %g: measured %g (at u %g v %g), %u degenerate, %u positions twice, area %.5f "
+                              "of %.5f",
+                              c, E, mr.max_error, mr.worst_uv[0], mr.worst_uv[1], v.degenerate_triangles, same, area,
+                              want);
+                }
+                tsr_ptess_result_free(&r);
+            }
+        tsr_pmodel_destroy(m);
+        tsr_patch_set_free(&set);
+        free(b.s);
+    }
+}
+
+/* The measurement and a sliver. A triangle whose corners lie within a
+ * rounding of one line has edge lines passing within the tolerance of
+ * points far along that line, outside the triangle; a sample there must be
+ * measured on the triangle that holds it, not extrapolated on the sliver
+ * (it was: 1.77 against a true 0.002, on a trimmed plate whose trim edge
+ * ran along a lattice diagonal). A sliver with its corners on the surface
+ * is put first among a plate's triangles: the figures must stay those of
+ * the plate's own triangles (and the sliver's own edges' chords). */
+TEST(measure_passes_slivers_by)
+{
+    sbuf b = {0};
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++)
+            sb_printf(&b, "v %.17g %.17g %.17g\n", 10.0 * i / 3, 10.0 * j / 3, 0.5 * sin(i + 1.0) * cos(0.7 * j));
+    sb_printf(&b, "cstype bezier\ndeg 3 3\nsurf 0 1 0 1 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16\nend\n");
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (parse_set(&b, "plate.obj", &set) && make_model(&set, &m)) {
+        tsr_ptess_options o = {0};
+        o.max_error = 0.01;
+        tsr_ptess_result r;
+        tsr_ptess_measure_result before = {0}, after = {0};
+        if (run_ptess(m, &o, &r) && tsr_ptess_measure(m, &r, 64, NULL, false, NULL, &before) == TSR_OK) {
+            /* the sliver (0.1, 0.9) (0.11, 0.89) (0.105, 0.895 + 1 ulp),
+             * first: no sample lies within its box, many lie along its
+             * line, the domain's corner (0, 1) among them */
+            const double uv[6] = {0.1, 0.9, 0.11, 0.89, 0.105, nextafter(0.895, 1)};
+            uint32_t v[3];
+            for (int k = 0; k < 3; k++) {
+                double pos[3];
+                CHECK(tsr_pmodel_eval(m, 0, uv[2 * k], uv[2 * k + 1], pos, NULL) == TSR_OK);
+                float f[3] = {(float)pos[0], (float)pos[1], (float)pos[2]};
+                v[k] = tsr_mesh_add_vertex(&r.mesh, f, NULL, NULL);
+            }
+            uint32_t n = r.mesh.triangle_count;
+            const tsr_allocator *a = r.alloc.realloc ? &r.alloc : NULL;
+            uint32_t *src = tsr_realloc(a, r.tri_source, ((size_t)n + 1) * sizeof *src);
+            double *tuv = src ? tsr_realloc(a, r.tri_uv, ((size_t)n + 1) * 6 * sizeof *tuv) : NULL;
+            if (src)
+                r.tri_source = src;
+            if (tuv)
+                r.tri_uv = tuv;
+            if (tuv && tsr_mesh_add_triangle(&r.mesh, v[0], v[1], v[2])) {
+                memmove(r.mesh.indices + 3, r.mesh.indices, (size_t)n * 3 * sizeof *r.mesh.indices);
+                memcpy(r.mesh.indices, v, sizeof v);
+                memmove(src + 1, src, (size_t)n * sizeof *src);
+                src[0] = 0;
+                memmove(tuv + 6, tuv, (size_t)n * 6 * sizeof *tuv);
+                memcpy(tuv, uv, sizeof uv);
+                /* the sliver's own edges: their chords' error, measured at
+                 * their midpoints */
+                double chord = 0;
+                for (int k = 0; k < 3; k++) {
+                    const double *p0 = uv + 2 * k, *p1 = uv + 2 * ((k + 1) % 3);
+                    double mid[3], a0[3], a1[3];
+                    tsr_pmodel_eval(m, 0, 0.5 * (p0[0] + p1[0]), 0.5 * (p0[1] + p1[1]), mid, NULL);
+                    tsr_pmodel_eval(m, 0, p0[0], p0[1], a0, NULL);
+                    tsr_pmodel_eval(m, 0, p1[0], p1[1], a1, NULL);
+                    double d2 = 0;
+                    for (int x = 0; x < 3; x++)
+                        d2 += (mid[x] - 0.5 * (a0[x] + a1[x])) * (mid[x] - 0.5 * (a0[x] + a1[x]));
+                    chord = fmax(chord, sqrt(d2));
+                }
+                CHECK(tsr_ptess_measure(m, &r, 64, NULL, false, NULL, &after) == TSR_OK);
+                double want = fmax(before.max_error, chord) + 1e-5;
+                CHECK_MSG(after.max_error <= want, "with the sliver: %g at (%g, %g), without %g, its chords %g",
+                          after.max_error, after.worst_uv[0], after.worst_uv[1], before.max_error, chord);
+            } else
+                CHECK(!"out of memory");
+        }
+        tsr_ptess_result_free(&r);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
 /* CAD files trim every face by its own boundary. Two bicubic B-splines
  * with interior knots (several Bezier pieces each) share the edge x = 30,
  * each trimmed by a loop along its whole domain boundary: the seam must
@@ -3830,7 +4004,7 @@ TEST(measure_threads_same_figures)
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
-          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
+          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(trim_loops_meet_the_lattice), T(measure_passes_slivers_by), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
           T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
          T(rational_cylinder_cut_near_its_strip),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
