@@ -9,6 +9,7 @@
  * quadtree. */
 #include "terrain_internal.h"
 
+#include <float.h>
 #include <math.h>
 #include <pthread.h>
 #include <string.h>
@@ -36,19 +37,28 @@ typedef struct band {
     bool nomem;
 } band;
 
+/* How far (in rows or columns) a float coordinate near coord may lie from
+ * the sample it stands for, spacing apart: float rounding, which at large
+ * coordinates (EPSG:3857 metres, 3e7) is a good part of a metre. */
+static double slack(double coord, double spacing)
+{
+    return 1e-6 + 2 * FLT_EPSILON * fabs(coord) / fabs(spacing);
+}
+
 /* The window rows a triangle's footprint may cover, [*r0, *r1]; false when
  * none (or a flat or non-finite triangle). */
 static bool tri_rows(const tsr_heightfield *hf, uint32_t y0, uint32_t wh, const tsr_mesh *mesh, uint32_t t,
                      uint32_t *r0, uint32_t *r1)
 {
     const uint32_t *ix = mesh->indices + 3 * (size_t)t;
-    double lo = INFINITY, hi = -INFINITY;
+    double lo = INFINITY, hi = -INFINITY, sl = 0;
     for (int k = 0; k < 3; k++) {
-        double r = mesh->positions[3 * (size_t)ix[k] + 1] / hf->dy - y0;
+        double y = mesh->positions[3 * (size_t)ix[k] + 1], r = y / hf->dy - y0;
         lo = fmin(lo, r);
         hi = fmax(hi, r);
+        sl = fmax(sl, slack(y, hf->dy));
     }
-    double rl = ceil(lo - 1e-6), rh = floor(hi + 1e-6);
+    double rl = ceil(lo - sl), rh = floor(hi + sl);
     if (!(rh >= 0) || !(rl <= (double)wh - 1))
         return false;
     *r0 = rl < 0 ? 0 : (uint32_t)rl;
@@ -56,12 +66,97 @@ static bool tri_rows(const tsr_heightfield *hf, uint32_t y0, uint32_t wh, const 
     return true;
 }
 
-static void measure_band(band *b)
+/* Triangle t's samples in band b: each one inside the triangle's (x, y)
+ * footprint compared with its height there, into worst and wpix (per
+ * sample) and b->out. rounded: only the samples not reached yet, at their
+ * coordinates rounded to float. */
+static void tri_samples(band *b, uint32_t t, float *worst, float *wpix, bool rounded)
 {
     const tsr_heightfield *hf = b->hf;
     const tsr_mesh *mesh = b->mesh;
     const tsr_camera *cam = b->cam;
     uint32_t x0 = b->x0, y0 = b->y0, ww = b->ww;
+    tsr_error_report *out = &b->out;
+    const uint32_t *ix = mesh->indices + 3 * (size_t)t;
+    const float *p0 = mesh->positions + 3 * (size_t)ix[0], *p1 = mesh->positions + 3 * (size_t)ix[1],
+                *p2 = mesh->positions + 3 * (size_t)ix[2];
+    double d = ((double)p1[0] - p0[0]) * ((double)p2[1] - p0[1]) - ((double)p1[1] - p0[1]) * ((double)p2[0] - p0[0]);
+    if (d == 0 || !isfinite(d))
+        return;
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY}, sc = 0, sr = 0;
+    const float *pp[3] = {p0, p1, p2};
+    for (int k = 0; k < 3; k++) {
+        double c = pp[k][0] / hf->dx - x0, r = pp[k][1] / hf->dy - y0;
+        lo[0] = fmin(lo[0], c);
+        hi[0] = fmax(hi[0], c);
+        lo[1] = fmin(lo[1], r);
+        hi[1] = fmax(hi[1], r);
+        sc = fmax(sc, slack(pp[k][0], hf->dx));
+        sr = fmax(sr, slack(pp[k][1], hf->dy));
+    }
+    double cl = ceil(lo[0] - sc), ch = floor(hi[0] + sc), rl = ceil(lo[1] - sr), rh = floor(hi[1] + sr);
+    if (ch < 0 || rh < (double)b->rb || cl > (double)ww - 1 || rl > (double)b->re - 1)
+        return;
+    uint32_t c0 = cl < 0 ? 0 : (uint32_t)cl, c1 = ch > ww - 1 ? ww - 1 : (uint32_t)ch;
+    uint32_t r0 = rl < b->rb ? b->rb : (uint32_t)rl, r1 = rh > b->re - 1 ? b->re - 1 : (uint32_t)rh;
+    for (uint32_t r = r0; r <= r1; r++) {
+        const float *row = hf->data + (size_t)(y0 + r) * hf->width + x0;
+        double y = (double)(y0 + r) * hf->dy;
+        if (rounded)
+            y = (float)y;
+        for (uint32_t c = c0; c <= c1; c++) {
+            float h = row[c];
+            size_t si = (size_t)(r - b->rb) * ww + c;
+            if (isnan(h) || (rounded && !isnan(worst[si])))
+                continue;
+            double x = (double)(x0 + c) * hf->dx;
+            if (rounded)
+                x = (float)x;
+            double l1 = ((x - p0[0]) * ((double)p2[1] - p0[1]) - (y - p0[1]) * ((double)p2[0] - p0[0])) / d;
+            double l2 = (((double)p1[0] - p0[0]) * (y - p0[1]) - ((double)p1[1] - p0[1]) * (x - p0[0])) / d;
+            const double eps = 1e-7;
+            if (l1 < -eps || l2 < -eps || l1 + l2 > 1 + eps)
+                continue;
+            double zm = p0[2] + l1 * ((double)p1[2] - p0[2]) + l2 * ((double)p2[2] - p0[2]);
+            double z = h * hf->dz, ev = fabs(zm - z);
+            if (isnan(worst[si]) || ev > worst[si])
+                worst[si] = (float)ev;
+            if (ev > out->max_vertical) {
+                out->max_vertical = ev;
+                if (!cam) {
+                    out->worst_c = x0 + c;
+                    out->worst_r = y0 + r;
+                }
+            }
+            if (!cam)
+                continue;
+            double ps[3] = {x, y, z}, qs[3] = {x, y, zm}, sx0, sy0, f0, sx1, sy1, f1;
+            tsr_camera_project(cam, ps, &sx0, &sy0, &f0);
+            tsr_camera_project(cam, qs, &sx1, &sy1, &f1);
+            if (f0 < cam->near_dist || f1 < cam->near_dist)
+                continue;
+            bool in0 = sx0 >= 0 && sx0 <= cam->width && sy0 >= 0 && sy0 <= cam->height;
+            bool in1 = sx1 >= 0 && sx1 <= cam->width && sy1 >= 0 && sy1 <= cam->height;
+            if (!in0 && !in1)
+                continue;
+            double e = hypot(sx1 - sx0, sy1 - sy0);
+            if (e > wpix[si])
+                wpix[si] = (float)e;
+            if (e > out->max_pixels) {
+                out->max_pixels = e;
+                out->worst_c = x0 + c;
+                out->worst_r = y0 + r;
+            }
+        }
+    }
+}
+
+static void measure_band(band *b)
+{
+    const tsr_heightfield *hf = b->hf;
+    const tsr_camera *cam = b->cam;
+    uint32_t x0 = b->x0, y0 = b->y0, ww = b->ww;
+    tsr_error_report *out = &b->out;
     /* per sample of the band (its own rows: a band writes no other's):
      * its worst error so far (NaN: not reached), and in pixels */
     size_t ns = (size_t)(b->re - b->rb) * ww;
@@ -77,75 +172,20 @@ static void measure_band(band *b)
         worst[i] = NAN;
     for (size_t i = 0; wpix && i < ns; i++)
         wpix[i] = -1;
-    tsr_error_report *out = &b->out;
-    for (uint32_t ti = 0; ti < b->ntris; ti++) {
-        const uint32_t *ix = mesh->indices + 3 * (size_t)b->tris[ti];
-        const float *p0 = mesh->positions + 3 * (size_t)ix[0], *p1 = mesh->positions + 3 * (size_t)ix[1],
-                    *p2 = mesh->positions + 3 * (size_t)ix[2];
-        double d = ((double)p1[0] - p0[0]) * ((double)p2[1] - p0[1]) - ((double)p1[1] - p0[1]) * ((double)p2[0] - p0[0]);
-        if (d == 0 || !isfinite(d))
-            continue;
-        double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
-        const float *pp[3] = {p0, p1, p2};
-        for (int k = 0; k < 3; k++) {
-            double c = pp[k][0] / hf->dx - x0, r = pp[k][1] / hf->dy - y0;
-            lo[0] = fmin(lo[0], c);
-            hi[0] = fmax(hi[0], c);
-            lo[1] = fmin(lo[1], r);
-            hi[1] = fmax(hi[1], r);
-        }
-        double cl = ceil(lo[0] - 1e-6), ch = floor(hi[0] + 1e-6), rl = ceil(lo[1] - 1e-6), rh = floor(hi[1] + 1e-6);
-        if (ch < 0 || rh < (double)b->rb || cl > (double)ww - 1 || rl > (double)b->re - 1)
-            continue;
-        uint32_t c0 = cl < 0 ? 0 : (uint32_t)cl, c1 = ch > ww - 1 ? ww - 1 : (uint32_t)ch;
-        uint32_t r0 = rl < b->rb ? b->rb : (uint32_t)rl, r1 = rh > b->re - 1 ? b->re - 1 : (uint32_t)rh;
-        for (uint32_t r = r0; r <= r1; r++) {
-            const float *row = hf->data + (size_t)(y0 + r) * hf->width + x0;
-            double y = (double)(y0 + r) * hf->dy;
-            for (uint32_t c = c0; c <= c1; c++) {
-                float h = row[c];
-                if (isnan(h))
-                    continue;
-                double x = (double)(x0 + c) * hf->dx;
-                double l1 = ((x - p0[0]) * ((double)p2[1] - p0[1]) - (y - p0[1]) * ((double)p2[0] - p0[0])) / d;
-                double l2 = (((double)p1[0] - p0[0]) * (y - p0[1]) - ((double)p1[1] - p0[1]) * (x - p0[0])) / d;
-                const double eps = 1e-7;
-                if (l1 < -eps || l2 < -eps || l1 + l2 > 1 + eps)
-                    continue;
-                double zm = p0[2] + l1 * ((double)p1[2] - p0[2]) + l2 * ((double)p2[2] - p0[2]);
-                double z = h * hf->dz, ev = fabs(zm - z);
-                size_t si = (size_t)(r - b->rb) * ww + c;
-                if (isnan(worst[si]) || ev > worst[si])
-                    worst[si] = (float)ev;
-                if (ev > out->max_vertical) {
-                    out->max_vertical = ev;
-                    if (!cam) {
-                        out->worst_c = x0 + c;
-                        out->worst_r = y0 + r;
-                    }
-                }
-                if (!cam)
-                    continue;
-                double ps[3] = {x, y, z}, qs[3] = {x, y, zm}, sx0, sy0, f0, sx1, sy1, f1;
-                tsr_camera_project(cam, ps, &sx0, &sy0, &f0);
-                tsr_camera_project(cam, qs, &sx1, &sy1, &f1);
-                if (f0 < cam->near_dist || f1 < cam->near_dist)
-                    continue;
-                bool in0 = sx0 >= 0 && sx0 <= cam->width && sy0 >= 0 && sy0 <= cam->height;
-                bool in1 = sx1 >= 0 && sx1 <= cam->width && sy1 >= 0 && sy1 <= cam->height;
-                if (!in0 && !in1)
-                    continue;
-                double e = hypot(sx1 - sx0, sy1 - sy0);
-                if (e > wpix[si])
-                    wpix[si] = (float)e;
-                if (e > out->max_pixels) {
-                    out->max_pixels = e;
-                    out->worst_c = x0 + c;
-                    out->worst_r = y0 + r;
-                }
-            }
-        }
+    for (uint32_t ti = 0; ti < b->ntris; ti++)
+        tri_samples(b, b->tris[ti], worst, wpix, false);
+    /* samples on the mesh's outer border that float rounding of the
+     * vertices' coordinates put outside it (the last row of a raster in
+     * EPSG:3857 metres): measured where the mesh has them, at their
+     * coordinates rounded to float as the vertices' are */
+    bool missed = false;
+    for (uint32_t r = b->rb; r < b->re && !missed; r++) {
+        const float *row = hf->data + (size_t)(y0 + r) * hf->width + x0;
+        for (uint32_t c = 0; c < ww && !missed; c++)
+            missed = !isnan(row[c]) && isnan(worst[(size_t)(r - b->rb) * ww + c]);
     }
+    for (uint32_t ti = 0; missed && ti < b->ntris; ti++)
+        tri_samples(b, b->tris[ti], worst, wpix, true);
     double sumsq = 0;
     for (uint32_t r = b->rb; r < b->re; r++) {
         const float *row = hf->data + (size_t)(y0 + r) * hf->width + x0;

@@ -258,6 +258,34 @@ TEST(spacing_and_scale)
     tsr_heightfield_destroy(hf);
 }
 
+/* Spacings of EPSG:3857 metres (the egm84 file's, 64 km): the vertices'
+ * float coordinates lie up to a few tenths of a unit from the samples'
+ * (c dx, r dy) at the far rows and columns, and the measurement left the
+ * last row out as "no cell of four valid samples" (624 samples of egm84).
+ * Every sample must be measured. */
+TEST(measure_far_from_the_origin)
+{
+    tsr_heightfield *hf = terrain(61, 53, 4);
+    tsr_heightfield_set_spacing(hf, 64187.4593, 63757.0968, 1);
+    for (int mth = 0; mth < 2; mth++) {
+        tsr_tin_options o = {0};
+        o.method = methods[mth];
+        o.max_error = 2;
+        tsr_mesh m;
+        tsr_mesh_init(&m, 0, NULL);
+        tsr_error err = {0};
+        tsr_tin_report rep;
+        CHECK_MSG(tsr_terrain_mesh(hf, &o, &m, &rep, &err) == TSR_OK, "%s", err.message);
+        tsr_error_report er;
+        CHECK(tsr_terrain_measure(hf, &m, NULL, &er) == TSR_OK);
+        CHECK_MSG(er.uncovered == 0 && er.covered == 61 * 53 && er.max_vertical <= rep.target_error,
+                  "%s: %llu samples left out, %llu measured, max %g (bound %g)", mname[mth],
+                  (unsigned long long)er.uncovered, (unsigned long long)er.covered, er.max_vertical, rep.target_error);
+        tsr_mesh_free(&m);
+    }
+    tsr_heightfield_destroy(hf);
+}
+
 TEST(flat_and_planar)
 {
     /* a plane needs its four corners only, whatever the bound */
@@ -1144,7 +1172,7 @@ TEST(measure_bands_agree_with_brute_force)
     tsr_heightfield_destroy(hf);
 }
 
-TEST_MAIN(T(error_bound_generated), T(measure_bands_agree_with_brute_force), T(flips_fewer_triangles), T(spacing_and_scale), T(flat_and_planar), T(budgets),
+TEST_MAIN(T(error_bound_generated), T(measure_bands_agree_with_brute_force), T(flips_fewer_triangles), T(spacing_and_scale), T(measure_far_from_the_origin), T(flat_and_planar), T(budgets),
           T(nodata_holes), T(quadtree_leaves_and_tiles),
           T(quadtree_half_variants_against_their_triangles),
           T(quadtree_half_probe_holds_the_variants), T(window_seams), T(blocks), T(blocks_allocation_failures), T(quadtree_allocation_failures), T(closed_solid), T(bad_options), T(data_real_terrain))
