@@ -4,12 +4,14 @@
 // copy and its float copy in memory at once.
 #include "terrain/io_module.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <sys/stat.h>
 #include <vector>
@@ -32,6 +34,46 @@ static std::string one_line(std::string s)
 }
 
 static const char *attr_name = "Tessera:HeightScaleOffset";
+
+// The file an image is written to, remembering a write that fell short (a
+// full disk, a file size limit): OpenImageIO's PNG writer does not look at
+// what its writes return, and would report a truncated file written.
+class CheckedFile : public OIIO::Filesystem::IOFile {
+public:
+    explicit CheckedFile(const char *name) : IOFile(OIIO::string_view(name), IOProxy::Write) {}
+    size_t write(const void *buf, size_t size) override
+    {
+        size_t n = IOFile::write(buf, size);
+        failed |= n != size;
+        return n;
+    }
+    size_t pwrite(const void *buf, size_t size, int64_t offset) override
+    {
+        size_t n = IOFile::pwrite(buf, size, offset);
+        failed |= n != size;
+        return n;
+    }
+    void close() override
+    {
+        if (m_file && (std::fflush(m_file) != 0 || std::ferror(m_file)))
+            failed = true;
+        IOFile::close();
+    }
+    bool failed = false;
+};
+
+// Writes through a CheckedFile where out's format takes one (proxy, made
+// here, must outlive out's close); false when the file cannot be opened.
+static bool use_checked_file(ImageOutput *out, const char *tmp, std::unique_ptr<CheckedFile> &proxy)
+{
+    if (!out->supports("ioproxy"))
+        return true;
+    proxy.reset(new CheckedFile(tmp));
+    if (!proxy->opened())
+        return false;
+    out->set_ioproxy(proxy.get());
+    return true;
+}
 
 tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples,
                                      float **pixels, tsr_image_info *info, tsr_error *err)
@@ -165,9 +207,10 @@ tsr_status tsr_io_image_write(const char *path, const char *tmp, uint32_t width,
     } else {
         spec.attribute("compression", "zip");
     }
-    if (!out->open(tmp, spec)) {
+    std::unique_ptr<CheckedFile> proxy;
+    if (!use_checked_file(out.get(), tmp, proxy) || !out->open(tmp, spec)) {
         std::string e = one_line(out->geterror());
-        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path, e.c_str());
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path, e.empty() ? std::strerror(errno) : e.c_str());
     }
     bool ok = true;
     if (as_u16) {
@@ -187,6 +230,13 @@ tsr_status tsr_io_image_write(const char *path, const char *tmp, uint32_t width,
     if (!out->close() && ok) {
         ok = false;
         e = one_line(out->geterror());
+    }
+    out.reset();
+    if (proxy)
+        proxy->close(); /* (flushed: a failure shows now) */
+    if (ok && proxy && proxy->failed) {
+        ok = false;
+        e = "the disk is full or the file too large";
     }
     if (!ok)
         return tsr_error_set(err, TSR_ERR_IO, "%s: write failed (%s)", path, e.c_str());
@@ -241,10 +291,14 @@ tsr_status tsr_io_image_save_u8_rows(const char *path, uint32_t width, uint32_t 
     tsr_status s = tsr_atomic_begin(path, tmp, sizeof tmp, err);
     if (s != TSR_OK)
         return s;
-    if (!out->open(tmp, spec)) {
+    std::unique_ptr<CheckedFile> proxy;
+    if (!use_checked_file(out.get(), tmp, proxy) || !out->open(tmp, spec)) {
         std::string e = one_line(out->geterror());
+        int en = errno;
+        out.reset();
+        proxy.reset();
         tsr_atomic_abort(tmp);
-        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path, e.c_str());
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path, e.empty() ? std::strerror(en) : e.c_str());
     }
     // a band of rows at a time: made by fill, written, the buffer reused
     std::vector<uint8_t> band;
@@ -267,6 +321,13 @@ tsr_status tsr_io_image_save_u8_rows(const char *path, uint32_t width, uint32_t 
         e = one_line(out->geterror());
     }
     out.reset();
+    if (proxy)
+        proxy->close(); /* (flushed: a failure shows now) */
+    if (ok && proxy && proxy->failed) {
+        ok = false;
+        e = "the disk is full or the file too large";
+    }
+    proxy.reset();
     if (!ok) {
         tsr_atomic_abort(tmp);
         return tsr_error_set(err, TSR_ERR_IO, "%s: write failed (%s)", path, e.c_str());

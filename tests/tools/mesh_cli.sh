@@ -167,6 +167,18 @@ bad=$(awk '$1 == "v" {z[++n] = $4; if (n == 1 || $4 < lo) lo = $4}
 [ "$bad" -eq 0 ] || fail "--base --normals: $bad wall or bottom corners not flat-shaded"
 echo "ok solid, images"
 
+# an image that does not fit (a file size limit, as a full disk): an error
+# naming it, no file left (the PNG writer did not check its writes)
+rm -f "$dir"/full.*
+if (trap '' XFSZ; ulimit -f 8; "$tessera" mesh "$dir/t.png" --dx 10 --method grid -o "$dir/full.ply" \
+    --normal-map "$dir/full.png" --quiet) 2> "$dir/full.err"; then
+  fail "a normal map over the file size limit was written: $(ls -l "$dir"/full.* 2>&1)"
+fi
+grep -q "full.png: write failed" "$dir/full.err" || fail "no error naming the image: $(cat "$dir/full.err")"
+left=$(ls -A "$dir" | grep -c "full\.\(png\|ply\)\|tsr-tmp" || true)
+[ "$left" -eq 0 ] || fail "files left after the failed write: $(ls -A "$dir")"
+echo "ok an image over the file size limit fails cleanly"
+
 # --north-up: every vertex (x, y, z) becomes (x, -y, z) with its normal's y
 # negated, every triangle still faces up (+z, by the cross product of its
 # edges), and a solid stays closed with its volume positive (outward)
