@@ -89,7 +89,11 @@ tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint6
     if (st.st_size == 0)
         return tsr_error_set(err, TSR_ERR_EMPTY, "%s: empty file (0 bytes)", path);
 
-    auto in = ImageInput::open(path);
+    // Alpha as stored: OpenImageIO would otherwise multiply a PNG's colour
+    // by its alpha, and heights (grey, or Terrain-RGB's colours) with it
+    ImageSpec hints;
+    hints.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = ImageInput::open(path, &hints);
     if (!in) {
         std::string e = one_line(OIIO::geterror());
         return tsr_error_set(err, TSR_ERR_FORMAT, "%s: not an image Tessera can read (%s)", path,

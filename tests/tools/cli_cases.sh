@@ -24,6 +24,14 @@ random_bytes_png)
 huge_header_png)
   expect_error 1 "huge\.png: image is 1000000x1000000" -- "$tessera" mesh "$dir/huge.png" -o "$out"
   expect_error 1 "huge\.png: image is 1000000x1000000" -- "$tessera" info "$dir/huge.png" ;;
+alpha_png)
+  # alpha is no height: a Terrain-RGB PNG whose rows have alpha 0, 128 and
+  # 255 reads 100 m everywhere (OpenImageIO multiplied colour by alpha)
+  "$tessera" info "$dir/alpha.png" --decode terrain-rgb --json > "$dir/info.json" || fail "info failed"
+  for k in min max; do
+    v=$(grep -o "\"$k\":[[:space:]]*[-0-9.e+]*" "$dir/info.json" | head -1 | sed 's/.*:[[:space:]]*//')
+    awk -v v="$v" 'BEGIN { exit !(v > 99.95 && v < 100.05) }' || fail "$k height $v, not 100: $(cat "$dir/info.json")"
+  done ;;
 one_by_one_image)
   oiiotool --create 1x1 1 -d uint16 -o "$dir/one.png" || fail "oiiotool failed"
   expect_error 1 "one\.png: image is 1x1; a heightfield needs at least 2x2" -- "$tessera" mesh "$dir/one.png" -o "$out" ;;

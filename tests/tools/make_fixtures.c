@@ -27,7 +27,7 @@ static void be32(unsigned char *b, uint32_t v)
 
 static void chunk(FILE *f, const char *type, const unsigned char *data, uint32_t n)
 {
-    unsigned char buf[64];
+    unsigned char buf[256];
     be32(buf, n);
     fwrite(buf, 1, 4, f);
     memcpy(buf, type, 4);
@@ -36,6 +36,43 @@ static void chunk(FILE *f, const char *type, const unsigned char *data, uint32_t
     fwrite(buf, 1, 4 + n, f);
     be32(buf, crc32_png(buf, 4 + n));
     fwrite(buf, 1, 4, f);
+}
+
+/* A 4 x 4 Terrain-RGB PNG, RGBA 8-bit, every pixel height 100 m (R 1, G
+ * 138, B 136), its rows' alpha 0, 128, 255, 255: alpha is no height. The
+ * IDAT is a zlib stream of one stored block. */
+static void alpha_png(FILE *f)
+{
+    static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+    fwrite(sig, 1, 8, f);
+    unsigned char ihdr[13] = {0};
+    be32(ihdr, 4);
+    be32(ihdr + 4, 4);
+    ihdr[8] = 8; /* bit depth */
+    ihdr[9] = 6; /* RGBA */
+    chunk(f, "IHDR", ihdr, 13);
+    unsigned char raw[4 * 17], z[2 + 5 + sizeof raw + 4];
+    static const unsigned char alpha[4] = {0, 128, 255, 255};
+    for (int y = 0; y < 4; y++) {
+        raw[17 * y] = 0; /* no filter */
+        for (int x = 0; x < 4; x++) {
+            unsigned char *p = raw + 17 * y + 1 + 4 * x;
+            p[0] = 1, p[1] = 138, p[2] = 136, p[3] = alpha[y];
+        }
+    }
+    uint32_t a = 1, b = 0; /* Adler-32 */
+    for (size_t i = 0; i < sizeof raw; i++) {
+        a = (a + raw[i]) % 65521;
+        b = (b + a) % 65521;
+    }
+    z[0] = 0x78, z[1] = 0x01;
+    z[2] = 1; /* the final block, stored */
+    z[3] = sizeof raw & 0xFF, z[4] = sizeof raw >> 8;
+    z[5] = (unsigned char)~z[3], z[6] = (unsigned char)~z[4];
+    memcpy(z + 7, raw, sizeof raw);
+    be32(z + 7 + sizeof raw, b << 16 | a);
+    chunk(f, "IDAT", z, sizeof z);
+    chunk(f, "IEND", NULL, 0);
 }
 
 static FILE *open_in(const char *dir, const char *name)
@@ -100,5 +137,8 @@ int main(int argc, char **argv)
     raw_f32(dir, "nan.f32", 16, 5, NAN, 0);
     raw_f32(dir, "inf.f32", 16, 9, INFINITY, 0);
     raw_f32(dir, "allnan.f32", 16, 0, NAN, 1);
+    f = open_in(dir, "alpha.png");
+    alpha_png(f);
+    fclose(f);
     return 0;
 }
