@@ -7,6 +7,7 @@
 #include "terrain/shade.h"
 
 #include <cjson/cJSON.h>
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -374,6 +375,16 @@ static int run(int argc, char **argv)
     to.progress_user = &pr;
     tsr_heightfield_stats st;
     tsr_heightfield_stats_compute(hf, &st);
+    /* the vertices are floats: heights and extents must fit */
+    double sdx, sdy, sdz;
+    tsr_heightfield_spacing(hf, &sdx, &sdy, &sdz);
+    double ztop = fmax(fabs(st.min), fabs(st.max)) * fabs(sdz);
+    if (!(ztop <= FLT_MAX) || !((double)W * fabs(sdx) <= FLT_MAX) || !((double)H * fabs(sdy) <= FLT_MAX)) {
+        cli_error("mesh", "%s: %s pass the largest float (%.3g), which mesh vertices are written in",
+                  in, ztop <= FLT_MAX ? "the extents (width dx, height dy)" : "the heights times --dz", FLT_MAX);
+        tsr_heightfield_destroy(hf);
+        return CLI_USAGE;
+    }
 
     tsr_mesh mesh;
     tsr_mesh_init(&mesh, to.normals ? TSR_MESH_NORMALS : 0, NULL);
@@ -408,7 +419,12 @@ static int run(int argc, char **argv)
         }
         to.max_error = rep.target_error - 2 * (er.max_vertical - bound);
         if (!(to.max_error > 0)) {
-            cli_error("mesh", "%s: cannot meet the bound %g", in, bound);
+            double ulp = ztop * FLT_EPSILON; /* float's spacing at the highest height */
+            if (bound < ulp)
+                cli_error("mesh", "%s: cannot meet the bound %g: heights up to %g are floats %g apart in a mesh", in,
+                          bound, ztop, ulp);
+            else
+                cli_error("mesh", "%s: cannot meet the bound %g", in, bound);
             rc = CLI_FAIL;
             break;
         }

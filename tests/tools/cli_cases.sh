@@ -32,6 +32,11 @@ alpha_png)
     v=$(grep -o "\"$k\":[[:space:]]*[-0-9.e+]*" "$dir/info.json" | head -1 | sed 's/.*:[[:space:]]*//')
     awk -v v="$v" 'BEGIN { exit !(v > 99.95 && v < 100.05) }' || fail "$k height $v, not 100: $(cat "$dir/info.json")"
   done ;;
+height_overflow)
+  # heights times --dz beyond float32 (which vertices are written in): an
+  # error, not a mesh of infinities
+  expect_error 2 "nan\.f32: the heights times --dz pass the largest float" -- \
+    "$tessera" mesh "$dir/nan.f32" --raw 4 4 f32 --dz 1e38 -o "$out" ;;
 one_by_one_image)
   oiiotool --create 1x1 1 -d uint16 -o "$dir/one.png" || fail "oiiotool failed"
   expect_error 1 "one\.png: image is 1x1; a heightfield needs at least 2x2" -- "$tessera" mesh "$dir/one.png" -o "$out" ;;
