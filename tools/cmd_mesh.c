@@ -43,7 +43,7 @@ static void help(FILE *f)
             "                        triangles' error above the bound)\n"
             "  --block N             delaunay with a bound: mesh blocks of about N x N cells on\n"
             "                        their own, their seams fixed like window borders (default\n"
-            "                        256; the mesh depends on N, not on --threads)\n"
+            "                        256, at least 16; the mesh depends on N, not on --threads)\n"
             "  --threads N           delaunay: blocks meshed at once; quadtree: nodes tested at\n"
             "                        once (default: one per processor this process may use, by its\n"
             "                        CPU affinity and cgroup CPU limit; the mesh is the same)\n"
@@ -267,7 +267,10 @@ static int run(int argc, char **argv)
                 to.max_vertices = v;
             else if (!strcmp(a, "--step"))
                 to.grid_step = v;
-            else if (!strcmp(a, "--block"))
+            else if (!strcmp(a, "--block") && v < 16) {
+                cli_error("mesh", "--block %s: at least 16 (cells a side; smaller blocks are mostly seams)", argv[i]);
+                return CLI_USAGE;
+            } else if (!strcmp(a, "--block"))
                 to.block = v;
             else if (!strcmp(a, "--threads"))
                 to.threads = v;
@@ -316,6 +319,15 @@ static int run(int argc, char **argv)
     }
     if (no_flip_given && to.method != TSR_TIN_DELAUNAY) {
         cli_error("mesh", "--no-flip applies to --method delaunay only");
+        return CLI_USAGE;
+    }
+    if (to.border_error > 0 && to.method != TSR_TIN_DELAUNAY) {
+        cli_error("mesh", "--border-error applies to --method delaunay only");
+        return CLI_USAGE;
+    }
+    if (to.border_error > 0 && max_error > 0 && to.border_error > max_error) {
+        cli_error("mesh", "--border-error %g: the border is part of the mesh, so it must be within --max-error %g",
+                  to.border_error, max_error);
         return CLI_USAGE;
     }
     if (to.block && to.method != TSR_TIN_DELAUNAY) {

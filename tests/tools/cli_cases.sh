@@ -185,7 +185,13 @@ bad_options)
   expect_error 2 "--dx abc: not a finite number" -- "$tessera" mesh "$dir/g.png" -o "$out" --dx abc
   expect_error 2 "unknown mesh format" -- "$tessera" mesh "$dir/g.png" -o "$dir/out.xyz"
   expect_error 2 "unknown option '--frobnicate'" -- "$tessera" info "$dir/g.png" --frobnicate
-  expect_error 2 "unknown command 'nosuch'" -- "$tessera" nosuch ;;
+  expect_error 2 "unknown command 'nosuch'" -- "$tessera" nosuch
+  # (--block 1 ran for minutes; a border beyond the bound could not be met)
+  expect_error 2 "--block 4: at least 16" -- "$tessera" mesh "$dir/g.png" -o "$out" --block 4
+  expect_error 2 "--border-error 3: .* within --max-error 2" -- \
+    "$tessera" mesh "$dir/g.png" -o "$out" --max-error 2 --border-error 3
+  expect_error 2 "--border-error applies to --method delaunay only" -- \
+    "$tessera" mesh "$dir/g.png" -o "$out" --method quadtree --border-error 1 ;;
 *) fail "unknown case" ;;
 esac
 exit 0
