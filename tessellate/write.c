@@ -8,6 +8,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +17,43 @@
 #include <unistd.h>
 
 /* ---- Atomic output ---------------------------------------------------- */
+
+/* The temporaries begun and not yet committed or aborted, for
+ * tsr_atomic_remove_pending: a slot is claimed (1), its path written, then
+ * marked ready (2); a signal handler reads only ready slots. */
+enum { PENDING = 32, PENDING_PATH = 4096 };
+static char pending_path[PENDING][PENDING_PATH];
+static atomic_int pending_state[PENDING];
+
+static void pending_add(const char *tmp)
+{
+    if (strlen(tmp) >= PENDING_PATH)
+        return;
+    for (int k = 0; k < PENDING; k++) {
+        int free_slot = 0;
+        if (atomic_compare_exchange_strong(&pending_state[k], &free_slot, 1)) {
+            memcpy(pending_path[k], tmp, strlen(tmp) + 1);
+            atomic_store(&pending_state[k], 2);
+            return;
+        }
+    }
+}
+
+static void pending_drop(const char *tmp)
+{
+    for (int k = 0; k < PENDING; k++)
+        if (atomic_load(&pending_state[k]) == 2 && !strcmp(pending_path[k], tmp)) {
+            atomic_store(&pending_state[k], 0);
+            return;
+        }
+}
+
+void tsr_atomic_remove_pending(void)
+{
+    for (int k = 0; k < PENDING; k++)
+        if (atomic_load(&pending_state[k]) == 2)
+            unlink(pending_path[k]);
+}
 
 tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *err)
 {
@@ -39,6 +77,7 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
     umask(mask);
     fchmod(fd, 0666 & ~mask);
     close(fd);
+    pending_add(tmp);
     return TSR_OK;
 }
 
@@ -47,12 +86,18 @@ tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err)
     if (rename(tmp, path) != 0) {
         int e = errno;
         remove(tmp);
+        pending_drop(tmp);
         return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: %s", path, strerror(e));
     }
+    pending_drop(tmp);
     return TSR_OK;
 }
 
-void tsr_atomic_abort(const char *tmp) { remove(tmp); }
+void tsr_atomic_abort(const char *tmp)
+{
+    remove(tmp);
+    pending_drop(tmp);
+}
 
 tsr_status tsr_atomic_probe(const char *path, tsr_error *err)
 {

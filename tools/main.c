@@ -1,7 +1,9 @@
 /* main.c: the tessera command: a table of subcommands, each in its own
  * file (cmd_*.c). */
+#define _POSIX_C_SOURCE 200809L /* sigaction */
 #include "cli.h"
 
+#include <signal.h>
 #include <string.h>
 
 #ifndef TSR_VERSION
@@ -24,8 +26,28 @@ static void usage(FILE *f)
                "'tessera --version' prints the version.\n");
 }
 
+/* Interrupted (Ctrl-C, a batch system's time limit): the output being
+ * written is removed, then the signal does what it would have done. */
+static void on_signal(int sig)
+{
+    tsr_atomic_remove_pending();
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
 int main(int argc, char **argv)
 {
+    static const int sigs[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT};
+    for (size_t k = 0; k < sizeof sigs / sizeof sigs[0]; k++) {
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_handler = on_signal;
+        sigemptyset(&sa.sa_mask);
+        struct sigaction old;
+        /* (a signal ignored when we start, as nohup leaves SIGHUP, stays so) */
+        if (sigaction(sigs[k], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
+            sigaction(sigs[k], &sa, NULL);
+    }
     if (argc < 2) {
         usage(stderr);
         return CLI_USAGE;

@@ -109,6 +109,33 @@ TEST(unwritable_output_leaves_nothing)
     tsr_mesh_free(&m);
 }
 
+/* An interrupted command's temporaries: tsr_atomic_remove_pending (what
+ * tessera's SIGINT / SIGTERM handler calls) removes those begun and not
+ * finished, and nothing committed or aborted. */
+TEST(pending_temporaries_removed)
+{
+    const char *dir = check_temp_dir();
+    char path[512], done[512], t1[4096], t2[4096], t3[4096];
+    tsr_error err = {0};
+    snprintf(path, sizeof path, "%s/pending.obj", dir);
+    snprintf(done, sizeof done, "%s/done.obj", dir);
+    CHECK(tsr_atomic_begin(path, t1, sizeof t1, &err) == TSR_OK && exists(t1));
+    CHECK(tsr_atomic_begin(done, t2, sizeof t2, &err) == TSR_OK);
+    CHECK(tsr_atomic_commit(t2, done, &err) == TSR_OK && exists(done));
+    CHECK(tsr_atomic_begin(path, t3, sizeof t3, &err) == TSR_OK && exists(t3));
+    tsr_atomic_abort(t3);
+    /* a file of the aborted temporary's name made since is not touched */
+    FILE *f = fopen(t3, "w");
+    CHECK(f != NULL);
+    if (f)
+        fclose(f);
+    tsr_atomic_remove_pending();
+    CHECK(!exists(t1));
+    CHECK(exists(done) && exists(t3));
+    remove(done);
+    remove(t3);
+}
+
 TEST(binary_layouts)
 {
     tsr_mesh m;
@@ -451,7 +478,7 @@ TEST(cgroup_cpu_limits)
     CHECK(system(cmd) == 0);
 }
 
-TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing),
+TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing), T(pending_temporaries_removed),
           T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced),
           T(keymap_clear_keeps_room), T(cpu_count_follows_affinity), T(cpu_quota_text),
           T(cgroup_cpu_limits), T(default_allocator_kinds),
