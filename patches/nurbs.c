@@ -243,6 +243,11 @@ static bool eval_jet(const tsr_patch *p, const dir *du, const dir *dv, double u,
     double A[3][3][4];
     memset(A, 0, sizeof A);
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    /* about the span's first control point: far from the origin (a part at
+     * 1e6) the derivatives are differences of nearby points, and would
+     * lose their digits to the coordinates' (a pole's normal flipped) */
+    const double *c0 = p->ctrl + 3 * ((size_t)(kv - (uint32_t)pv) * du->count + ku - (uint32_t)pu);
+    double ref[3] = {c0[0], c0[1], c0[2]};
     for (int j = 0; j <= pv; j++) {
         size_t row = (size_t)(kv - (uint32_t)pv + (uint32_t)j) * du->count;
         /* this row's u-contractions: R[k] = sum_i Nu[k][i] Pw_i */
@@ -258,7 +263,7 @@ static bool eval_jet(const tsr_patch *p, const dir *du, const dir *dv, double u,
                 lo[c] = P[c] < lo[c] ? P[c] : lo[c];
                 hi[c] = P[c] > hi[c] ? P[c] : hi[c];
             }
-            double pw[4] = {w * P[0], w * P[1], w * P[2], w};
+            double pw[4] = {w * (P[0] - ref[0]), w * (P[1] - ref[1]), w * (P[2] - ref[2]), w};
             for (int k = 0; k <= order; k++)
                 for (int c = 0; c < 4; c++)
                     R[k][c] += Nu[k][i] * pw[c];
@@ -286,6 +291,8 @@ static bool eval_jet(const tsr_patch *p, const dir *du, const dir *dv, double u,
             for (int c = 0; c < 3; c++)
                 J->S[k][l][c] = s[c] / A[0][0][3];
         }
+    for (int c = 0; c < 3; c++)
+        J->S[0][0][c] += ref[c];
     J->wu = du->knots[ku + 1] - du->knots[ku];
     J->wv = dv->knots[kv + 1] - dv->knots[kv];
     double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];

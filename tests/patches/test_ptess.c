@@ -3676,6 +3676,63 @@ TEST(crease_normals_smooth_sphere)
     free(b.s);
 }
 
+/* One NURBS sphere (9 x 5 rational quadratic net, double knots: C0 in its
+ * parameters, smooth on the surface), at the origin and a million units
+ * away: no vertex split, and the poles' normals point away from the
+ * centre. Far away, the evaluator's derivatives lost their digits to the
+ * coordinates, and each pole got a second vertex with its normal flipped. */
+TEST(crease_normals_far_sphere)
+{
+    static const double cu[9][3] = {{1, 0, 1}, {1, 1, H2}, {0, 1, 1}, {-1, 1, H2}, {-1, 0, 1},
+                                    {-1, -1, H2}, {0, -1, 1}, {1, -1, H2}, {1, 0, 1}};
+    static const double cv[5][3] = {{0, -1, 1}, {1, -1, H2}, {1, 0, 1}, {1, 1, H2}, {0, 1, 1}};
+    for (int far = 0; far < 2; far++) {
+        double off = far ? 1e6 : 0;
+        sbuf b = {0};
+        for (int j = 0; j < 5; j++)
+            for (int i = 0; i < 9; i++)
+                sb_printf(&b, "v %.17g %.17g %.17g %.17g\n", off + cu[i][0] * cv[j][0], off + cu[i][1] * cv[j][0],
+                          cv[j][1], cu[i][2] * cv[j][2]);
+        sb_printf(&b, "cstype rat bspline\ndeg 2 2\nsurf 0 1 0 1");
+        for (int k = 1; k <= 45; k++)
+            sb_printf(&b, " %d", k);
+        sb_printf(&b, "\nparm u 0 0 0 0.25 0.25 0.5 0.5 0.75 0.75 1 1 1\nparm v 0 0 0 0.5 0.5 1 1 1\nend\n");
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        if (parse_set(&b, "nurbs_sphere.obj", &set) && make_model(&set, &m)) {
+            tsr_ptess_options o = {0};
+            o.max_error = 0.25;
+            o.normals = true;
+            tsr_ptess_result r;
+            if (run_ptess(m, &o, &r)) {
+                tsr_mesh out;
+                uint32_t added = 99;
+                tsr_error e = {0};
+                tsr_status st = tsr_ptess_crease_normals(m, &r, 1, NULL, &out, &added, &e);
+                CHECK_MSG(st == TSR_OK, "%s", e.message);
+                if (st == TSR_OK) {
+                    uint32_t poles = 0, wrong = 0;
+                    for (uint32_t i = 0; i < out.vertex_count; i++) {
+                        const float *p = out.positions + 3 * (size_t)i, *n = out.normals + 3 * (size_t)i;
+                        if (fabs(p[2]) != 1 || fabs(p[0] - off) > 1e-3 || fabs(p[1] - off) > 1e-3)
+                            continue;
+                        poles++;
+                        wrong += !(n[2] * p[2] > 0.99);
+                    }
+                    CHECK_MSG(added == 0 && poles == 2 && wrong == 0,
+                              "offset %g: %u vertices split, %u pole vertices, %u pointing inwards", off, added,
+                              poles, wrong);
+                }
+                tsr_mesh_free(&out);
+            }
+            tsr_ptess_result_free(&r);
+        }
+        tsr_pmodel_destroy(m);
+        tsr_patch_set_free(&set);
+        free(b.s);
+    }
+}
+
 /* A roof: one cubic x linear B-spline whose knot u = 1 is triple, its two
  * halves planes meeting at a ridge (x = 1) at an angle. The triple knot is
  * its one kink; every ridge vertex is written twice, and each corner's
@@ -4008,7 +4065,7 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
           T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
          T(rational_cylinder_cut_near_its_strip),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
-          T(data_osd_corner_estimate), T(data_osd_half_tiles), T(crease_normals_box), T(crease_normals_smooth_sphere),
+          T(data_osd_corner_estimate), T(data_osd_half_tiles), T(crease_normals_box), T(crease_normals_smooth_sphere), T(crease_normals_far_sphere),
           T(crease_normals_bspline_kink), T(small_faces_small_memory), T(measure_threads_same_figures),
           T(data_osd_crease_normals),
           T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
