@@ -75,6 +75,25 @@ static bool use_checked_file(ImageOutput *out, const char *tmp, std::unique_ptr<
     return true;
 }
 
+// Closes out (and its proxy, flushed so that a failure shows now) after
+// writes that went as ok says; false, with why in e, when any part failed.
+static bool finish_write(ImageOutput::unique_ptr &out, std::unique_ptr<CheckedFile> &proxy, bool ok, std::string &e)
+{
+    e = ok ? std::string() : one_line(out->geterror());
+    if (!out->close() && ok) {
+        ok = false;
+        e = one_line(out->geterror());
+    }
+    out.reset();
+    if (proxy)
+        proxy->close();
+    if (ok && proxy && proxy->failed) {
+        ok = false;
+        e = "the disk is full or the file too large";
+    }
+    return ok;
+}
+
 tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples,
                                      float **pixels, tsr_image_info *info, tsr_error *err)
 {
@@ -230,18 +249,8 @@ tsr_status tsr_io_image_write(const char *path, const char *tmp, uint32_t width,
     } else {
         ok = out->write_image(TypeDesc::FLOAT, values);
     }
-    std::string e = ok ? std::string() : one_line(out->geterror());
-    if (!out->close() && ok) {
-        ok = false;
-        e = one_line(out->geterror());
-    }
-    out.reset();
-    if (proxy)
-        proxy->close(); /* (flushed: a failure shows now) */
-    if (ok && proxy && proxy->failed) {
-        ok = false;
-        e = "the disk is full or the file too large";
-    }
+    std::string e;
+    ok = finish_write(out, proxy, ok, e);
     if (!ok)
         return tsr_error_set(err, TSR_ERR_IO, "%s: write failed (%s)", path, e.c_str());
     return TSR_OK;
@@ -319,18 +328,8 @@ tsr_status tsr_io_image_save_u8_rows(const char *path, uint32_t width, uint32_t 
         fill(user, y0, y1, band.data());
         ok = out->write_scanlines((int)y0, (int)y1, 0, TypeDesc::UINT8, band.data());
     }
-    std::string e = ok ? std::string() : one_line(out->geterror());
-    if (!out->close() && ok) {
-        ok = false;
-        e = one_line(out->geterror());
-    }
-    out.reset();
-    if (proxy)
-        proxy->close(); /* (flushed: a failure shows now) */
-    if (ok && proxy && proxy->failed) {
-        ok = false;
-        e = "the disk is full or the file too large";
-    }
+    std::string e;
+    ok = finish_write(out, proxy, ok, e);
     proxy.reset();
     if (!ok) {
         tsr_atomic_abort(tmp);

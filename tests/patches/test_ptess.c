@@ -3638,6 +3638,23 @@ TEST(crease_normals_box)
 
 /* The sphere of eight octants is smooth where they meet and at its poles
  * (collapsed edges): no vertex is split, the normals stay radial. */
+/* m tessellated within E with normals, then split at creases of 1 degree
+ * into *out (free it); false (after a failed CHECK) when either fails. */
+static bool crease_run(const tsr_pmodel *m, double E, tsr_mesh *out, uint32_t *added, tsr_ptess_result *r)
+{
+    tsr_ptess_options o = {0};
+    o.max_error = E;
+    o.normals = true;
+    memset(out, 0, sizeof *out);
+    if (!run_ptess(m, &o, r))
+        return false;
+    tsr_error e = {0};
+    *added = 99;
+    tsr_status st = tsr_ptess_crease_normals(m, r, 1, NULL, out, added, &e);
+    CHECK_MSG(st == TSR_OK, "%s", e.message);
+    return st == TSR_OK;
+}
+
 TEST(crease_normals_smooth_sphere)
 {
     sbuf b = {0};
@@ -3649,26 +3666,18 @@ TEST(crease_normals_smooth_sphere)
         return;
     }
     if (make_model(&set, &m)) {
-        tsr_ptess_options o = {0};
-        o.max_error = 1e-3;
-        o.normals = true;
         tsr_ptess_result r;
-        if (run_ptess(m, &o, &r)) {
-            tsr_mesh out;
-            uint32_t added = 99;
-            tsr_error e = {0};
-            tsr_status st = tsr_ptess_crease_normals(m, &r, 1, NULL, &out, &added, &e);
-            CHECK_MSG(st == TSR_OK, "%s", e.message);
-            if (st == TSR_OK) {
-                uint32_t *copies = NULL;
-                check_crease_copy(&r, &out, added, &copies);
-                free(copies);
-                CHECK_MSG(added == 0, "%u vertices split on a smooth sphere", added);
-                uint32_t off = normals_off_radial(&out, 1, 1e-6);
-                CHECK_MSG(off == 0, "%u normals not radial", off);
-            }
-            tsr_mesh_free(&out);
+        tsr_mesh out;
+        uint32_t added;
+        if (crease_run(m, 1e-3, &out, &added, &r)) {
+            uint32_t *copies = NULL;
+            check_crease_copy(&r, &out, added, &copies);
+            free(copies);
+            CHECK_MSG(added == 0, "%u vertices split on a smooth sphere", added);
+            uint32_t off = normals_off_radial(&out, 1, 1e-6);
+            CHECK_MSG(off == 0, "%u normals not radial", off);
         }
+        tsr_mesh_free(&out);
         tsr_ptess_result_free(&r);
     }
     tsr_pmodel_destroy(m);
@@ -3700,31 +3709,23 @@ TEST(crease_normals_far_sphere)
         tsr_patch_set set;
         tsr_pmodel *m = NULL;
         if (parse_set(&b, "nurbs_sphere.obj", &set) && make_model(&set, &m)) {
-            tsr_ptess_options o = {0};
-            o.max_error = 0.25;
-            o.normals = true;
             tsr_ptess_result r;
-            if (run_ptess(m, &o, &r)) {
-                tsr_mesh out;
-                uint32_t added = 99;
-                tsr_error e = {0};
-                tsr_status st = tsr_ptess_crease_normals(m, &r, 1, NULL, &out, &added, &e);
-                CHECK_MSG(st == TSR_OK, "%s", e.message);
-                if (st == TSR_OK) {
-                    uint32_t poles = 0, wrong = 0;
-                    for (uint32_t i = 0; i < out.vertex_count; i++) {
-                        const float *p = out.positions + 3 * (size_t)i, *n = out.normals + 3 * (size_t)i;
-                        if (fabs(p[2]) != 1 || fabs(p[0] - off) > 1e-3 || fabs(p[1] - off) > 1e-3)
-                            continue;
-                        poles++;
-                        wrong += !(n[2] * p[2] > 0.99);
-                    }
-                    CHECK_MSG(added == 0 && poles == 2 && wrong == 0,
-                              "offset %g: %u vertices split, %u pole vertices, %u pointing inwards", off, added,
-                              poles, wrong);
+            tsr_mesh out;
+            uint32_t added;
+            if (crease_run(m, 0.25, &out, &added, &r)) {
+                uint32_t poles = 0, wrong = 0;
+                for (uint32_t i = 0; i < out.vertex_count; i++) {
+                    const float *p = out.positions + 3 * (size_t)i, *n = out.normals + 3 * (size_t)i;
+                    if (fabs(p[2]) != 1 || fabs(p[0] - off) > 1e-3 || fabs(p[1] - off) > 1e-3)
+                        continue;
+                    poles++;
+                    wrong += !(n[2] * p[2] > 0.99);
                 }
-                tsr_mesh_free(&out);
+                CHECK_MSG(added == 0 && poles == 2 && wrong == 0,
+                          "offset %g: %u vertices split, %u pole vertices, %u pointing inwards", off, added, poles,
+                          wrong);
             }
+            tsr_mesh_free(&out);
             tsr_ptess_result_free(&r);
         }
         tsr_pmodel_destroy(m);
