@@ -3188,7 +3188,8 @@ static uint64_t lat_cell(const lat_grid *g, double u, double v, int64_t di, int6
 {
     double fu = floor((u - g->u0) / g->cu), fv = floor((v - g->v0) / g->cv);
     int64_t i = (fu > -1e9 && fu < 1e9 ? (int64_t)fu : 0) + di, j = (fv > -1e9 && fv < 1e9 ? (int64_t)fv : 0) + dj;
-    return (uint64_t)(uint32_t)i << 32 | (uint32_t)j;
+    /* (biased: no cell's key is the keymap's forbidden UINT64_MAX) */
+    return (uint64_t)((uint32_t)i + 0x80000000u) << 32 | ((uint32_t)j + 0x80000000u);
 }
 
 static bool lat_build(lat_grid *g, const double *xy, uint32_t n, const double dom[4], double hu, double hv,

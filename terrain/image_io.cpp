@@ -57,6 +57,11 @@ public:
     {
         if (m_file && (std::fflush(m_file) != 0 || std::ferror(m_file)))
             failed = true;
+        if (m_file && m_auto_close) { // (IOFile's own close drops fclose's answer)
+            if (std::fclose(m_file) != 0)
+                failed = true;
+            m_file = nullptr;
+        }
         IOFile::close();
     }
     bool failed = false;
@@ -213,6 +218,7 @@ tsr_status tsr_io_image_write(const char *path, const char *tmp, uint32_t width,
                                       const float *values, bool as_u16, double scale, double offset,
                                       tsr_error *err)
 {
+    std::unique_ptr<CheckedFile> proxy; // (before out: destroyed after it)
     auto out = ImageOutput::create(tmp);
     if (!out) {
         std::string e = one_line(OIIO::geterror());
@@ -230,10 +236,13 @@ tsr_status tsr_io_image_write(const char *path, const char *tmp, uint32_t width,
     } else {
         spec.attribute("compression", "zip");
     }
-    std::unique_ptr<CheckedFile> proxy;
+    errno = 0;
     if (!use_checked_file(out.get(), tmp, proxy) || !out->open(tmp, spec)) {
+        int en = errno;
         std::string e = one_line(out->geterror());
-        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path, e.empty() ? std::strerror(errno) : e.c_str());
+        out.reset();
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path,
+                             !e.empty() ? e.c_str() : en ? std::strerror(en) : "unknown error");
     }
     bool ok = true;
     if (as_u16) {
@@ -296,6 +305,7 @@ tsr_status tsr_io_image_save_u8_rows(const char *path, uint32_t width, uint32_t 
         return tsr_error_set(err, TSR_ERR_TOO_LARGE, "%s: image %ux%u too large to write", path, width, height);
     // The writer is picked by the extension alone: an unknown one is
     // refused before anything is created on disk.
+    std::unique_ptr<CheckedFile> proxy; // (before out: destroyed after it)
     auto out = image_writer(path, err);
     if (!out)
         return TSR_ERR_UNSUPPORTED;
@@ -304,14 +314,15 @@ tsr_status tsr_io_image_save_u8_rows(const char *path, uint32_t width, uint32_t 
     tsr_status s = tsr_atomic_begin(path, tmp, sizeof tmp, err);
     if (s != TSR_OK)
         return s;
-    std::unique_ptr<CheckedFile> proxy;
+    errno = 0;
     if (!use_checked_file(out.get(), tmp, proxy) || !out->open(tmp, spec)) {
-        std::string e = one_line(out->geterror());
         int en = errno;
+        std::string e = one_line(out->geterror());
         out.reset();
         proxy.reset();
         tsr_atomic_abort(tmp);
-        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path, e.empty() ? std::strerror(en) : e.c_str());
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write (%s)", path,
+                             !e.empty() ? e.c_str() : en ? std::strerror(en) : "unknown error");
     }
     // a band of rows at a time: made by fill, written, the buffer reused
     std::vector<uint8_t> band;

@@ -185,9 +185,10 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
 tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err);
 /* Removes tmp after a failed write. */
 void tsr_atomic_abort(const char *tmp);
-/* Removes every temporary begun and not yet committed or aborted (the
- * last 32 at most): for a handler of SIGINT or SIGTERM, so an interrupted
- * command leaves no hidden partial file. Async-signal-safe (unlink). */
+/* Removes every temporary begun and not yet committed or aborted (up to
+ * 32 in flight at once; more, or paths of 4 KiB, are not kept): for a
+ * handler of SIGINT or SIGTERM, so an interrupted command leaves no hidden
+ * partial file. Async-signal-safe (unlink). */
 void tsr_atomic_remove_pending(void);
 /* Whether an output could be made at path: creates the temporary that
  * tsr_atomic_begin would and removes it, leaving the disk as it was. For

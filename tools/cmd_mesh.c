@@ -421,6 +421,13 @@ static int run(int argc, char **argv)
         }
         if (bound == 0 && !to.max_triangles && !to.max_vertices && to.method != TSR_TIN_GRID)
             bound = rep.bound; /* the default bound */
+        if (to.border_error > bound && bound > 0 && attempt == 0) {
+            cli_error("mesh", "--border-error %g: the border is part of the mesh, so it must be within the bound %g "
+                              "(the default, 0.1%% of the height range; --max-error sets another)",
+                      to.border_error, bound);
+            rc = CLI_USAGE;
+            break;
+        }
         if (bound == 0 || er.max_vertical <= bound || to.method == TSR_TIN_GRID)
             break;
         if (attempt == 3) {

@@ -190,6 +190,8 @@ bad_options)
   expect_error 2 "--block 4: at least 16" -- "$tessera" mesh "$dir/g.png" -o "$out" --block 4
   expect_error 2 "--border-error 3: .* within --max-error 2" -- \
     "$tessera" mesh "$dir/g.png" -o "$out" --max-error 2 --border-error 3
+  expect_error 2 "--border-error 1e\+06: .* within the bound .* \(the default" -- \
+    "$tessera" mesh "$dir/g.png" -o "$out" --border-error 1e6
   expect_error 2 "--border-error applies to --method delaunay only" -- \
     "$tessera" mesh "$dir/g.png" -o "$out" --method quadtree --border-error 1 ;;
 *) fail "unknown case" ;;
