@@ -346,16 +346,12 @@ static bool mesh_point(const measurer *M, double u, double v, double p[3])
         bool exact;
         if (!locate_in(entry_uv(M, e), u, v, M->tol, w, &exact))
             continue;
-        if (!exact) {
-            if (near == UINT32_MAX) {
-                near = e;
-                memcpy(nw, w, sizeof nw);
-            }
-            continue;
+        if (exact || near == UINT32_MAX) {
+            near = e;
+            memcpy(nw, w, sizeof nw);
         }
-        near = e;
-        memcpy(nw, w, sizeof nw);
-        break;
+        if (exact)
+            break;
     }
     if (near != UINT32_MAX) {
         uint32_t t = M->tris[near];
