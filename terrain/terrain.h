@@ -280,8 +280,12 @@ typedef struct tsr_tin_report {
  * lowers the error (unless no_flip); the outer border and no-data boundaries are
  * fixed first by Douglas-Peucker so they depend only on their own
  * samples. Does not measure the result: see tsr_terrain_measure. Fails
- * with TSR_ERR_ARGUMENT for bad options or a budget smaller than the
- * fixed border needs (err says how many), TSR_ERR_NOMEM, TSR_ERR_TOO_LARGE. */
+ * with TSR_ERR_ARGUMENT for bad options (among them a delaunay
+ * border_error above the bound, given or the default), a budget smaller
+ * than the fixed border needs (err says how many), or heights times dz or
+ * the window's extents beyond float (the vertices' type); TSR_ERR_VALUE
+ * for a window without a valid sample; TSR_ERR_NOMEM, TSR_ERR_TOO_LARGE.
+ * Nothing is meshed when the options are refused. */
 tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *opts, tsr_mesh *mesh,
                             tsr_tin_report *report, tsr_error *err);
 

@@ -45,6 +45,7 @@
  * leaf a grid tile; grid: every step-th sample (grid.c). */
 #include "terrain_internal.h"
 
+#include <float.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -1886,9 +1887,20 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
     rep->target_error = target;
     rep->bound = target;
     rep->border_error = btol;
+    /* vertices are floats: the window's heights and extents must fit */
+    double ztop = fmax(fabs(hs.min), fabs(hs.max)) * hf->dz;
+    bool ext_ok = (double)(wx + ww - 1) * hf->dx <= FLT_MAX && (double)(wy + wh - 1) * hf->dy <= FLT_MAX;
     tsr_status st;
     if (hs.valid == 0)
         st = tsr_error_set(err, TSR_ERR_VALUE, "mesh: no valid sample in the window");
+    else if (!(ztop <= FLT_MAX) || !ext_ok)
+        st = tsr_error_set(err, TSR_ERR_ARGUMENT, "mesh: %s pass the largest float (%.3g), which mesh vertices are "
+                           "written in", ext_ok ? "the heights times dz" : "the extents (columns times dx, rows "
+                           "times dy)", FLT_MAX);
+    else if (o.method == TSR_TIN_DELAUNAY && o.border_error > 0 && target > 0 && o.border_error > target)
+        st = tsr_error_set(err, TSR_ERR_ARGUMENT, "mesh: the border tolerance %g exceeds the bound %g%s: the border "
+                           "is part of the mesh", o.border_error, target,
+                           o.max_error > 0 ? "" : " (the default, 0.1% of the window's height range)");
     else if (o.method == TSR_TIN_DELAUNAY) {
         /* a hair below the bound, for the float rounding of the output */
         double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(hs.max), fabs(hs.min)) * hf->dz;

@@ -387,16 +387,9 @@ static int run(int argc, char **argv)
     to.progress_user = &pr;
     tsr_heightfield_stats st;
     tsr_heightfield_stats_compute(hf, &st);
-    /* the vertices are floats: heights and extents must fit */
     double sdx, sdy, sdz;
     tsr_heightfield_spacing(hf, &sdx, &sdy, &sdz);
-    double ztop = fmax(fabs(st.min), fabs(st.max)) * fabs(sdz);
-    if (!(ztop <= FLT_MAX) || !((double)W * fabs(sdx) <= FLT_MAX) || !((double)H * fabs(sdy) <= FLT_MAX)) {
-        cli_error("mesh", "%s: %s pass the largest float (%.3g), which mesh vertices are written in",
-                  in, ztop <= FLT_MAX ? "the extents (width dx, height dy)" : "the heights times --dz", FLT_MAX);
-        tsr_heightfield_destroy(hf);
-        return CLI_USAGE;
-    }
+    double ztop = fmax(fabs(st.min), fabs(st.max)) * fabs(sdz); /* for the float spacing below */
 
     tsr_mesh mesh;
     tsr_mesh_init(&mesh, to.normals ? TSR_MESH_NORMALS : 0, NULL);
@@ -411,7 +404,7 @@ static int run(int argc, char **argv)
     for (int attempt = 0; rc == CLI_OK; attempt++) {
         if (tsr_terrain_mesh(hf, &to, &mesh, &rep, &err) != TSR_OK) {
             cli_error("mesh", "%s: %s", in, err.message);
-            rc = CLI_FAIL;
+            rc = err.status == TSR_ERR_ARGUMENT ? CLI_USAGE : CLI_FAIL;
             break;
         }
         if (tsr_terrain_measure_window(hf, mx, my, mw, mh, &mesh, NULL, &er) != TSR_OK) {
@@ -421,13 +414,6 @@ static int run(int argc, char **argv)
         }
         if (bound == 0 && !to.max_triangles && !to.max_vertices && to.method != TSR_TIN_GRID)
             bound = rep.bound; /* the default bound */
-        if (to.border_error > bound && bound > 0 && attempt == 0) {
-            cli_error("mesh", "--border-error %g: the border is part of the mesh, so it must be within the bound %g "
-                              "(the default, 0.1%% of the height range; --max-error sets another)",
-                      to.border_error, bound);
-            rc = CLI_USAGE;
-            break;
-        }
         if (bound == 0 || er.max_vertical <= bound || to.method == TSR_TIN_GRID)
             break;
         if (attempt == 3) {

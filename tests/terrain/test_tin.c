@@ -1075,6 +1075,34 @@ TEST(bad_options)
     o.window_w = 1;
     CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_ERR_ARGUMENT);
     CHECK(m.vertex_count == 0 && m.triangle_count == 0);
+    /* a border tolerance above the bound, given or the default; a budget
+     * alone has no bound to exceed */
+    o = (tsr_tin_options){0};
+    o.max_error = 1;
+    o.border_error = 1.5;
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_ERR_ARGUMENT);
+    CHECK_MSG(strstr(err.message, "border tolerance 1.5 exceeds the bound 1") != NULL, "%s", err.message);
+    o.max_error = 0;
+    o.border_error = 1e6;
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_ERR_ARGUMENT);
+    CHECK_MSG(strstr(err.message, "(the default") != NULL, "%s", err.message);
+    o.max_triangles = 100;
+    tsr_status st = tsr_terrain_mesh(hf, &o, &m, NULL, &err);
+    CHECK_MSG(st == TSR_OK && m.triangle_count <= 100, "%s", err.message);
+    tsr_mesh_free(&m);
+    tsr_mesh_init(&m, 0, NULL);
+    /* vertices are floats: heights times dz, or extents, beyond them */
+    o = (tsr_tin_options){0};
+    double dz = hf->dz, dx = hf->dx;
+    hf->dz = 1e38;
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_ERR_ARGUMENT);
+    CHECK_MSG(strstr(err.message, "heights times dz pass the largest float") != NULL, "%s", err.message);
+    hf->dz = dz;
+    hf->dx = 1e38;
+    CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_ERR_ARGUMENT);
+    CHECK_MSG(strstr(err.message, "the extents") != NULL, "%s", err.message);
+    hf->dx = dx;
+    CHECK(m.vertex_count == 0 && m.triangle_count == 0);
     tsr_mesh_free(&m);
     tsr_heightfield_destroy(hf);
 }

@@ -35,7 +35,7 @@ alpha_png)
 height_overflow)
   # heights times --dz beyond float32 (which vertices are written in): an
   # error, not a mesh of infinities
-  expect_error 2 "nan\.f32: the heights times --dz pass the largest float" -- \
+  expect_error 2 "nan\.f32: mesh: the heights times dz pass the largest float" -- \
     "$tessera" mesh "$dir/nan.f32" --raw 4 4 f32 --dz 1e38 -o "$out" ;;
 one_by_one_image)
   oiiotool --create 1x1 1 -d uint16 -o "$dir/one.png" || fail "oiiotool failed"
@@ -190,7 +190,7 @@ bad_options)
   expect_error 2 "--block 4: at least 16" -- "$tessera" mesh "$dir/g.png" -o "$out" --block 4
   expect_error 2 "--border-error 3: .* within --max-error 2" -- \
     "$tessera" mesh "$dir/g.png" -o "$out" --max-error 2 --border-error 3
-  expect_error 2 "--border-error 1e\+06: .* within the bound .* \(the default" -- \
+  expect_error 2 "g\.png: mesh: the border tolerance 1e\+06 exceeds the bound .* \(the default" -- \
     "$tessera" mesh "$dir/g.png" -o "$out" --border-error 1e6
   expect_error 2 "--border-error applies to --method delaunay only" -- \
     "$tessera" mesh "$dir/g.png" -o "$out" --method quadtree --border-error 1 ;;
