@@ -162,8 +162,7 @@ int cli_bench_fly(int argc, char **argv)
         else if (!strcmp(a, "--device") && more)
             device = argv[++i];
         else {
-            cli_error("bench", "fly: %s '%s' (see tessera bench fly --help)", more ? "unknown option" : "bad option",
-                      a);
+            cli_option_error("bench", "fly", a, help);
             return CLI_USAGE;
         }
         if (!ok) {

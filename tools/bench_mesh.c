@@ -346,8 +346,7 @@ int cli_bench_mesh(int argc, char **argv)
                 s = *end ? end + 1 : end;
             }
         } else {
-            cli_error("bench", "%s '%s' (see tessera bench mesh --help)",
-                      has_value ? "unknown option" : "missing value for", a);
+            cli_option_error("bench", "mesh", a, help);
             return CLI_USAGE;
         }
     }

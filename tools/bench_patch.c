@@ -1071,13 +1071,7 @@ int cli_bench_patch(int argc, char **argv)
             }
             ok = ok && nfr > 0;
         } else {
-            static const char *const valued[] = {"--input",    "--json",    "--repeat", "--tile",
-                                                 "--max-rate", "--cameras", "--errors"};
-            bool known = false;
-            for (size_t k = 0; k < sizeof valued / sizeof valued[0]; k++)
-                known |= !strcmp(a, valued[k]);
-            cli_error("bench", "patch: %s '%s' (see tessera bench patch --help)",
-                      known ? "missing value for" : "unknown option", a);
+            cli_option_error("bench", "patch", a, help);
             return CLI_USAGE;
         }
         if (!ok) {

@@ -51,6 +51,128 @@ bool cli_parse_u32(const char *s, uint32_t min, uint32_t max, uint32_t *out)
 
 bool cli_is_help(const char *arg) { return !strcmp(arg, "-h") || !strcmp(arg, "--help"); }
 
+/* Edit distance of a and b (at most 64 characters of each compared). */
+static unsigned edit_distance(const char *a, const char *b)
+{
+    size_t na = strlen(a), nb = strlen(b);
+    na = na > 64 ? 64 : na;
+    nb = nb > 64 ? 64 : nb;
+    unsigned row[65];
+    for (size_t j = 0; j <= nb; j++)
+        row[j] = (unsigned)j;
+    for (size_t i = 1; i <= na; i++) {
+        unsigned diag = row[0];
+        row[0] = (unsigned)i;
+        for (size_t j = 1; j <= nb; j++) {
+            unsigned up = row[j];
+            unsigned best = diag + (a[i - 1] != b[j - 1]);
+            best = up + 1 < best ? up + 1 : best;
+            best = row[j - 1] + 1 < best ? row[j - 1] + 1 : best;
+            row[j] = best;
+            diag = up;
+        }
+    }
+    return row[nb];
+}
+
+/* The options a help text lists: lines that begin with spaces and a dash,
+ * "--opt VALUE, --alias VALUE  description" (the names and values up to two
+ * spaces); where a line's names are followed by a word, they take a value.
+ * Calls each(name, length, valued, user) for each. */
+static void help_options(const char *text, void (*each)(const char *, size_t, bool, void *), void *user)
+{
+    for (const char *l = text; l && *l;) {
+        const char *eol = strchr(l, '\n');
+        const char *end = eol ? eol : l + strlen(l);
+        const char *p = l;
+        while (p < end && *p == ' ')
+            p++;
+        if (p > l && p < end && *p == '-') {
+            const char *gap = p;
+            while (gap < end && !(gap[0] == ' ' && gap + 1 < end && gap[1] == ' '))
+                gap++;
+            const char *names[8];
+            size_t lens[8];
+            int n = 0;
+            bool valued = false;
+            for (const char *q = p; q < gap;) {
+                while (q < gap && (*q == ' ' || *q == ','))
+                    q++;
+                const char *w = q;
+                while (q < gap && *q != ' ' && *q != ',')
+                    q++;
+                if (q == w)
+                    continue;
+                if (*w != '-')
+                    valued = true;
+                else if (n < 8) {
+                    names[n] = w;
+                    lens[n++] = (size_t)(q - w);
+                }
+            }
+            for (int k = 0; k < n; k++)
+                each(names[k], lens[k], valued, user);
+        }
+        l = eol ? eol + 1 : NULL;
+    }
+}
+
+typedef struct option_match {
+    const char *a;
+    bool valued;            /* a is listed with a value */
+    char best[64];          /* the nearest listed option */
+    unsigned best_d;
+    int prefixed;           /* how many listed options a is a prefix of */
+    char prefix_of[64];
+} option_match;
+
+static void match_option(const char *name, size_t len, bool valued, void *user)
+{
+    option_match *m = user;
+    char opt[64];
+    if (len >= sizeof opt || len < 2)
+        return;
+    memcpy(opt, name, len);
+    opt[len] = '\0';
+    if (!strcmp(opt, m->a)) {
+        m->valued |= valued;
+        return;
+    }
+    if (!strncmp(opt, m->a, strlen(m->a)) && strcmp(opt, m->prefix_of)) {
+        m->prefixed++;
+        memcpy(m->prefix_of, opt, len + 1);
+    }
+    unsigned d = edit_distance(m->a, opt);
+    if (d < m->best_d) {
+        m->best_d = d;
+        memcpy(m->best, opt, len + 1);
+    }
+}
+
+void cli_option_error(const char *cmd, const char *sub, const char *a, void (*help)(FILE *))
+{
+    option_match m = {.a = a, .best_d = UINT32_MAX};
+    char *text = NULL;
+    size_t size = 0;
+    FILE *f = help ? open_memstream(&text, &size) : NULL;
+    if (f) {
+        help(f);
+        if (fclose(f) == 0)
+            help_options(text, match_option, &m);
+    }
+    free(text);
+    char see[128];
+    snprintf(see, sizeof see, "see tessera %s%s%s --help", cmd, sub ? " " : "", sub ? sub : "");
+    const char *near = m.prefixed == 1 ? m.prefix_of : m.best_d <= 2 && strlen(a) > 3 ? m.best : NULL;
+    if (m.valued)
+        cli_error(cmd, "%s%smissing value for '%s' (%s)", sub ? sub : "", sub ? ": " : "", a, see);
+    else if (near)
+        cli_error(cmd, "%s%sunknown option '%s': did you mean %s? (%s)", sub ? sub : "", sub ? ": " : "", a, near,
+                  see);
+    else
+        cli_error(cmd, "%s%sunknown option '%s' (%s)", sub ? sub : "", sub ? ": " : "", a, see);
+}
+
 double cli_now(void)
 {
     struct timespec ts;

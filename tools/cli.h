@@ -96,6 +96,13 @@ void cli_progress_end(cli_progress *p);
  * that cannot. */
 bool cli_outputs_writable(const char *cmd, int n, const char *const *paths);
 
+/* Reports an argument a that the command's parser did not take: "missing
+ * value for" an option that its help text (printed by help) lists with a
+ * value, else "unknown option", with the nearest option the help lists
+ * (a unique prefix, or a few letters off) as "did you mean". sub: the
+ * subcommand ("bench patch") or NULL. */
+void cli_option_error(const char *cmd, const char *sub, const char *a, void (*help)(FILE *));
+
 /* Writes text to path atomically (temporary, then rename). */
 tsr_status cli_write_text(const char *path, const char *text, tsr_error *err);
 

@@ -82,26 +82,39 @@ static void star_polygon(uint32_t n, uint32_t holes, double **xy_out, uint32_t *
  * 0.8 s and Triangle 1.25 s for 1M uniform points; Triangle 1.05 s for the
  * 1000 x 1000 grid. A qsort of the same points, timed in the same run,
  * is the baseline that makes figures from different machines comparable. */
+static void help_cdt(FILE *f)
+{
+    fprintf(f, "usage: tessera bench cdt [--points N] [--grid S] [--polygon V]\n\n"
+               "Times Delaunay triangulation of N uniform random points and of an S x S integer grid,\n"
+               "with peak memory per point; then triangulates a polygon of V vertices with 100 holes by\n"
+               "both methods (delaunay and quadtree), plain and with a maximum area, each the best of 3\n"
+               "runs alternating with the other method, and prints the ratio of their times. A qsort of\n"
+               "the points is timed in the same run as a baseline.\n\n"
+               "options:\n"
+               "  --points N        uniform random points (default 1000000)\n"
+               "  --grid S          grid of S x S points (default 1000)\n"
+               "  --polygon V       polygon vertices (default 20000)\n"
+               "  -h, --help        this help\n");
+}
+
 static int run_cdt(int argc, char **argv)
 {
     uint32_t n = 1000000, side = 1000, poly = 20000;
     for (int i = 2; i < argc; i++) {
         if (cli_is_help(argv[i])) {
-            printf("usage: tessera bench cdt [--points N] [--grid S] [--polygon V]\n\n"
-                   "Times Delaunay triangulation of N uniform random points (default 1000000) and of an\n"
-                   "S x S integer grid (default 1000), with peak memory per point; then triangulates a\n"
-                   "polygon of V vertices (default 20000) with 100 holes by both methods (delaunay and\n"
-                   "quadtree), plain and with a maximum area, each the best of 3 runs alternating with the\n"
-                   "other method, and prints the ratio of their times. A qsort of the points is timed in the\n"
-                   "same run as a baseline.\n");
+            help_cdt(stdout);
             return CLI_OK;
         }
         uint32_t *dst = !strcmp(argv[i], "--points")    ? &n
                         : !strcmp(argv[i], "--grid")    ? &side
                         : !strcmp(argv[i], "--polygon") ? &poly
                                                         : NULL;
-        if (!dst || i + 1 >= argc || !cli_parse_u32(argv[i + 1], 3, 1u << 26, dst)) {
-            cli_error("bench", "cdt: bad option '%s' (see tessera bench cdt --help)", argv[i]);
+        if (!dst || i + 1 >= argc) {
+            cli_option_error("bench", "cdt", argv[i], help_cdt);
+            return CLI_USAGE;
+        }
+        if (!cli_parse_u32(argv[i + 1], 3, 1u << 26, dst)) {
+            cli_error("bench", "cdt: %s %s: give a whole number from 3 to %u", argv[i], argv[i + 1], 1u << 26);
             return CLI_USAGE;
         }
         i++;
@@ -255,8 +268,7 @@ static int run(int argc, char **argv)
                 return CLI_USAGE;
             }
         } else {
-            cli_error("bench", "%s '%s' (see tessera bench --help)", has_value ? "unknown option" : "missing value for",
-                      a);
+            cli_option_error("bench", "terrain", a, help);
             return CLI_USAGE;
         }
     }

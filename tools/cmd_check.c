@@ -130,7 +130,7 @@ static int run_terrain(int argc, char **argv)
             }
             i++;
         } else if (a[0] == '-' && a[1] != '\0') {
-            cli_error("check", "%s '%s' (see tessera check --help)", has_value ? "unknown option" : "missing value for", a);
+            cli_option_error("check", "terrain", a, help_terrain);
             rc = CLI_USAGE;
             break;
         } else if (in) {
@@ -849,8 +849,7 @@ static int run_patches(int argc, char **argv)
             }
             i++;
         } else if (a[0] == '-' && a[1] != '\0') {
-            cli_error("check", "%s '%s' (see tessera check --help)", has_value ? "unknown option" : "missing value for",
-                      a);
+            cli_option_error("check", "patches", a, help_patches);
             rc = CLI_USAGE;
         } else if (in) {
             cli_error("check", "one input at a time ('%s' and '%s' given)", in, a);

@@ -533,8 +533,7 @@ static int run(int argc, char **argv)
         else if (!strcmp(arg, "--device") && more)
             a.device = argv[++i];
         else if (arg[0] == '-' && arg[1]) {
-            cli_error("fly", "unknown option '%s'%s (see tessera fly --help)", arg,
-                      more ? "" : " or missing value");
+            cli_option_error("fly", NULL, arg, help);
             return CLI_USAGE;
         } else if (!a.in)
             a.in = arg;

@@ -72,8 +72,10 @@ static int run(int argc, char **argv)
                 return CLI_USAGE;
             }
         } else {
-            cli_error("generate", "%s '%s' (see tessera generate --help)",
-                      a[0] == '-' ? (has_value ? "unknown option" : "missing value for") : "unexpected argument", a);
+            if (a[0] == '-')
+                cli_option_error("generate", NULL, a, help);
+            else
+                cli_error("generate", "unexpected argument '%s' (see tessera generate --help)", a);
             return CLI_USAGE;
         }
     }

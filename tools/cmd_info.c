@@ -34,7 +34,7 @@ static int run(int argc, char **argv)
         if (!strcmp(argv[i], "--json"))
             json = true;
         else if (argv[i][0] == '-' && argv[i][1] != '\0') {
-            cli_error("info", "unknown option '%s' (see tessera info --help)", argv[i]);
+            cli_option_error("info", NULL, argv[i], help);
             return CLI_USAGE;
         } else if (path) {
             cli_error("info", "one file at a time ('%s' and '%s' given)", path, argv[i]);

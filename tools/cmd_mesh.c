@@ -296,8 +296,7 @@ static int run(int argc, char **argv)
         else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = true;
         else if (a[0] == '-' && a[1] != '\0') {
-            cli_error("mesh", "%s '%s' (see tessera mesh --help)", has_value ? "unknown option" : "missing value for",
-                      a);
+            cli_option_error("mesh", NULL, a, help);
             return CLI_USAGE;
         } else if (in) {
             cli_error("mesh", "one input at a time ('%s' and '%s' given)", in, a);

@@ -178,8 +178,7 @@ static int run(int argc, char **argv)
                 return CLI_USAGE;
             i++;
         } else if (a[0] == '-' && a[1] != '\0') {
-            cli_error("patch", "%s '%s' (see tessera patch --help)", has_value ? "unknown option" : "missing value for",
-                      a);
+            cli_option_error("patch", NULL, a, help);
             return CLI_USAGE;
         } else if (in) {
             cli_error("patch", "one input at a time ('%s' and '%s' given)", in, a);

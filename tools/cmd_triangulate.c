@@ -267,11 +267,7 @@ static int run(int argc, char **argv)
         else if (!strcmp(a, "--quiet"))
             quiet = true;
         else if (a[0] == '-' && a[1] != '\0') {
-            bool known = !strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--method") ||
-                         !strcmp(a, "--region") || !strcmp(a, "-q") || !strcmp(a, "-a") || !strcmp(a, "--format") ||
-                         !strcmp(a, "--max-steiner");
-            cli_error("triangulate", "%s '%s' (see tessera triangulate --help)",
-                      known ? "missing value for" : "unknown option", a);
+            cli_option_error("triangulate", NULL, a, help);
             return CLI_USAGE;
         } else if (in_path) {
             cli_error("triangulate", "one input at a time ('%s' and '%s' given)", in_path, a);

@@ -194,6 +194,42 @@ bad_options)
     "$tessera" mesh "$dir/g.png" -o "$out" --border-error 1e6
   expect_error 2 "--border-error applies to --method delaunay only" -- \
     "$tessera" mesh "$dir/g.png" -o "$out" --method quadtree --border-error 1 ;;
+help_options)
+  # every option a command's --help lists is one its parser takes: a flag
+  # lets parsing go on to the next argument, an option with a value given
+  # none says so rather than "unknown option"; and a misspelt option gets
+  # the nearest one the help lists
+  for cmd in info generate mesh "check terrain" "check patches" triangulate "bench terrain" "bench cdt" \
+             "bench mesh" "bench fly" "bench patch" fly patch; do
+    # shellcheck disable=SC2086
+    "$tessera" $cmd --help > "$dir/help.txt" || fail "$cmd --help failed"
+    # the names and values of lines "  --opt VALUE, --alias  description"
+    awk '/^ +-/ { sub(/^ +/, ""); n = index($0, "  "); if (n) $0 = substr($0, 1, n - 1);
+                  gsub(/,/, " "); v = 0; names = "";
+                  for (k = 1; k <= NF; k++) if ($k ~ /^-/) names = names " " $k; else v = 1;
+                  nn = split(names, a, " "); for (k = 1; k <= nn; k++) print a[k], v }' \
+      "$dir/help.txt" > "$dir/opts.txt"
+    [ -s "$dir/opts.txt" ] || fail "$cmd: no options found in its help"
+    while read -r opt valued; do
+      case "$opt" in -h|--help) continue ;; esac
+      if [ "$valued" = 1 ]; then
+        # shellcheck disable=SC2086
+        "$tessera" $cmd "$opt" > /dev/null 2> "$dir/err" && fail "$cmd $opt without a value: exit 0"
+        grep -q "unknown option" "$dir/err" && fail "$cmd --help lists $opt, the parser does not take it: $(cat "$dir/err")"
+      else
+        # shellcheck disable=SC2086
+        "$tessera" $cmd "$opt" --zz-no-such > /dev/null 2> "$dir/err" && fail "$cmd $opt --zz-no-such: exit 0"
+        grep -q "unknown option '--zz-no-such'" "$dir/err" ||
+          fail "$cmd --help lists $opt, the parser does not take it: $(cat "$dir/err")"
+      fi
+    done < "$dir/opts.txt"
+    echo "ok [$case]: $cmd: $(wc -l < "$dir/opts.txt") options"
+  done
+  expect_error 2 "unknown option '--normal': did you mean --normals\?" -- "$tessera" mesh "$dir/g.png" -o "$out" --normal
+  expect_error 2 "unknown option '--max-eror': did you mean --max-error\?" -- \
+    "$tessera" patch "$dir/g.png" -o "$out" --max-eror 1
+  expect_error 2 "bench: patch: missing value for '--repeat'" -- "$tessera" bench patch --repeat
+  expect_error 2 "missing value for '-o'" -- "$tessera" mesh "$dir/g.png" -o ;;
 *) fail "unknown case" ;;
 esac
 exit 0
