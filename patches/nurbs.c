@@ -29,8 +29,10 @@
  * - Splitting: de Casteljau's algorithm in homogeneous coordinates.
  */
 #include "patches/patches.h"
+#include "tessellate/predicates.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define MAXD TSR_PATCH_MAX_DEGREE
@@ -988,4 +990,147 @@ tsr_status tsr_trim_loop_sample(const tsr_patch_set *set, uint32_t loop, double 
         return TSR_ERR_ARGUMENT;
     *count = (uint32_t)s.n;
     return TSR_OK;
+}
+
+/* ---- Checking a trim loop's shape ------------------------------------------- */
+
+typedef struct xseg {
+    double lo; /* the smaller u of its ends */
+    uint32_t k; /* edge k: point k to point k + 1 (mod n) */
+} xseg;
+
+static int xseg_cmp(const void *a, const void *b)
+{
+    double x = ((const xseg *)a)->lo, y = ((const xseg *)b)->lo;
+    return x < y ? -1 : x > y;
+}
+
+/* Whether edges pq and rs cross at a point inside both (exact signs). */
+static bool edges_cross(const double *p, const double *q, const double *r, const double *s)
+{
+    double o1 = tsr_orient2d(p, q, r), o2 = tsr_orient2d(p, q, s);
+    double o3 = tsr_orient2d(r, s, p), o4 = tsr_orient2d(r, s, q);
+    return ((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0));
+}
+
+/* Signed area of the polygon pts (n points) clipped to the rectangle dom
+ * (Sutherland-Hodgman, one side at a time); NAN when out of memory. */
+static double clipped_area(const double *pts, uint32_t n, const double dom[4], const tsr_allocator *alloc)
+{
+    size_t m = n;
+    double *cur = tsr_alloc(alloc, sizeof(double) * 2 * m);
+    if (!cur)
+        return NAN;
+    memcpy(cur, pts, sizeof(double) * 2 * m);
+    for (int side = 0; side < 4 && m > 0; side++) {
+        int ax = side >> 1;            /* 0: u, 1: v */
+        double lim = dom[side];        /* u0, u1, v0, v1 */
+        bool keep_above = !(side & 1); /* u >= u0, u <= u1, v >= v0, v <= v1 */
+        double *nxt = tsr_alloc(alloc, sizeof(double) * 4 * m); /* at most two points per edge */
+        if (!nxt) {
+            tsr_free(alloc, cur);
+            return NAN;
+        }
+        size_t o = 0;
+        for (size_t k = 0; k < m; k++) {
+            const double *a = cur + 2 * k, *b = cur + 2 * ((k + 1) % m);
+            bool ina = keep_above ? a[ax] >= lim : a[ax] <= lim, inb = keep_above ? b[ax] >= lim : b[ax] <= lim;
+            if (ina) {
+                nxt[2 * o] = a[0], nxt[2 * o + 1] = a[1];
+                o++;
+            }
+            if (ina != inb) {
+                double t = (lim - a[ax]) / (b[ax] - a[ax]);
+                nxt[2 * o + ax] = lim;
+                nxt[2 * o + 1 - ax] = a[1 - ax] + t * (b[1 - ax] - a[1 - ax]);
+                o++;
+            }
+        }
+        tsr_free(alloc, cur);
+        cur = nxt;
+        m = o;
+    }
+    double area = 0;
+    for (size_t k = 0; k < m; k++) {
+        const double *a = cur + 2 * k, *b = cur + 2 * ((k + 1) % m);
+        area += a[0] * b[1] - a[1] * b[0];
+    }
+    tsr_free(alloc, cur);
+    return 0.5 * area;
+}
+
+tsr_status tsr_trim_loop_check(const tsr_patch_set *set, uint32_t loop, double tol, const tsr_allocator *alloc,
+                               tsr_trim_loop_info *info)
+{
+    if (!info)
+        return TSR_ERR_ARGUMENT;
+    memset(info, 0, sizeof *info);
+    uint32_t n = 0;
+    tsr_status st = tsr_trim_loop_sample(set, loop, tol, NULL, 0, &n);
+    if (st != TSR_OK)
+        return st;
+    const tsr_trim_loop *L = &set->loops[loop];
+    double dom[4];
+    if (L->patch >= set->num_patches || tsr_patch_domain(&set->patches[L->patch], dom) != TSR_OK)
+        return TSR_ERR_ARGUMENT;
+    info->domain_area = (dom[1] - dom[0]) * (dom[3] - dom[2]);
+    info->points = n;
+    /* the gaps: each segment's start against the previous one's end */
+    for (uint32_t i = 0; i < L->num_segments; i++) {
+        const tsr_trim_segment *g = &set->segments[L->first_segment + i];
+        const tsr_trim_segment *h = &set->segments[L->first_segment + (i + L->num_segments - 1) % L->num_segments];
+        double a[2], b[2];
+        if (tsr_curve2_eval(&set->curves[h->curve], h->t1, a, NULL) != TSR_OK ||
+            tsr_curve2_eval(&set->curves[g->curve], g->t0, b, NULL) != TSR_OK)
+            return TSR_ERR_ARGUMENT;
+        double d = hypot(a[0] - b[0], a[1] - b[1]);
+        if (d > tol && d > info->gap)
+            info->gap = d;
+    }
+    if (n < 3)
+        return TSR_OK; /* no area, no crossing */
+    double *pts = tsr_alloc(alloc, sizeof(double) * 2 * n);
+    xseg *xs = tsr_alloc(alloc, sizeof *xs * n);
+    if (!pts || !xs) {
+        tsr_free(alloc, pts);
+        tsr_free(alloc, xs);
+        return TSR_ERR_NOMEM;
+    }
+    tsr_trim_loop_sample(set, loop, tol, pts, n, &n);
+    /* crossings: edges sorted by their lower u, each against those that
+     * begin before it ends */
+    for (uint32_t k = 0; k < n; k++) {
+        const double *a = pts + 2 * k, *b = pts + 2 * ((k + 1) % n);
+        xs[k] = (xseg){a[0] < b[0] ? a[0] : b[0], k};
+    }
+    qsort(xs, n, sizeof *xs, xseg_cmp);
+    for (uint32_t i = 0; i < n && !info->crosses; i++) {
+        uint32_t k = xs[i].k;
+        const double *a = pts + 2 * k, *b = pts + 2 * ((k + 1) % n);
+        double hi = a[0] > b[0] ? a[0] : b[0];
+        double vlo = a[1] < b[1] ? a[1] : b[1], vhi = a[1] > b[1] ? a[1] : b[1];
+        for (uint32_t j = i + 1; j < n && xs[j].lo <= hi; j++) {
+            uint32_t l = xs[j].k;
+            if (l == (k + 1) % n || k == (l + 1) % n)
+                continue; /* neighbours share an end */
+            const double *c = pts + 2 * l, *d = pts + 2 * ((l + 1) % n);
+            if ((c[1] < vlo && d[1] < vlo) || (c[1] > vhi && d[1] > vhi))
+                continue;
+            if (edges_cross(a, b, c, d)) {
+                info->crosses = true;
+                /* where: the intersection of the two lines */
+                double den = (b[0] - a[0]) * (d[1] - c[1]) - (b[1] - a[1]) * (d[0] - c[0]);
+                double t = den != 0 ? ((c[0] - a[0]) * (d[1] - c[1]) - (c[1] - a[1]) * (d[0] - c[0])) / den : 0.5;
+                info->cross_uv[0] = a[0] + t * (b[0] - a[0]);
+                info->cross_uv[1] = a[1] + t * (b[1] - a[1]);
+                break;
+            }
+        }
+    }
+    /* a simple polygon's area inside the domain; a crossing one's signed
+     * area is no area of its inside: left unknown */
+    info->area = info->crosses ? -1 : fabs(clipped_area(pts, n, dom, alloc));
+    tsr_free(alloc, pts);
+    tsr_free(alloc, xs);
+    return isnan(info->area) ? TSR_ERR_NOMEM : TSR_OK;
 }

@@ -868,7 +868,7 @@ static tsr_status obj_loop(lexer *L, obj_state *o, bool hole)
     const char *kw = hole ? "hole" : "trim";
     if (e->kind != EL_SURF)
         return fail(L, L->stmt_line, TSR_ERR_FORMAT, "%s outside a surf element", kw);
-    tsr_trim_loop loop = {(uint32_t)b->patches.n, hole, (uint32_t)b->segments.n, 0};
+    tsr_trim_loop loop = {(uint32_t)b->patches.n, hole, (uint32_t)b->segments.n, 0, L->stmt_line};
     token t;
     tsr_status s;
     for (;;) {

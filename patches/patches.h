@@ -269,6 +269,7 @@ typedef struct tsr_trim_loop {
     uint32_t patch; /* the patch it trims */
     bool hole;
     uint32_t first_segment, num_segments; /* into the set's segments */
+    uint32_t line;                        /* the file's line of its statement (0: unknown) */
 } tsr_trim_loop;
 
 /* ---- Patch sets (loaded files) ---------------------------------------------- */
@@ -381,6 +382,30 @@ void tsr_patch_set_free(tsr_patch_set *s);
  * range, tol not positive and finite, or count NULL. Thread-safe. */
 tsr_status tsr_trim_loop_sample(const tsr_patch_set *s, uint32_t loop, double tol, double *uv, uint32_t cap,
                                 uint32_t *count);
+
+/* What a trim loop's shape means for the region it bounds, for warnings:
+ * a file's loop may be open, cross itself, or enclose none of its patch's
+ * domain, and the tessellation still does something definite with it
+ * (closes it with a straight edge; the crossing-number rule decides its
+ * inside; an outer loop keeping none of the domain keeps nothing, a hole
+ * removes nothing). Figures of the loop sampled as by
+ * tsr_trim_loop_sample at tol. */
+typedef struct tsr_trim_loop_info {
+    double gap;           /* from the loop's end to its start, (u, v) units: 0 when it closes within tol */
+    double area;          /* of the part of the patch's domain inside it; -1 when it crosses itself */
+    double domain_area;   /* of the patch's domain */
+    bool crosses;         /* two of its edges cross (not at a shared end) */
+    double cross_uv[2];   /* where, when they do */
+    uint32_t points;      /* of its polyline */
+} tsr_trim_loop_info;
+
+/* Fills *info for trim loop `loop` of s (sampled at tol: positive and
+ * finite). TSR_ERR_ARGUMENT as for tsr_trim_loop_sample, TSR_ERR_NOMEM.
+ * The crossing test is exact in the sampled points' coordinates
+ * (tsr_orient2d); O(n log n + k) for n points and k pairs of edges whose
+ * boxes meet. Thread-safe. */
+tsr_status tsr_trim_loop_check(const tsr_patch_set *s, uint32_t loop, double tol, const tsr_allocator *alloc,
+                               tsr_trim_loop_info *info);
 
 /* ---- Subdivision cages (polygon OBJ) ---------------------------------------- */
 

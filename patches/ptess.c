@@ -3369,20 +3369,18 @@ static bool loop_inside(const tloop *l, const double c[2])
  * triangle, which lies on one side of every loop, the loops being edges):
  * the innermost loop around it (the smallest) decides, an outer loop (OBJ
  * `trim`) keeping and a hole removing; where no loop is around it, it is
- * kept unless the patch has an outer loop. So holes remove their inside
+ * kept unless the patch has an outer loop (outer; one that encloses none
+ * of the domain, left out of loops, still counts: it keeps nothing). So holes remove their inside
  * whether or not an outer loop is given, a hole given twice or two
  * overlapping holes remove their union, a hole reaching past the outer
  * loop adds nothing outside it, and an island (an outer loop inside a
  * hole) is kept. */
-static bool trim_keeps(const tloop *loops, uint32_t n, const double c[2])
+static bool trim_keeps(const tloop *loops, uint32_t n, bool outer, const double c[2])
 {
     const tloop *best = NULL;
-    bool outer = false;
-    for (uint32_t k = 0; k < n; k++) {
-        outer |= !loops[k].hole;
+    for (uint32_t k = 0; k < n; k++)
         if ((!best || loops[k].area < best->area) && loop_inside(&loops[k], c))
             best = &loops[k];
-    }
     return best ? !best->hole : !outer;
 }
 
@@ -3463,6 +3461,9 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
     const tsr_patch_set *set = m->set;
     uint32_t l0 = set->first_loop[s->patch], nloops = set->first_loop[s->patch + 1] - l0, nkept = 0;
     tloop *loops = tsr_alloc(a, (nloops ? nloops : 1) * sizeof *loops);
+    bool has_outer = false;
+    for (uint32_t l = l0; l < l0 + nloops; l++)
+        has_outer |= !set->loops[l].hole;
     if (!loops)
         st = TSR_ERR_NOMEM;
     for (uint32_t l = l0; l < l0 + nloops && st == TSR_OK; l++) {
@@ -3606,7 +3607,7 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
             const uint32_t *tv = tr.tri + 3 * t;
             double cen[2] = {(tr.xy[2 * tv[0]] + tr.xy[2 * tv[1]] + tr.xy[2 * tv[2]]) / 3,
                              (tr.xy[2 * tv[0] + 1] + tr.xy[2 * tv[1] + 1] + tr.xy[2 * tv[2] + 1]) / 3};
-            if (!trim_keeps(loops, nkept, cen))
+            if (!trim_keeps(loops, nkept, has_outer, cen))
                 continue;
             for (int k = 0; k < 3 && st == TSR_OK; k++) {
                 uint32_t o = tr.tri[3 * t + (mirrored && k ? 3 - k : k)];

@@ -223,6 +223,8 @@ static int run(int argc, char **argv)
                 "surfaces are not tessellated, the first at line %u (a file without surfaces is read as a "
                 "subdivision cage)\n",
                 in, pm.set.num_polygons, pm.set.first_polygon_line);
+    if (!quiet)
+        cli_patch_trim_warnings("patch", in, &pm, 5);
     if (!quiet && pm.is_subd && pm.cage.num_skipped_tags)
         fprintf(stderr,
                 "tessera patch: %s: note: %u tags OpenSubdiv does not use (hierarchical edits, unknown names) "

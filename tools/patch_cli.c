@@ -159,3 +159,45 @@ tsr_status cli_patch_tessellate(const tsr_pmodel *m, const tsr_ptess_options *op
     free(scale);
     return st;
 }
+
+uint32_t cli_patch_trim_warnings(const char *cmd, const char *path, const cli_patch_model *pm, uint32_t max)
+{
+    if (pm->is_subd)
+        return 0;
+    const tsr_patch_set *s = &pm->set;
+    uint32_t warned = 0;
+    for (uint32_t l = 0; l < s->num_loops; l++) {
+        const tsr_trim_loop *L = &s->loops[l];
+        double dom[4];
+        if (tsr_patch_domain(&s->patches[L->patch], dom) != TSR_OK)
+            continue;
+        double ext = fmax(dom[1] - dom[0], dom[3] - dom[2]);
+        tsr_trim_loop_info in;
+        if (tsr_trim_loop_check(s, l, 1e-6 * ext, NULL, &in) != TSR_OK)
+            continue;
+        const char *what = L->hole ? "hole" : "trim";
+        char msg[3][256];
+        int nm = 0;
+        if (in.gap > 0)
+            snprintf(msg[nm++], sizeof msg[0], "is open (ends %.3g apart in (u, v)): closed by a straight edge",
+                     in.gap);
+        if (in.crosses)
+            snprintf(msg[nm++], sizeof msg[0],
+                     "crosses itself near (u, v) = (%.6g, %.6g): its inside is what an odd number of its edges "
+                     "surround",
+                     in.cross_uv[0], in.cross_uv[1]);
+        else if (!(in.area > 1e-12 * in.domain_area))
+            snprintf(msg[nm++], sizeof msg[0], "encloses none of the patch's domain [%g, %g] x [%g, %g]: %s",
+                     dom[0], dom[1], dom[2], dom[3], L->hole ? "it removes nothing" : "the patch keeps nothing");
+        if (!nm)
+            continue;
+        if (warned < max)
+            for (int k = 0; k < nm; k++)
+                fprintf(stderr, "tessera %s: %s:%u: warning: the %s loop of patch %u %s\n", cmd, path, L->line, what,
+                        L->patch + 1, msg[k]);
+        warned++;
+    }
+    if (warned > max)
+        fprintf(stderr, "tessera %s: %s: warning: %u more trim loops as above\n", cmd, path, warned - max);
+    return warned;
+}

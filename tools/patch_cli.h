@@ -37,6 +37,12 @@ bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *sc
     "                        diagonal; CAD files often leave gaps of 1e-6 to 1e-3)\n"
 void cli_patch_model_free(cli_patch_model *m);
 
+/* Warns, on stderr, of trim loops whose shape the file may not mean (open,
+ * crossing themselves, enclosing none of their patch's domain), naming
+ * the line and saying what the tessellation makes of each; at most `max`
+ * lines, then a count of the rest. Returns how many loops were warned of. */
+uint32_t cli_patch_trim_warnings(const char *cmd, const char *path, const cli_patch_model *pm, uint32_t max);
+
 /* Rebuilds a free-form model (not a cage) for tessellation at max_error
  * with tiles of `tile` (tsr_pmodel_set_options.split_error: knot spans
  * curved one way and straight the other cut across the curve). false

@@ -151,6 +151,13 @@ static void check_set(const tsr_patch_set *s)
             if (!isfinite(uv[k]))
                 fuzz_fail("patch_io: loop %u: sample %u is not finite", l, k / 2);
         free(uv);
+        /* its shape's figures: finite, the area within the domain's */
+        tsr_trim_loop_info in;
+        if (n > 20000 || tsr_trim_loop_check(s, l, tol, NULL, &in) != TSR_OK)
+            continue;
+        bool area_ok = in.crosses || in.area <= in.domain_area * (1 + 1e-9) + 1e-300;
+        if (!(in.gap >= 0) || !isfinite(in.gap) || !area_ok)
+            fuzz_fail("patch_io: loop %u: gap %g, area %g of the domain's %g", l, in.gap, in.area, in.domain_area);
     }
 }
 

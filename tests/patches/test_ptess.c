@@ -1635,6 +1635,86 @@ static uint32_t same_positions(const tsr_mesh *m)
     return same;
 }
 
+/* Trim loops of odd shapes on a flat 10 x 10 patch: what
+ * tsr_trim_loop_check reports against figures worked out by hand, and the
+ * area the tessellation keeps (an outer loop enclosing none of the domain
+ * keeps nothing: it used to be dropped, and the whole patch kept). */
+TEST(trim_loop_shapes)
+{
+    static const struct {
+        const char *name, *vp, *parm, *stmt;
+        double gap, area;    /* of the check: gap, area inside the domain (-1: crosses) */
+        double cross_uv[2];
+        double kept;         /* the mesh's area */
+    } cases[] = {
+        {"square", "0.1 0.1,0.9 0.1,0.9 0.9,0.1 0.9,0.1 0.1", "0 0 1 2 3 4 4", "trim 0 4 1", 0, 0.64, {0, 0}, 64},
+        {"open", "0.1 0.1,0.9 0.1,0.9 0.9,0.1 0.9", "0 0 1 2 3 3", "trim 0 3 1", 0.8, 0.64, {0, 0}, 64},
+        {"bowtie", "0.1 0.1,0.9 0.9,0.9 0.1,0.1 0.9,0.1 0.1", "0 0 1 2 3 4 4", "trim 0 4 1", 0, -1, {0.5, 0.5}, 32},
+        {"outside", "2 2,3 2,3 3,2 3,2 2", "0 0 1 2 3 4 4", "trim 0 4 1", 0, 0, {0, 0}, 0},
+        {"flat", "0.1 0.1,0.9 0.1,0.5 0.1,0.1 0.1", "0 0 1 2 3 3", "trim 0 3 1", 0, 0, {0, 0}, 0},
+        {"half out", "0.5 0.5,1.5 0.5,1.5 1.5,0.5 1.5,0.5 0.5", "0 0 1 2 3 4 4", "trim 0 4 1", 0, 0.25, {0, 0}, 25},
+        {"hole out", "2 2,3 2,3 3,2 3,2 2", "0 0 1 2 3 4 4", "hole 0 4 1", 0, 0, {0, 0}, 100},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        sbuf b = {0};
+        sb_printf(&b, "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 10 10 0\n");
+        int nvp = 0;
+        for (const char *q = cases[c].vp; *q; nvp++) {
+            double u, v;
+            int used = 0;
+            if (sscanf(q, "%lf %lf%n", &u, &v, &used) != 2)
+                break;
+            sb_printf(&b, "vp %.17g %.17g\n", u, v);
+            q += used;
+            q += *q == ',';
+        }
+        sb_printf(&b, "cstype bspline\ndeg 1\ncurv2");
+        for (int k = 1; k <= nvp; k++)
+            sb_printf(&b, " %d", k);
+        sb_printf(&b, "\nparm u %s\nend\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nparm u 0 0 1 1\nparm v 0 0 1 1\n%s\nend\n",
+                  cases[c].parm, cases[c].stmt);
+        uint32_t stmt_line = 4 + (uint32_t)nvp + 10; /* after the v, vp, cstype .. parm v lines */
+        tsr_patch_set set;
+        if (!parse_set(&b, cases[c].name, &set)) {
+            free(b.s);
+            continue;
+        }
+        tsr_trim_loop_info in;
+        CHECK(set.num_loops == 1 && tsr_trim_loop_check(&set, 0, 1e-9, NULL, &in) == TSR_OK);
+        CHECK_MSG(set.loops[0].line == stmt_line, "%s: line %u, not %u", cases[c].name, set.loops[0].line, stmt_line);
+        bool crosses = cases[c].area < 0;
+        CHECK_MSG(fabs(in.gap - cases[c].gap) <= 1e-12 && in.crosses == crosses &&
+                      fabs(in.area - cases[c].area) <= 1e-12 && fabs(in.domain_area - 1) <= 1e-15,
+                  "%s: gap %g area %g crosses %d (want %g, %g, %d)", cases[c].name, in.gap, in.area, in.crosses,
+                  cases[c].gap, cases[c].area, crosses);
+        if (crosses)
+            CHECK_MSG(hypot(in.cross_uv[0] - cases[c].cross_uv[0], in.cross_uv[1] - cases[c].cross_uv[1]) <= 1e-12,
+                      "%s: crossing at %g %g", cases[c].name, in.cross_uv[0], in.cross_uv[1]);
+        tsr_pmodel *m = NULL;
+        if (make_model(&set, &m)) {
+            tsr_ptess_options o = {0};
+            o.max_error = 1e-3;
+            tsr_ptess_result r;
+            tsr_error e = {0};
+            CHECK_MSG(tsr_ptess_run(m, &o, NULL, &r, &e) == TSR_OK, "%s: %s", cases[c].name, e.message);
+            double area = 0;
+            const float *P = r.mesh.positions;
+            for (uint32_t f = 0; f < r.mesh.triangle_count; f++) {
+                const uint32_t *t = r.mesh.indices + 3 * f;
+                const float *p0 = P + 3 * t[0], *p1 = P + 3 * t[1], *p2 = P + 3 * t[2];
+                area += 0.5 * (((double)p1[0] - p0[0]) * ((double)p2[1] - p0[1]) -
+                               ((double)p1[1] - p0[1]) * ((double)p2[0] - p0[0]));
+            }
+            CHECK_MSG(fabs(area - cases[c].kept) <= 1e-4, "%s: kept %g, want %g", cases[c].name, area,
+                      cases[c].kept);
+            tsr_ptess_result_free(&r);
+        }
+        tsr_pmodel_destroy(m);
+        tsr_patch_set_free(&set);
+        free(b.s);
+    }
+}
+
 TEST(trim_loops_meet_the_lattice)
 {
     static const double hole[9][3] = {{0.75, 0.5, 1},
@@ -4062,7 +4142,7 @@ TEST(measure_threads_same_figures)
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
-          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(trim_loops_meet_the_lattice), T(measure_passes_slivers_by), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
+          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(trim_loops_meet_the_lattice), T(trim_loop_shapes), T(measure_passes_slivers_by), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
           T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
          T(rational_cylinder_cut_near_its_strip),
           T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),

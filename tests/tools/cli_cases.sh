@@ -146,6 +146,29 @@ patch_skipped_statements)
   [ ! -s "$cap/stderr" ] || fail "--quiet printed: $(cat "$cap/stderr")"
   rm "$dir/mixed.ply"
   echo "ok [$case]: polygons noted" ;;
+patch_trim_warnings)
+  # trim loops the file may not mean are warned of, with their line
+  surf='deg 1 1\nsurf 0 1 0 1 1 2 3 4\nparm u 0 0 1 1\nparm v 0 0 1 1\n'
+  pts='v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n'
+  printf "${pts}vp 0.1 0.1\nvp 0.9 0.1\nvp 0.9 0.9\nvp 0.1 0.9\ncstype bspline\ndeg 1\ncurv2 1 2 3 4\nparm u 0 0 1 2 3 3\nend\n${surf}trim 0 3 1\nend\n" > "$dir/open.obj"
+  "$tessera" patch "$dir/open.obj" -o "$dir/open.ply" 2> "$cap/stderr" || fail "open: $(cat "$cap/stderr")"
+  grep -q "open\.obj:18: warning: the trim loop of patch 1 is open (ends 0\.8 apart in (u, v)): closed by a straight edge" "$cap/stderr" ||
+    fail "open: no warning: $(cat "$cap/stderr")"
+  "$tessera" patch "$dir/open.obj" -o "$dir/open.ply" --quiet 2> "$cap/stderr" || fail "quiet failed"
+  [ ! -s "$cap/stderr" ] || fail "--quiet printed: $(cat "$cap/stderr")"
+  rm "$dir/open.ply"
+  printf "${pts}vp 0.1 0.1\nvp 0.9 0.9\nvp 0.9 0.1\nvp 0.1 0.9\nvp 0.1 0.1\ncstype bspline\ndeg 1\ncurv2 1 2 3 4 5\nparm u 0 0 1 2 3 4 4\nend\n${surf}trim 0 4 1\nend\n" > "$dir/bowtie.obj"
+  "$tessera" check patches "$dir/bowtie.obj" --cameras 1 > /dev/null 2> "$cap/stderr" || fail "bowtie: $(cat "$cap/stderr")"
+  grep -q "bowtie\.obj:19: warning: the trim loop of patch 1 crosses itself near (u, v) = (0\.5, 0\.5)" "$cap/stderr" ||
+    fail "bowtie: no warning: $(cat "$cap/stderr")"
+  # a loop outside the domain keeps nothing (it used to be dropped and the
+  # whole patch kept): the only patch gone, the command fails
+  printf "${pts}vp 2 2\nvp 3 2\nvp 3 3\nvp 2 3\nvp 2 2\ncstype bspline\ndeg 1\ncurv2 1 2 3 4 5\nparm u 0 0 1 2 3 4 4\nend\n${surf}trim 0 4 1\nend\n" > "$dir/outside.obj"
+  "$tessera" patch "$dir/outside.obj" -o "$dir/outside.ply" 2> "$cap/stderr" && fail "outside: exit 0"
+  grep -q "outside\.obj:19: warning: the trim loop of patch 1 encloses none of the patch's domain \[0, 1\] x \[0, 1\]: the patch keeps nothing" "$cap/stderr" ||
+    fail "outside: no warning: $(cat "$cap/stderr")"
+  [ -e "$dir/outside.ply" ] && fail "outside: output left behind"
+  echo "ok [$case]: open, crossing and outside loops warned of" ;;
 patch_crease_normals)
   # a box of six planar patches: with --normals each vertex is written once
   # per face meeting there, every normal that face's (an axis), every
