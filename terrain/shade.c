@@ -9,6 +9,8 @@
 #include "terrain_internal.h"
 
 #include <math.h>
+#include <string.h>
+#include <strings.h>
 
 static tsr_status check_hf(const tsr_heightfield *hf, const char *path, tsr_error *err)
 {
@@ -60,27 +62,46 @@ tsr_status tsr_heightfield_normal_map(const tsr_heightfield *hf, const char *pat
 typedef struct shade_user {
     const tsr_heightfield *hf;
     double le, ln, lu; /* the light: east, north, up */
+    uint32_t channels; /* 1: grey; 2: grey and alpha (0 at no-data) */
 } shade_user;
 
-/* Rows y0 .. y1 - 1 of the hillshade: grey, no-data black. */
+/* Rows y0 .. y1 - 1 of the hillshade: grey (no-data black), and alpha
+ * (no-data 0, else 255) with two channels. */
 static void shade_rows(void *user, uint32_t y0, uint32_t y1, uint8_t *px)
 {
     const shade_user *u = user;
     const tsr_heightfield *hf = u->hf;
-    uint32_t w = hf->width;
+    uint32_t w = hf->width, nc = u->channels;
     for (uint32_t r = y0; r < y1; r++)
         for (uint32_t c = 0; c < w; c++) {
-            uint8_t *p = px + (size_t)(r - y0) * w + c;
+            uint8_t *p = px + nc * ((size_t)(r - y0) * w + c);
             if (isnan(hf->data[(size_t)r * w + c])) {
-                *p = 0;
+                p[0] = 0;
+                if (nc == 2)
+                    p[1] = 0;
                 continue;
             }
             float n[3];
             tsr_heightfield_normal_at(hf, c, r, n);
             double d = n[0] * u->le + (-n[1]) * u->ln + n[2] * u->lu;
             double q = floor(255.0 * (d > 0 ? d : 0) + 0.5);
-            *p = (uint8_t)(q > 255 ? 255 : q);
+            p[0] = (uint8_t)(q > 255 ? 255 : q);
+            if (nc == 2)
+                p[1] = 255;
         }
+}
+
+/* Whether path's extension names a format that keeps grey and alpha. */
+static bool keeps_grey_alpha(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    if (!dot || strchr(dot, '/'))
+        return false;
+    static const char *const ext[] = {".png", ".tif", ".tiff", ".exr"};
+    for (size_t k = 0; k < sizeof ext / sizeof ext[0]; k++)
+        if (!strcasecmp(dot, ext[k]))
+            return true;
+    return false;
 }
 
 tsr_status tsr_heightfield_hillshade(const tsr_heightfield *hf, const char *path, double azimuth_deg,
@@ -99,6 +120,11 @@ tsr_status tsr_heightfield_hillshade(const tsr_heightfield *hf, const char *path
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: sun altitude %g is outside 0..90 degrees", path, altitude_deg);
     const double deg = 3.14159265358979323846 / 180.0;
     double az = fmod(azimuth_deg, 360.0) * deg, alt = altitude_deg * deg;
-    shade_user u = {hf, cos(alt) * sin(az), cos(alt) * cos(az), sin(alt)};
-    return tsr_image_save_u8_rows(path, hf->width, hf->height, 1, shade_rows, &u, err);
+    shade_user u = {hf, cos(alt) * sin(az), cos(alt) * cos(az), sin(alt), 1};
+    if (keeps_grey_alpha(path)) {
+        size_t n = (size_t)hf->width * hf->height;
+        for (size_t i = 0; i < n && u.channels == 1; i++)
+            u.channels = isnan(hf->data[i]) ? 2 : 1;
+    }
+    return tsr_image_save_u8_rows(path, hf->width, hf->height, u.channels, shade_rows, &u, err);
 }

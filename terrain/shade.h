@@ -69,8 +69,11 @@ tsr_status tsr_heightfield_normal_map(const tsr_heightfield *hf, const char *pat
  * the top-left. Any finite value (taken modulo 360). altitude_deg: degrees
  * above the horizon, 0 to 90. NAN for either picks its default
  * (TSR_HILLSHADE_AZIMUTH, TSR_HILLSHADE_ALTITUDE). No-data (NaN) samples are
- * 0, as is full shadow: there is no alpha channel. The heights are used
- * with their spacing and scale (dz acts as GDAL's z factor). */
+ * 0, as is full shadow; so where the heightfield has any and the format
+ * keeps grey with alpha (.png, .tif, .tiff, .exr), a second channel is
+ * written, alpha: 0 at no-data, 255 elsewhere (without no-data, or in
+ * other formats, grey alone). The heights are used with their spacing and
+ * scale (dz acts as GDAL's z factor). */
 tsr_status tsr_heightfield_hillshade(const tsr_heightfield *hf, const char *path, double azimuth_deg,
                                      double altitude_deg, tsr_error *err);
 

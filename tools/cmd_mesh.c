@@ -69,7 +69,8 @@ static void help(FILE *f)
             "                        the walls and bottom flat-shaded: their vertices are written apart\n"
             "                        from the top's, except in .stl, which has facet normals)\n"
             "  --normal-map FILE     a normal map image at the heightfield's resolution (.png, .tif)\n"
-            "  --hillshade FILE      a hillshade image at the heightfield's resolution (.png, .tif)\n"
+            "  --hillshade FILE      a hillshade image at the heightfield's resolution (.png, .tif;\n"
+            "                        with no-data, an alpha channel: 0 there)\n"
             "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
             "                        peak_bytes, method and the input's size, range and no-data count\n"
             "  --quiet               print nothing on success (no summary, no progress bar)\n" CLI_HEIGHTFIELD_HELP

@@ -262,6 +262,8 @@ TEST(hillshade_azimuth_convention)
     tsr_free(NULL, wst);
 }
 
+/* No-data is black, as full shadow is, so where the format keeps it an
+ * alpha channel tells them apart: 0 at no-data, 255 elsewhere. */
 TEST(hillshade_nan_is_zero)
 {
     const char *dir = check_temp_dir();
@@ -269,12 +271,18 @@ TEST(hillshade_nan_is_zero)
     float *d = tsr_heightfield_data(hf);
     d[7] = NAN;
     d[0] = NAN;
-    const char *p = tmp_path(dir, "nan.tif");
-    CHECK(tsr_heightfield_hillshade(hf, p, 315, 45, NULL) == TSR_OK);
-    float *px = read_back(p, 5, 4, 1);
-    for (int i = 0; px && i < 20; i++)
-        CHECK(px[i] == (i == 7 || i == 0 ? 0 : 180));
-    tsr_free(NULL, px);
+    const char *names[] = {"nan.tif", "nan.png"};
+    for (int f = 0; f < 2; f++) {
+        const char *p = tmp_path(dir, names[f]);
+        CHECK(tsr_heightfield_hillshade(hf, p, 315, 45, NULL) == TSR_OK);
+        float *px = read_back(p, 5, 4, 2);
+        for (int i = 0; px && i < 20; i++) {
+            bool hole = i == 7 || i == 0;
+            CHECK_MSG(px[2 * i] == (hole ? 0 : 180) && px[2 * i + 1] == (hole ? 0 : 255), "%s pixel %d: %g %g",
+                      names[f], i, px[2 * i], px[2 * i + 1]);
+        }
+        tsr_free(NULL, px);
+    }
     tsr_heightfield_destroy(hf);
 }
 
