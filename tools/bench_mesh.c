@@ -328,7 +328,8 @@ int cli_bench_mesh(int argc, char **argv)
         else if ((!strcmp(a, "--size") || !strcmp(a, "--repeat") || !strcmp(a, "--threads")) && has_value) {
             uint32_t u;
             if (!cli_parse_u32(argv[++i], !strcmp(a, "--size") ? 2 : 1, 1u << 16, &u)) {
-                cli_error("bench", "%s %s: must be a positive integer", a, argv[i]);
+                cli_error("bench", "%s %s: must be a whole number from %u to %u", a, argv[i], !strcmp(a, "--size") ? 2 : 1,
+                          1u << 16);
                 return CLI_USAGE;
             }
             *(!strcmp(a, "--size") ? &size : !strcmp(a, "--repeat") ? &repeat : &bench_threads) = u;

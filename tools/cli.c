@@ -208,7 +208,11 @@ int cli_heightfield_option(const char *cmd, int argc, char **argv, int *i, cli_h
         }
         tsr_raw_type t = tsr_raw_type_parse(argv[*i + 3]);
         if (t == TSR_RAW_NONE) {
-            cli_error(cmd, "--raw: unknown sample type '%s' (use u16, i16 or f32)", argv[*i + 3]);
+            if (argv[*i + 3][0] == '-')
+                cli_error(cmd, "--raw %s %s %s: TYPE missing: --raw needs three values, W H TYPE (TYPE u16, i16 or "
+                          "f32)", argv[*i + 1], argv[*i + 2], argv[*i + 3]);
+            else
+                cli_error(cmd, "--raw: unknown sample type '%s' (use u16, i16 or f32)", argv[*i + 3]);
             return -1;
         }
         o->load.raw_type = t;

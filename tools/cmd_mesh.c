@@ -259,7 +259,7 @@ static int run(int argc, char **argv)
                    has_value) {
             uint32_t v;
             if (!cli_parse_u32(argv[++i], 1, UINT32_MAX - 1, &v)) {
-                cli_error("mesh", "%s %s: must be a positive integer", a, argv[i]);
+                cli_error("mesh", "%s %s: must be a whole number from 1 to %u", a, argv[i], UINT32_MAX - 1);
                 return CLI_USAGE;
             }
             if (!strcmp(a, "--triangles"))
