@@ -4,6 +4,7 @@
 #include "fly.h"
 
 #include <cjson/cJSON.h>
+#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -30,7 +31,8 @@ static void help(FILE *f)
                "  --headless            render offscreen along the flight path instead of a window\n"
                "  --frames N            headless: frames to render (default 120); window: quit after N\n"
                "  --out DIR             headless: where the frames go, DIR/frame_00000.png ... (default fly-frames)\n"
-               "  --video FILE.mp4      headless: assemble the frames with ffmpeg (30 fps) when it is installed\n"
+               "  --video FILE.mp4      headless: assemble the frames with ffmpeg (30 fps, MP4; refused before\n"
+               "                        rendering when ffmpeg is not installed)\n"
                "  --path FILE           keyframes, one per line: EX EY EZ [TX TY TZ] (world units); default: an\n"
                "                        automatic loop over the terrain, kept above the ground\n"
                "  --width W, --height H viewport in pixels (default 1280 x 720)\n"
@@ -186,13 +188,14 @@ static int assemble_video(const fly_args *a)
         cli_error("fly", "ffmpeg is not installed, so %s was not made; the frames are in %s", a->video, a->out_dir);
         return CLI_FAIL;
     }
-    char pattern[4200], tmp[4200];
+    char pattern[4200], tmp[4200], count[32];
     snprintf(pattern, sizeof pattern, "%s/frame_%%05d.png", a->out_dir);
     snprintf(tmp, sizeof tmp, "%s.tmp-%ld.mp4", a->video, (long)getpid());
+    snprintf(count, sizeof count, "%u", a->frames);
     pid_t pid = fork();
     if (pid == 0) {
-        execlp("ffmpeg", "ffmpeg", "-y", "-loglevel", "error", "-framerate", "30", "-i", pattern, "-pix_fmt",
-               "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", tmp, (char *)NULL);
+        execlp("ffmpeg", "ffmpeg", "-y", "-loglevel", "error", "-framerate", "30", "-i", pattern, "-frames:v", count,
+               "-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4", tmp, (char *)NULL);
         _exit(127);
     }
     int status = 0;
@@ -209,8 +212,34 @@ static int assemble_video(const fly_args *a)
     return CLI_OK;
 }
 
+/* Removes out_dir/frame_NNNNN.png for N >= from (to, when to < UINT32_MAX:
+ * below to): frames of an earlier, longer run, or those of this run when
+ * it failed. */
+static void remove_frames(const char *out_dir, uint32_t from, uint32_t to)
+{
+    DIR *d = opendir(out_dir);
+    if (!d)
+        return;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        unsigned n;
+        char tail[8];
+        if (strlen(e->d_name) != 15 || sscanf(e->d_name, "frame_%5u.%4s", &n, tail) != 2 || strcmp(tail, "png") ||
+            n < from || n >= to)
+            continue;
+        char name[4200];
+        snprintf(name, sizeof name, "%s/%s", out_dir, e->d_name);
+        unlink(name);
+    }
+    closedir(d);
+}
+
 static int run_headless(fly_args *a, const tsr_heightfield *hf)
 {
+    if (a->video && !have_program("ffmpeg")) { /* before the work, not after it */
+        cli_error("fly", "--video %s: ffmpeg is not installed (apt install ffmpeg), so no video can be made", a->video);
+        return CLI_FAIL;
+    }
     tsr_hw_vulkan_options vo = {.width = a->width, .height = a->height, .device = a->device};
     tsr_hw_backend *be = NULL;
     tsr_error err = {0};
@@ -227,6 +256,7 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
     fly_path path;
     tsr_status st = a->path_file ? fly_path_read(a->path_file, &path, &err) : fly_path_auto(&f, &path, &err);
     int rc = CLI_OK;
+    uint32_t written = UINT32_MAX; /* frames written by this run, once it has begun writing */
     frame_rec *recs = calloc(a->frames, sizeof *recs);
     uint8_t *rgba = malloc((size_t)a->width * a->height * 4);
     if (st != TSR_OK || !recs || !rgba) {
@@ -242,15 +272,22 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
     double clearance = 0.01 * (f.zmax - f.zmin) + 2 * f.o.near_dist;
     bool tty = !a->quiet && isatty(2);
     double t_start = cli_now();
+    /* every frame's camera, before any frame is written */
     for (uint32_t i = 0; i < a->frames; i++) {
         double s = path.closed ? (double)i / a->frames : a->frames > 1 ? (double)i / (a->frames - 1) : 0;
         tsr_camera cam;
         if (!fly_path_camera(&f, &path, s, clearance, &cam)) {
-            cli_error("fly", "frame %u: the camera is degenerate (target at the eye)",
-                      i);
+            cli_error("fly", "%s: frame %u: the camera is degenerate (the target at the eye, or no view)",
+                      a->path_file ? a->path_file : "the automatic path", i);
             rc = CLI_FAIL;
             goto done;
         }
+    }
+    for (uint32_t i = 0; i < a->frames; i++) {
+        double s = path.closed ? (double)i / a->frames : a->frames > 1 ? (double)i / (a->frames - 1) : 0;
+        tsr_camera cam;
+        fly_path_camera(&f, &path, s, clearance, &cam);
+        written = i; /* frames 0 .. i - 1 are this run's */
         double t0 = cli_now();
         fly_frame_stats fs;
         if (fly_frame(&f, &cam, &fs, &err) != TSR_OK) {
@@ -266,6 +303,7 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
             rc = CLI_FAIL;
             goto done;
         }
+        written = i + 1;
         if (tty)
             fprintf(stderr, "\rtessera fly: frame %u/%u (%.1f ms, %u tiles, %llu triangles)   ", i + 1, a->frames,
                     recs[i].frame_ms, recs[i].tiles, (unsigned long long)recs[i].triangles);
@@ -286,9 +324,13 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
     }
     if (rc == CLI_OK)
         rc = write_stats(a, &f.o, be->name, recs, a->frames);
+    if (rc == CLI_OK) /* a longer earlier run's frames would read as this flight's */
+        remove_frames(a->out_dir, a->frames, UINT32_MAX);
     if (rc == CLI_OK && a->video)
         rc = assemble_video(a);
 done:
+    if (rc != CLI_OK && written < UINT32_MAX && !(a->video && written == a->frames))
+        remove_frames(a->out_dir, 0, written);
     free(recs);
     free(rgba);
     fly_path_free(&path);
@@ -390,7 +432,7 @@ static int run_window(fly_args *a, const tsr_heightfield *hf)
         glfwGetCursorPos(win, &cx, &cy);
         if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
             if (have_cursor) {
-                yaw -= (cx - last_x) * 0.003;
+                yaw += (cx - last_x) * 0.003; /* the screen is mirrored (fly_frame_desc): right turns right */
                 pitch = fmax(-1.5, fmin(1.5, pitch - (cy - last_y) * 0.003));
             }
             have_cursor = true;
@@ -399,7 +441,7 @@ static int run_window(fly_args *a, const tsr_heightfield *hf)
         last_x = cx;
         last_y = cy;
         double fwd[3] = {cos(pitch) * cos(yaw), cos(pitch) * sin(yaw), sin(pitch)};
-        double right[2] = {sin(yaw), -cos(yaw)};
+        double right[2] = {-sin(yaw), cos(yaw)}; /* on the mirrored screen, the map's right */
         double speed = extent * 0.05 * dt * (glfwGetKey(win, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ? 5 : 1);
         int kw = glfwGetKey(win, GLFW_KEY_W) == GLFW_PRESS, ks = glfwGetKey(win, GLFW_KEY_S) == GLFW_PRESS;
         int ka = glfwGetKey(win, GLFW_KEY_A) == GLFW_PRESS, kd = glfwGetKey(win, GLFW_KEY_D) == GLFW_PRESS;

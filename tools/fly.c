@@ -85,7 +85,16 @@ void fly_frame_desc(const fly_ctx *f, const tsr_camera *cam, tsr_hw_frame *frame
     memset(frame, 0, sizeof *frame);
     memcpy(frame->eye, cam->eye, sizeof frame->eye);
     tsr_hw_view_proj(cam, frame->view_proj);
-    /* afternoon sun from the south-west, 35 degrees up */
+    /* Mirrored left to right: y runs down the heightfield's rows (south in
+     * a north-up raster), so x, y, z up is the map's mirror image, and a
+     * camera in it would show east on the west. Negating clip x (row 0 of
+     * the matrix) shows the map the right way round; nothing is culled by
+     * winding, and the frustum is symmetric, so the tiles are the same. */
+    for (int j = 0; j < 4; j++)
+        frame->view_proj[4 * j] = -frame->view_proj[4 * j];
+    /* the sun toward -x, -y (west and, y being south, north), 35 degrees
+     * up: from the map's north-west, the image's top-left, as hillshades
+     * are lit */
     double el = 35 * M_PI / 180, az = 225 * M_PI / 180;
     frame->sun[0] = (float)(cos(el) * cos(az));
     frame->sun[1] = (float)(cos(el) * sin(az));

@@ -105,8 +105,10 @@ TEST(depth_matches_picking)
             double worst = 0;
             for (int y = 0; y < H; y++)
                 for (int x = 0; x < W; x++) {
-                    /* the ray through the pixel's centre, with unit depth */
-                    double u = (x + 0.5 - W / 2.0) / cam.K, w = -(y + 0.5 - H / 2.0) / cam.K, dir[3];
+                    /* the ray through the pixel's centre, with unit depth (the
+                     * image is the camera's mirrored left to right, so the map
+                     * shows the right way round: fly_frame_desc) */
+                    double u = -(x + 0.5 - W / 2.0) / cam.K, w = -(y + 0.5 - H / 2.0) / cam.K, dir[3];
                     for (int k = 0; k < 3; k++)
                         dir[k] = cam.fwd[k] + u * cam.right[k] + w * cam.up[k];
                     double t;
@@ -271,7 +273,7 @@ static bool pixel_point(const tsr_camera *cam, const float *depth, int x, int y,
     float d = depth[y * W + x];
     if (!(d > 0))
         return false;
-    double u = (x + 0.5 - W / 2.0) / cam->K, w = -(y + 0.5 - H / 2.0) / cam->K;
+    double u = -(x + 0.5 - W / 2.0) / cam->K, w = -(y + 0.5 - H / 2.0) / cam->K; /* mirrored: fly_frame_desc */
     for (int k = 0; k < 3; k++)
         p[k] = cam->eye[k] + cam->near_dist / d * (cam->fwd[k] + u * cam->right[k] + w * cam->up[k]);
     return true;
@@ -797,7 +799,7 @@ TEST(no_pinholes_between_tiles)
                     float mn = fminf(fminf(n1, n2), fminf(n3, n4)), mx = fmaxf(fmaxf(n1, n2), fmaxf(n3, n4));
                     if (d > 0 && !(d < 0.8f * mn && mx <= 1.1f * mn))
                         continue;
-                    double u = (x + 0.5 - PW / 2.0) / cam.K, w = -(y + 0.5 - PH / 2.0) / cam.K, dir[3], t;
+                    double u = -(x + 0.5 - PW / 2.0) / cam.K, w = -(y + 0.5 - PH / 2.0) / cam.K, dir[3], t;
                     for (int k = 0; k < 3; k++)
                         dir[k] = cam.fwd[k] + u * cam.right[k] + w * cam.up[k];
                     /* the surface is there, as near as the neighbours */
