@@ -205,8 +205,9 @@ typedef enum tsr_tin_method {
 typedef struct tsr_tin_options {
     tsr_tin_method method;
     /* The bound: no valid sample farther from the mesh than this. 0 means
-     * 0.1% of the height range, unless a budget is given, in which case
-     * the budget alone stops refinement. Must be >= 0. */
+     * 0.1% of the whole heightfield's height range (with a window too, so
+     * adjacent windows get the same bound and border), unless a budget is
+     * given, in which case the budget alone stops refinement. Must be >= 0. */
     double max_error;
     /* Budgets: the mesh has at most this many triangles / vertices (0:
      * none); refinement stops before the next step would exceed one. */
@@ -260,8 +261,9 @@ typedef struct tsr_tin_options {
 
 typedef struct tsr_tin_report {
     double target_error;      /* the tolerance refinement worked to (world units) */
-    double bound;             /* the max error asked for, else the default (0.1 % of the window's
-                                 height range) when no budget is given either; 0 with a budget alone */
+    double bound;             /* the max error asked for, else the default (0.1 % of the whole
+                                 heightfield's height range) when no budget is given either; 0 with a
+                                 budget alone */
     double border_error;      /* the border simplification's tolerance */
     double estimated_error;   /* the mesher's own estimate of the max error (not measured) */
     uint32_t border_vertices; /* vertices fixed on the border, no-data boundaries and block seams (per block) */

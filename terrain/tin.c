@@ -1880,7 +1880,14 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
     tsr_heightfield_stats hs;
     tsr_heightfield_stats_compute(src, &hs);
     double range = hs.valid ? (hs.max - hs.min) * hf->dz : 0;
-    double deflt = range > 0 ? range * 1e-3 : 1e-3 * hf->dz;
+    /* the default bound from the whole heightfield's range, so windows
+     * meshed with the same options get the same bound, and so the same
+     * border vertices */
+    tsr_heightfield_stats whole = hs;
+    if (src != hf)
+        tsr_heightfield_stats_compute(hf, &whole);
+    double wrange = whole.valid ? (whole.max - whole.min) * hf->dz : 0;
+    double deflt = wrange > 0 ? wrange * 1e-3 : 1e-3 * hf->dz;
     bool budget = o.max_triangles || o.max_vertices;
     double target = o.max_error > 0 ? o.max_error : budget ? 0 : deflt;
     double btol = o.border_error > 0 ? o.border_error : o.max_error > 0 ? o.max_error : deflt;
@@ -1900,7 +1907,7 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
     else if (o.method == TSR_TIN_DELAUNAY && o.border_error > 0 && target > 0 && o.border_error > target)
         st = tsr_error_set(err, TSR_ERR_ARGUMENT, "mesh: the border tolerance %g exceeds the bound %g%s: the border "
                            "is part of the mesh", o.border_error, target,
-                           o.max_error > 0 ? "" : " (the default, 0.1% of the window's height range)");
+                           o.max_error > 0 ? "" : " (the default, 0.1% of the heightfield's height range)");
     else if (o.method == TSR_TIN_DELAUNAY) {
         /* a hair below the bound, for the float rounding of the output */
         double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(hs.max), fabs(hs.min)) * hf->dz;

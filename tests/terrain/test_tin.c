@@ -541,8 +541,19 @@ static void seam_case(const tsr_heightfield *hf, tsr_tin_method method, double e
         ob.window_h = H - split;
     }
     tsr_error err = {0};
-    CHECK_MSG(tsr_terrain_mesh(hf, &oa, &a, NULL, &err) == TSR_OK, "%s", err.message);
-    CHECK_MSG(tsr_terrain_mesh(hf, &ob, &b, NULL, &err) == TSR_OK, "%s", err.message);
+    tsr_tin_report ra = {0}, rb = {0};
+    CHECK_MSG(tsr_terrain_mesh(hf, &oa, &a, &ra, &err) == TSR_OK, "%s", err.message);
+    CHECK_MSG(tsr_terrain_mesh(hf, &ob, &b, &rb, &err) == TSR_OK, "%s", err.message);
+    if (e == 0) { /* the default bound: the whole heightfield's, the same for both */
+        tsr_heightfield_stats st;
+        tsr_heightfield_stats_compute(hf, &st);
+        double sdx, sdy, sdz;
+        tsr_heightfield_spacing(hf, &sdx, &sdy, &sdz);
+        double want = 1e-3 * (st.max - st.min) * sdz;
+        CHECK_MSG(ra.bound == rb.bound && fabs(ra.bound - want) <= 1e-12 * want, "%s: default bounds %g and %g, "
+                  "not the heightfield's %g", mname[method], ra.bound, rb.bound, want);
+        e = ra.bound;
+    }
     double dx, dy, dz;
     tsr_heightfield_spacing(hf, &dx, &dy, &dz);
     float line = vertical ? (float)(split * dx) : (float)(split * dy);
@@ -817,6 +828,10 @@ TEST(window_seams)
         for (int v = 0; v < 2; v++)
             for (int e = 0; e < 2; e++)
                 seam_case(hf, mth == 2 ? TSR_TIN_GRID : methods[mth], mth == 2 ? 1e9 : errors[e], v);
+    /* no bound given: the default is the whole heightfield's, so the
+     * windows still share their border (it was each window's own) */
+    for (int v = 0; v < 2; v++)
+        seam_case(hf, TSR_TIN_DELAUNAY, 0, v);
     /* no-data right of the seam at column 63 (rows 20..40), left of it
      * (rows 60..70) */
     for (uint32_t r = 0; r < 97; r++)
