@@ -1,5 +1,6 @@
 /* cli.c: shared helpers of the tessera subcommands. */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE /* realpath */
 #include "cli.h"
 
 #include <cjson/cJSON.h>
@@ -10,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -387,6 +389,58 @@ void cli_progress_end(cli_progress *p)
     if (p->shown)
         fprintf(stderr, "\r%*s\r", (int)strlen(p->cmd) + 58, "");
     p->shown = false;
+}
+
+/* path's canonical form: its folder's real path and its name (NULL where
+ * the folder does not resolve); free the result. */
+static char *canonical_path(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    char dir[4096];
+    const char *base = slash ? slash + 1 : path;
+    size_t dn = slash ? (size_t)(slash - path) : 1;
+    if (dn >= sizeof dir)
+        return NULL;
+    if (slash)
+        memcpy(dir, path, dn);
+    else
+        dir[0] = '.';
+    dir[dn ? dn : 1] = '\0';
+    if (slash && dn == 0)
+        strcpy(dir, "/");
+    char *real = realpath(dir, NULL);
+    if (!real)
+        return NULL;
+    size_t n = strlen(real) + strlen(base) + 2;
+    char *out = malloc(n);
+    if (out)
+        snprintf(out, n, "%s/%s", real, base);
+    free(real);
+    return out;
+}
+
+static bool same_file(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    if (stat(a, &sa) == 0 && stat(b, &sb) == 0)
+        return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    char *ca = canonical_path(a), *cb = canonical_path(b);
+    bool same = ca && cb ? !strcmp(ca, cb) : !strcmp(a, b);
+    free(ca);
+    free(cb);
+    return same;
+}
+
+bool cli_paths_distinct(const char *cmd, int n, const char *const *names, const char *const *paths)
+{
+    for (int i = 0; i < n; i++)
+        for (int j = i + 1; paths[i] && j < n; j++)
+            if (paths[j] && same_file(paths[i], paths[j])) {
+                cli_error(cmd, "%s %s and %s %s name the same file", names[i], paths[i],
+                          names[j], paths[j]);
+                return false;
+            }
+    return true;
 }
 
 bool cli_outputs_writable(const char *cmd, int n, const char *const *paths)

@@ -103,6 +103,13 @@ bool cli_outputs_writable(const char *cmd, int n, const char *const *paths);
  * subcommand ("bench patch") or NULL. */
 void cli_option_error(const char *cmd, const char *sub, const char *a, void (*help)(FILE *));
 
+/* Checks, before any work, that no two of the n files (names[k] the
+ * option that gives paths[k], e.g. "-o" or "the input"; NULL paths
+ * skipped) are one file: by device and inode where both exist, else by
+ * their folders' real paths and names. Prints the error and returns false
+ * at the first pair; the caller exits with CLI_USAGE. */
+bool cli_paths_distinct(const char *cmd, int n, const char *const *names, const char *const *paths);
+
 /* Writes text to path atomically (temporary, then rename). */
 tsr_status cli_write_text(const char *path, const char *text, tsr_error *err);
 

@@ -594,6 +594,9 @@ static int run(int argc, char **argv)
     }
     if (a.headless && !frames_given)
         a.frames = 120;
+    const char *names[3] = {"the input", "--stats", "--video"}, *files[3] = {a.in, a.stats, a.video};
+    if (!cli_paths_distinct("fly", 3, names, files))
+        return CLI_USAGE;
     const char *outputs[2] = {a.stats, a.video}; /* checked before the flight, not after it */
     if (!cli_outputs_writable("fly", 2, outputs))
         return CLI_FAIL;

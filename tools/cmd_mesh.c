@@ -349,6 +349,10 @@ static int run(int argc, char **argv)
         return CLI_USAGE;
     }
     /* Outputs are checked before the work, not after it. */
+    const char *names[5] = {"the input", "-o", "--stats", "--normal-map", "--hillshade"};
+    const char *files[5] = {in, out, stats, normal_map, hillshade};
+    if (!cli_paths_distinct("mesh", 5, names, files))
+        return CLI_USAGE;
     const char *images[2] = {normal_map, hillshade};
     for (int k = 0; k < 2; k++) {
         tsr_error ierr = {0};

@@ -210,6 +210,9 @@ static int run(int argc, char **argv)
         cli_error("patch", "give either --max-error or --pixel-error with --camera, not both");
         return CLI_USAGE;
     }
+    const char *names[3] = {"the input", "-o", "--stats"}, *files[3] = {in, out, stats};
+    if (!cli_paths_distinct("patch", 3, names, files))
+        return CLI_USAGE;
     const char *outputs[2] = {out, stats}; /* checked before the work, not after it */
     if (!cli_outputs_writable("patch", 2, outputs))
         return CLI_FAIL;

@@ -216,7 +216,17 @@ bad_options)
   expect_error 2 "g\.png: mesh: the border tolerance 1e\+06 exceeds the bound .* \(the default" -- \
     "$tessera" mesh "$dir/g.png" -o "$out" --border-error 1e6
   expect_error 2 "--border-error applies to --method delaunay only" -- \
-    "$tessera" mesh "$dir/g.png" -o "$out" --method quadtree --border-error 1 ;;
+    "$tessera" mesh "$dir/g.png" -o "$out" --method quadtree --border-error 1
+  # an output over the input, or two outputs one file: refused before any
+  # work (--stats over the mesh, --hillshade over the DEM, went through)
+  expect_error 2 "the input .*g\.png and --stats .*g\.png name the same file" -- \
+    "$tessera" mesh "$dir/g.png" -o "$out" --stats "$dir/../$(basename "$dir")/g.png"
+  expect_error 2 "-o .*out\.obj and --stats .*out\.obj name the same file" -- \
+    "$tessera" mesh "$dir/g.png" -o "$out" --stats "$out"
+  expect_error 2 "--normal-map .*a\.png and --hillshade .*a\.png name the same file" -- \
+    "$tessera" mesh "$dir/g.png" -o "$out" --normal-map "$dir/a.png" --hillshade "$dir/./a.png"
+  expect_error 2 "the input .*s\.obj and -o .*s\.obj name the same file" -- \
+    "$tessera" patch "$dir/s.obj" -o "$dir/s.obj" ;;
 help_options)
   # every option a command's --help lists is one its parser takes: a flag
   # lets parsing go on to the next argument, an option with a value given
