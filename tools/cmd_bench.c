@@ -23,7 +23,7 @@ static void help(FILE *f)
                "options:\n"
                "  --size S          generated heightfield of S x S samples (default 16385)\n"
                "  --input FILE      benchmark this heightfield instead (heightfield options apply)\n"
-               "  --tile N          tile size (default 16)\n"
+               "  --tile N          tile size: 2, 4, ..., 128 (default 16)\n"
                "  --frames F        frames of the flight (default 1000)\n"
                "  --pixel-error T   screen-space error, pixels (default 1)\n"
                "  --repeat R        best of R runs for the timed builds (default 3)\n" CLI_HEIGHTFIELD_HELP
@@ -271,6 +271,10 @@ static int run(int argc, char **argv)
             cli_option_error("bench", "terrain", a, help);
             return CLI_USAGE;
         }
+    }
+    if (tile < TSR_TILE_MIN || tile > TSR_TILE_MAX || (tile & (tile - 1))) { /* before generating, not after */
+        cli_error("bench", "terrain: --tile %u: must be a power of two from %u to %u", tile, TSR_TILE_MIN, TSR_TILE_MAX);
+        return CLI_USAGE;
     }
     double t0 = cli_now();
     tsr_heightfield *hf;

@@ -28,7 +28,7 @@ static void help_terrain(FILE *f)
                "  --seed S              seed of the random cameras (default 1)\n"
                "  --camera EX,EY,EZ,TX,TY,TZ  a camera at eye E looking at T (world units; repeatable;\n"
                "                        replaces the random cameras)\n"
-               "  --tile N              tile size: 8, 16, 32, 64 or 128 quads (default 16)\n"
+               "  --tile N              tile size: 2, 4, ..., 128 quads (default 16)\n"
                "  --width W, --height H viewport in pixels (default 1920 x 1080)\n"
                "  --fov DEG             vertical field of view (default 60)\n"
                "  --near D              near plane distance (default 1)\n"
@@ -119,6 +119,12 @@ static int run_terrain(int argc, char **argv)
         else if ((!strcmp(a, "--cameras") || !strcmp(a, "--seed") || !strcmp(a, "--tile")) && has_value) {
             if (!cli_parse_u32(argv[++i], !strcmp(a, "--seed") ? 0 : 1, 1000000, &u)) {
                 cli_error("check", "%s %s: not a valid count", a, argv[i]);
+                rc = CLI_USAGE;
+                break;
+            }
+            if (!strcmp(a, "--tile") && (u < TSR_TILE_MIN || u > TSR_TILE_MAX || (u & (u - 1)))) {
+                cli_error("check", "--tile %s: must be a power of two from %u to %u", argv[i], TSR_TILE_MIN,
+                          TSR_TILE_MAX);
                 rc = CLI_USAGE;
                 break;
             }
