@@ -462,23 +462,38 @@ static int run(int argc, char **argv)
             rc = CLI_FAIL;
         }
     }
-    if (rc == CLI_OK && normal_map && tsr_heightfield_normal_map(hf, normal_map, &err) != TSR_OK) {
-        cli_error("mesh", "%s", err.message);
-        rc = CLI_FAIL;
+    /* the files written so far, removed when a later one fails: no
+     * partial set of outputs is left behind */
+    const char *written[3];
+    int nwritten = 0;
+    if (rc == CLI_OK && normal_map) {
+        if (tsr_heightfield_normal_map(hf, normal_map, &err) != TSR_OK) {
+            cli_error("mesh", "%s", err.message);
+            rc = CLI_FAIL;
+        } else
+            written[nwritten++] = normal_map;
     }
-    if (rc == CLI_OK && hillshade && tsr_heightfield_hillshade(hf, hillshade, 315, 45, &err) != TSR_OK) {
-        cli_error("mesh", "%s", err.message);
-        rc = CLI_FAIL;
+    if (rc == CLI_OK && hillshade) {
+        if (tsr_heightfield_hillshade(hf, hillshade, 315, 45, &err) != TSR_OK) {
+            cli_error("mesh", "%s", err.message);
+            rc = CLI_FAIL;
+        } else
+            written[nwritten++] = hillshade;
     }
     if (rc == CLI_OK && north_up)
         mirror_rows(&mesh);
-    if (rc == CLI_OK && tsr_mesh_write(&mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
-        cli_error("mesh", "%s", err.message);
-        rc = CLI_FAIL;
+    if (rc == CLI_OK) {
+        if (tsr_mesh_write(&mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
+            cli_error("mesh", "%s", err.message);
+            rc = CLI_FAIL;
+        } else
+            written[nwritten++] = out;
     }
     double secs = cli_now() - t0;
     if (rc == CLI_OK && stats)
         rc = write_stats(stats, &mesh, &er, secs, &to, hf, &o, &st, bound, &rep);
+    for (int k = 0; rc != CLI_OK && k < nwritten; k++)
+        unlink(written[k]);
     if (rc == CLI_OK && !quiet) {
         fprintf(stderr, "tessera mesh: wrote %s (%s, %s, %u vertices, %u triangles", out,
                 tsr_mesh_format_name(tsr_mesh_format_from_path(out)), method_name(to.method), mesh.vertex_count,

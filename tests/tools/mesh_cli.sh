@@ -178,6 +178,17 @@ grep -q "full.png: write failed" "$dir/full.err" || fail "no error naming the im
 left=$(ls -A "$dir" | grep -c "full\.\(png\|ply\)\|tsr-tmp" || true)
 [ "$left" -eq 0 ] || fail "files left after the failed write: $(ls -A "$dir")"
 echo "ok an image over the file size limit fails cleanly"
+# the mesh failing after a (small, flat) normal map was written: the map
+# is removed too, no partial set of outputs left (it was left)
+python3 -c "import struct; open('$dir/flat.f32', 'wb').write(struct.pack('<4225f', *([5.0] * 4225)))"
+if (trap '' XFSZ; ulimit -f 8; "$tessera" mesh "$dir/flat.f32" --raw 65 65 f32 --method grid -o "$dir/full.ply" \
+    --normal-map "$dir/full.png" --quiet) 2> "$dir/full.err"; then
+  fail "a mesh over the file size limit was written: $(ls -l "$dir"/full.* 2>&1)"
+fi
+grep -q "full.ply: write failed" "$dir/full.err" || fail "no error naming the mesh: $(cat "$dir/full.err")"
+left=$(ls -A "$dir" | grep -c "full\.\(png\|ply\)\|tsr-tmp" || true)
+[ "$left" -eq 0 ] || fail "files left after the failed mesh write: $(ls -A "$dir")"
+echo "ok a mesh over the file size limit removes the normal map written before it"
 
 # --north-up: every vertex (x, y, z) becomes (x, -y, z) with its normal's y
 # negated, every triangle still faces up (+z, by the cross product of its
