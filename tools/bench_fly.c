@@ -156,7 +156,7 @@ int cli_bench_fly(int argc, char **argv)
         else if (!strcmp(a, "--pixel-error") && more)
             ok = cli_parse_double(argv[++i], &o.pixel_error) && o.pixel_error > 0;
         else if (!strcmp(a, "--tile") && more)
-            ok = cli_parse_u32(argv[++i], 2, 128, &o.tile_n) && !(o.tile_n & (o.tile_n - 1));
+            ok = cli_parse_u32(argv[++i], TSR_TILE_MIN, TSR_TILE_MAX, &o.tile_n) && cli_tile_size_ok(o.tile_n);
         else if (!strcmp(a, "--input") && more)
             input = argv[++i];
         else if (!strcmp(a, "--device") && more)

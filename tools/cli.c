@@ -51,6 +51,8 @@ bool cli_parse_u32(const char *s, uint32_t min, uint32_t max, uint32_t *out)
     return true;
 }
 
+bool cli_tile_size_ok(uint32_t n) { return n >= TSR_TILE_MIN && n <= TSR_TILE_MAX && !(n & (n - 1)); }
+
 bool cli_is_help(const char *arg) { return !strcmp(arg, "-h") || !strcmp(arg, "--help"); }
 
 /* Edit distance of a and b (at most 64 characters of each compared). */

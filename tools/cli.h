@@ -28,6 +28,9 @@ void cli_error(const char *cmd, const char *fmt, ...)
 /* Strict parsers: the whole string must be a finite number in range. */
 bool cli_parse_double(const char *s, double *out);
 bool cli_parse_u32(const char *s, uint32_t min, uint32_t max, uint32_t *out);
+/* Whether n is a grid tile size the terrain takes: a power of two from
+ * TSR_TILE_MIN to TSR_TILE_MAX. */
+bool cli_tile_size_ok(uint32_t n);
 
 /* The heightfield options every command that reads one accepts:
  * --decode terrain-rgb, --raw W H TYPE, --nodata V, --dx S, --dy S, --dz S. */

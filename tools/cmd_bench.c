@@ -272,7 +272,7 @@ static int run(int argc, char **argv)
             return CLI_USAGE;
         }
     }
-    if (tile < TSR_TILE_MIN || tile > TSR_TILE_MAX || (tile & (tile - 1))) { /* before generating, not after */
+    if (!cli_tile_size_ok(tile)) { /* before generating, not after */
         cli_error("bench", "terrain: --tile %u: must be a power of two from %u to %u", tile, TSR_TILE_MIN, TSR_TILE_MAX);
         return CLI_USAGE;
     }

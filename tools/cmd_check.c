@@ -122,7 +122,7 @@ static int run_terrain(int argc, char **argv)
                 rc = CLI_USAGE;
                 break;
             }
-            if (!strcmp(a, "--tile") && (u < TSR_TILE_MIN || u > TSR_TILE_MAX || (u & (u - 1)))) {
+            if (!strcmp(a, "--tile") && !cli_tile_size_ok(u)) {
                 cli_error("check", "--tile %s: must be a power of two from %u to %u", argv[i], TSR_TILE_MIN,
                           TSR_TILE_MAX);
                 rc = CLI_USAGE;

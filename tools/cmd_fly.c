@@ -553,7 +553,7 @@ static int run(int argc, char **argv)
                 return CLI_USAGE;
             }
         } else if (!strcmp(arg, "--tile") && more) {
-            if (!cli_parse_u32(argv[++i], TSR_TILE_MIN, TSR_TILE_MAX, &a.o.tile_n) || (a.o.tile_n & (a.o.tile_n - 1))) {
+            if (!cli_parse_u32(argv[++i], TSR_TILE_MIN, TSR_TILE_MAX, &a.o.tile_n) || !cli_tile_size_ok(a.o.tile_n)) {
                 cli_error("fly", "--tile wants a power of two from 2 to 128, not '%s'", argv[i]);
                 return CLI_USAGE;
             }
