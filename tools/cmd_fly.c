@@ -180,14 +180,10 @@ static bool have_program(const char *name)
     return false;
 }
 
-/* Runs ffmpeg on the frames into a temporary beside `video`, renamed when
- * complete. */
+/* Runs ffmpeg (run_headless checked it is there) on the frames into a
+ * temporary beside `video`, renamed when complete. */
 static int assemble_video(const fly_args *a)
 {
-    if (!have_program("ffmpeg")) {
-        cli_error("fly", "ffmpeg is not installed, so %s was not made; the frames are in %s", a->video, a->out_dir);
-        return CLI_FAIL;
-    }
     char pattern[4200], tmp[4200], count[32];
     snprintf(pattern, sizeof pattern, "%s/frame_%%05d.png", a->out_dir);
     snprintf(tmp, sizeof tmp, "%s.tmp-%ld.mp4", a->video, (long)getpid());
@@ -256,10 +252,11 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
     fly_path path;
     tsr_status st = a->path_file ? fly_path_read(a->path_file, &path, &err) : fly_path_auto(&f, &path, &err);
     int rc = CLI_OK;
-    uint32_t written = UINT32_MAX; /* frames written by this run, once it has begun writing */
+    uint32_t written = UINT32_MAX; /* frames 0 .. written - 1 are this run's, once it renders */
     frame_rec *recs = calloc(a->frames, sizeof *recs);
+    tsr_camera *cams = malloc((a->frames ? a->frames : 1) * sizeof *cams);
     uint8_t *rgba = malloc((size_t)a->width * a->height * 4);
-    if (st != TSR_OK || !recs || !rgba) {
+    if (st != TSR_OK || !recs || !cams || !rgba) {
         cli_error("fly", "%s", st != TSR_OK ? err.message : "out of memory");
         rc = CLI_FAIL;
         goto done;
@@ -275,22 +272,18 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
     /* every frame's camera, before any frame is written */
     for (uint32_t i = 0; i < a->frames; i++) {
         double s = path.closed ? (double)i / a->frames : a->frames > 1 ? (double)i / (a->frames - 1) : 0;
-        tsr_camera cam;
-        if (!fly_path_camera(&f, &path, s, clearance, &cam)) {
+        if (!fly_path_camera(&f, &path, s, clearance, &cams[i])) {
             cli_error("fly", "%s: frame %u: the camera is degenerate (the target at the eye, or no view)",
                       a->path_file ? a->path_file : "the automatic path", i);
             rc = CLI_FAIL;
             goto done;
         }
     }
+    written = 0;
     for (uint32_t i = 0; i < a->frames; i++) {
-        double s = path.closed ? (double)i / a->frames : a->frames > 1 ? (double)i / (a->frames - 1) : 0;
-        tsr_camera cam;
-        fly_path_camera(&f, &path, s, clearance, &cam);
-        written = i; /* frames 0 .. i - 1 are this run's */
         double t0 = cli_now();
         fly_frame_stats fs;
-        if (fly_frame(&f, &cam, &fs, &err) != TSR_OK) {
+        if (fly_frame(&f, &cams[i], &fs, &err) != TSR_OK) {
             cli_error("fly", "frame %u: %s", i, err.message);
             rc = CLI_FAIL;
             goto done;
@@ -332,6 +325,7 @@ done:
     if (rc != CLI_OK && written < UINT32_MAX && !(a->video && written == a->frames))
         remove_frames(a->out_dir, 0, written);
     free(recs);
+    free(cams);
     free(rgba);
     fly_path_free(&path);
     fly_free(&f);
