@@ -165,16 +165,14 @@ void cli_option_error(const char *cmd, const char *sub, const char *a, void (*he
             help_options(text, match_option, &m);
     }
     free(text);
-    char see[128];
+    char pre[64], see[128], hint[96] = "";
+    snprintf(pre, sizeof pre, "%s%s", sub ? sub : "", sub ? ": " : "");
     snprintf(see, sizeof see, "see tessera %s%s%s --help", cmd, sub ? " " : "", sub ? sub : "");
     const char *near = m.prefixed == 1 ? m.prefix_of : m.best_d <= 2 && strlen(a) > 3 ? m.best : NULL;
-    if (m.valued)
-        cli_error(cmd, "%s%smissing value for '%s' (%s)", sub ? sub : "", sub ? ": " : "", a, see);
-    else if (near)
-        cli_error(cmd, "%s%sunknown option '%s': did you mean %s? (%s)", sub ? sub : "", sub ? ": " : "", a, near,
-                  see);
-    else
-        cli_error(cmd, "%s%sunknown option '%s' (%s)", sub ? sub : "", sub ? ": " : "", a, see);
+    if (near)
+        snprintf(hint, sizeof hint, ": did you mean %s?", near);
+    cli_error(cmd, "%s%s '%s'%s (%s)", pre, m.valued ? "missing value for" : "unknown option", a,
+              m.valued ? "" : hint, see);
 }
 
 double cli_now(void)
@@ -398,18 +396,15 @@ void cli_progress_end(cli_progress *p)
 static char *canonical_path(const char *path)
 {
     const char *slash = strrchr(path, '/');
-    char dir[4096];
     const char *base = slash ? slash + 1 : path;
-    size_t dn = slash ? (size_t)(slash - path) : 1;
-    if (dn >= sizeof dir)
-        return NULL;
-    if (slash)
+    char dir[4096] = ".";
+    if (slash) { /* "/name": the root; "d/name": d */
+        size_t dn = slash == path ? 1 : (size_t)(slash - path);
+        if (dn >= sizeof dir)
+            return NULL;
         memcpy(dir, path, dn);
-    else
-        dir[0] = '.';
-    dir[dn ? dn : 1] = '\0';
-    if (slash && dn == 0)
-        strcpy(dir, "/");
+        dir[dn] = '\0';
+    }
     char *real = realpath(dir, NULL);
     if (!real)
         return NULL;
