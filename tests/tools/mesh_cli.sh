@@ -167,27 +167,29 @@ bad=$(awk '$1 == "v" {z[++n] = $4; if (n == 1 || $4 < lo) lo = $4}
 [ "$bad" -eq 0 ] || fail "--base --normals: $bad wall or bottom corners not flat-shaded"
 echo "ok solid, images"
 
-# an image that does not fit (a file size limit, as a full disk): an error
-# naming it, no file left (the PNG writer did not check its writes)
-rm -f "$dir"/full.*
-if (trap '' XFSZ; ulimit -f 8; "$tessera" mesh "$dir/t.png" --dx 10 --method grid -o "$dir/full.ply" \
-    --normal-map "$dir/full.png" --quiet) 2> "$dir/full.err"; then
-  fail "a normal map over the file size limit was written: $(ls -l "$dir"/full.* 2>&1)"
-fi
-grep -q "full.png: write failed" "$dir/full.err" || fail "no error naming the image: $(cat "$dir/full.err")"
-left=$(ls -A "$dir" | grep -c "full\.\(png\|ply\)\|tsr-tmp" || true)
-[ "$left" -eq 0 ] || fail "files left after the failed write: $(ls -A "$dir")"
+# over_limit WHAT FILE INPUT ARGS...: meshes INPUT with -o full.ply and
+# --normal-map full.png under an 8 KiB file size limit (as a full disk);
+# it must fail naming FILE and leave neither output nor a temporary
+over_limit() {
+  local what=$1 file=$2 input=$3
+  shift 3
+  rm -f "$dir"/full.*
+  if (trap '' XFSZ; ulimit -f 8; "$tessera" mesh "$input" "$@" --method grid -o "$dir/full.ply" \
+      --normal-map "$dir/full.png" --quiet) 2> "$dir/full.err"; then
+    fail "$what: written over the file size limit: $(ls -l "$dir"/full.* 2>&1)"
+  fi
+  grep -q "$file: write failed" "$dir/full.err" || fail "$what: no error naming $file: $(cat "$dir/full.err")"
+  local left
+  left=$(ls -A "$dir" | grep -c "full\.\(png\|ply\)\|tsr-tmp" || true)
+  [ "$left" -eq 0 ] || fail "$what: files left after the failed write: $(ls -A "$dir")"
+}
+# the image does not fit (the PNG writer did not check its writes)
+over_limit "normal map" full.png "$dir/t.png" --dx 10
 echo "ok an image over the file size limit fails cleanly"
-# the mesh failing after a (small, flat) normal map was written: the map
-# is removed too, no partial set of outputs left (it was left)
+# the mesh does not fit after a (small, flat) normal map was written: the
+# map is removed too, no partial set of outputs left (it was left)
 python3 -c "import struct; open('$dir/flat.f32', 'wb').write(struct.pack('<4225f', *([5.0] * 4225)))"
-if (trap '' XFSZ; ulimit -f 8; "$tessera" mesh "$dir/flat.f32" --raw 65 65 f32 --method grid -o "$dir/full.ply" \
-    --normal-map "$dir/full.png" --quiet) 2> "$dir/full.err"; then
-  fail "a mesh over the file size limit was written: $(ls -l "$dir"/full.* 2>&1)"
-fi
-grep -q "full.ply: write failed" "$dir/full.err" || fail "no error naming the mesh: $(cat "$dir/full.err")"
-left=$(ls -A "$dir" | grep -c "full\.\(png\|ply\)\|tsr-tmp" || true)
-[ "$left" -eq 0 ] || fail "files left after the failed mesh write: $(ls -A "$dir")"
+over_limit "mesh" full.ply "$dir/flat.f32" --raw 65 65 f32
 echo "ok a mesh over the file size limit removes the normal map written before it"
 
 # --north-up: every vertex (x, y, z) becomes (x, -y, z) with its normal's y
