@@ -16,6 +16,7 @@
 #include <gdal.h>
 #include <gdal_frmts.h>
 #include <ogr_srs_api.h>
+#include <tiffio.h>
 
 static pthread_once_t registered = PTHREAD_ONCE_INIT;
 
@@ -33,6 +34,33 @@ static void register_drivers(void)
     GDALRegister_USGSDEM();
     GDALRegister_BT();
     GDALRegister_XYZ();
+}
+
+/* libtiff's error and warning handlers are process-wide, and GDAL's GTiff
+ * driver sets its own the first time it is used: every later TIFF that
+ * OpenImageIO writes then sent libtiff's messages through GDAL to stderr
+ * ("ERROR 1: TIFFSetField: ... Unknown tag 306" for the EXIF directory it
+ * tries, a normal step that OpenImageIO's own handler keeps quiet). Each
+ * GDAL call here restores the handlers it found (leave_gdal): GDAL's
+ * messages are held back anyway (open_quiet). */
+typedef struct tiff_handlers {
+    TIFFErrorHandler error, warning;
+} tiff_handlers;
+
+static tiff_handlers enter_gdal(void)
+{
+    tiff_handlers t;
+    t.error = TIFFSetErrorHandler(NULL);
+    TIFFSetErrorHandler(t.error);
+    t.warning = TIFFSetWarningHandler(NULL);
+    TIFFSetWarningHandler(t.warning);
+    return t;
+}
+
+static void leave_gdal(tiff_handlers t)
+{
+    TIFFSetErrorHandler(t.error);
+    TIFFSetWarningHandler(t.warning);
 }
 
 /* Opens path read-only with GDAL's messages held back (the caller pops
@@ -178,6 +206,7 @@ bool tsr_io_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g)
 {
     memset(g, 0, sizeof *g);
     g->z_scale = 1;
+    tiff_handlers th = enter_gdal();
     GDALDatasetH d = open_quiet(path);
     if (d) {
         if ((uint32_t)GDALGetRasterXSize(d) == w && (uint32_t)GDALGetRasterYSize(d) == h)
@@ -185,6 +214,7 @@ bool tsr_io_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g)
         GDALClose(d);
     }
     CPLPopErrorHandler();
+    leave_gdal(th);
     return g->has_transform || g->crs != TSR_CRS_NONE || g->has_nodata || g->z_scale != 1 || g->z_offset != 0;
 }
 
@@ -245,6 +275,7 @@ tsr_status tsr_io_gdal_read(const char *path, const tsr_allocator *alloc, uint64
     *w = *h = 0;
     format[0] = '\0';
     memset(g, 0, sizeof *g);
+    tiff_handlers th = enter_gdal();
     GDALDatasetH d = open_quiet(path);
     tsr_status s;
     if (!d) {
@@ -255,6 +286,7 @@ tsr_status tsr_io_gdal_read(const char *path, const tsr_allocator *alloc, uint64
         GDALClose(d);
     }
     CPLPopErrorHandler();
+    leave_gdal(th);
     return s;
 }
 

@@ -186,9 +186,13 @@ void tsr_terrain_generate_fast(tsr_heightfield *hf, uint32_t seed, double relief
 /* The regular-grid mesh of the samples at every step-th column and row
  * (the last column and row always included), in world coordinates
  * (x = c*dx, y = r*dy, z = h*dz), triangles counter-clockwise from +z,
- * two per cell. Cells with a NaN corner are left out: no-data becomes a
- * hole. Normals, when asked, come from central differences of the full
- * heightfield. The mesh must be initialised (tsr_mesh_init) and empty. */
+ * two per cell along its top-left to bottom-right diagonal. No-data
+ * becomes a hole: a cell with one no-data corner keeps the triangle of its
+ * other three, one with more keeps none, and no triangle touches a no-data
+ * sample, also one between the lattice samples (step above 1). Only
+ * samples some triangle uses become vertices. Normals, when asked, come
+ * from central differences of the full heightfield. The mesh must be
+ * initialised (tsr_mesh_init) and empty. */
 tsr_status tsr_terrain_grid_mesh(const tsr_heightfield *hf, uint32_t step, bool normals,
                                  tsr_mesh *mesh, tsr_error *err);
 

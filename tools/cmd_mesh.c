@@ -512,7 +512,7 @@ static int run(int argc, char **argv)
         }
         if (er.uncovered)
             fprintf(stderr,
-                    "tessera mesh: note: %llu valid samples have no cell of four valid samples and are left out\n",
+                    "tessera mesh: note: %llu valid samples lie in no triangle (next to no-data) and are not measured\n",
                     (unsigned long long)er.uncovered);
     }
     tsr_mesh_free(&mesh);

@@ -16,7 +16,7 @@ PKGS=(
   glslc
   xvfb xauth
   libcjson-dev
-  libgdal-dev
+  libgdal-dev libtiff-dev
   libmeshoptimizer-dev
   assimp-utils
   nodejs npm

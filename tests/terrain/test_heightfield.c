@@ -379,6 +379,64 @@ TEST(nodata_becomes_hole)
     tsr_heightfield_destroy(hf);
 }
 
+/* With a step above 1, no-data between the lattice samples (pinholes, a
+ * one-sample crack) must stay uncovered: against a plain point-in-closed-
+ * triangle test of every no-data sample against every triangle (dx = dy =
+ * 1: integer positions, exact). Every vertex is used by a triangle. */
+TEST(grid_step_leaves_nodata_uncovered)
+{
+    srand(5);
+    for (int t = 0; t < 24; t++) {
+        uint32_t w = 9 + (uint32_t)(rand() % 30), h = 9 + (uint32_t)(rand() % 25);
+        tsr_heightfield *hf = make_field(w, h);
+        float *d = tsr_heightfield_data(hf);
+        for (uint32_t k = 0; k < 1 + (uint32_t)(rand() % 6); k++)
+            d[(size_t)(rand() % (int)h) * w + (uint32_t)(rand() % (int)w)] = NAN;
+        if (t % 3 == 0) /* a crack one sample wide, down a column */
+            for (uint32_t r = 0; r < h; r++)
+                d[(size_t)r * w + w / 2] = NAN;
+        if (t % 4 == 1) /* a valid sample alone in no-data: in no triangle */
+            for (uint32_t r = 2; r < 7; r++)
+                for (uint32_t c = 2; c < 7; c++)
+                    d[(size_t)r * w + c] = r == 4 && c == 4 ? 1.0f : NAN;
+        uint32_t step = 1 + (uint32_t)(t % 7);
+        tsr_mesh m;
+        tsr_mesh_init(&m, 0, NULL);
+        CHECK(tsr_terrain_grid_mesh(hf, step, false, &m, NULL) == TSR_OK);
+        bool *used = calloc(m.vertex_count + 1, 1);
+        int covered = 0;
+        for (uint32_t i = 0; i < m.triangle_count; i++) {
+            const float *p[3];
+            for (int k = 0; k < 3; k++) {
+                used[m.indices[3 * i + k]] = true;
+                p[k] = m.positions + 3 * m.indices[3 * i + k];
+            }
+            for (uint32_t r = 0; r < h; r++)
+                for (uint32_t c = 0; c < w; c++) {
+                    if (!isnan(d[(size_t)r * w + c]))
+                        continue;
+                    bool in = true;
+                    for (int k = 0; k < 3 && in; k++) {
+                        const float *u = p[k], *v = p[(k + 1) % 3];
+                        in = (v[0] - u[0]) * ((double)r - u[1]) - (v[1] - u[1]) * ((double)c - u[0]) >= 0;
+                    }
+                    covered += in;
+                }
+        }
+        uint32_t unused = 0;
+        for (uint32_t i = 0; i < m.vertex_count; i++)
+            unused += !used[i];
+        CHECK_MSG(covered == 0 && unused == 0, "%ux%u step %u: %d no-data samples covered, %u vertices unused", w, h,
+                  step, covered, unused);
+        tsr_validation v;
+        CHECK(tsr_mesh_validate(&m, NULL, &v) == TSR_OK);
+        CHECK(tsr_validation_ok(&v));
+        free(used);
+        tsr_mesh_free(&m);
+        tsr_heightfield_destroy(hf);
+    }
+}
+
 /* tsr_heightfield_stats_compute (eight lanes in vectors) against a plain
  * scan: minimum, maximum and no-data count exactly, the mean within
  * rounding of a long double sum; sizes of every remainder mod 8, NaN,
@@ -427,4 +485,5 @@ TEST_MAIN(T(save_and_load_float_formats), T(png16_keeps_scale_and_offset), T(pgm
           T(nan_height_is_nodata_and_inf_height_is_refused), T(size_limits), T(data_terrain_rgb_real_tile),
           T(data_real_float_tiffs), T(generator_is_deterministic_and_terrain_like),
           T(generator_same_on_any_thread_count_with_progress), T(grid_mesh_is_valid_and_exact), T(nodata_becomes_hole),
+          T(grid_step_leaves_nodata_uncovered),
           T(stats_against_a_plain_scan))

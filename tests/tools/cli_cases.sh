@@ -89,6 +89,12 @@ outputs_checked_first)
     || fail "mesh with all outputs failed: $(cat "$cap/stderr")"
   [ -s "$dir/x.ply" ] && [ -s "$dir/s.json" ] && [ -s "$dir/h.png" ] || fail "an output is missing"
   [ ! -s "$cap/stderr" ] || fail "mesh --quiet printed: $(cat "$cap/stderr")"
+  # a GeoTIFF read goes through GDAL, whose libtiff handlers printed
+  # OpenImageIO's quiet TIFF messages ("ERROR 1: ... Unknown tag 306")
+  "$tessera" generate --size 16 -o "$dir/q.tif" --quiet || fail "generate q.tif"
+  "$tessera" mesh "$dir/q.tif" -o "$dir/x.ply" --hillshade "$dir/h.tif" --normal-map "$dir/n.tif" --quiet \
+    2>"$cap/stderr" || fail "mesh with TIFF images failed: $(cat "$cap/stderr")"
+  [ -s "$dir/h.tif" ] && [ -s "$dir/n.tif" ] && [ ! -s "$cap/stderr" ] || fail "mesh --quiet, TIFF: $(cat "$cap/stderr")"
   "$tessera" generate --size 16 -o "$dir/q.png" --quiet 2>"$cap/stderr" || fail "generate --quiet failed"
   [ -s "$dir/q.png" ] && [ ! -s "$cap/stderr" ] || fail "generate --quiet: no file, or it printed: $(cat "$cap/stderr")"
   echo "ok [$case]: good runs" ;;
