@@ -62,7 +62,9 @@ static void help(FILE *f)
             "                        separate jobs fit exactly (quadtree: its window borders are\n"
             "                        kept at full resolution)\n"
             "  --base DEPTH          a closed solid for 3D printing: walls down to a flat bottom\n"
-            "                        DEPTH below the lowest point\n"
+            "                        DEPTH below the heightfield's lowest sample (the whole\n"
+            "                        heightfield's, also with --window: tiles share the bottom);\n"
+            "                        --triangles and --vertices count the walls and bottom too\n"
             "  --north-up            y = -r*dy: +y is the image's up (north in a north-up GIS raster),\n"
             "                        so x east, y north, z up is right-handed and the terrain is not\n"
             "                        mirrored in a z-up viewer (the default's y runs down the rows)\n"
@@ -197,6 +199,80 @@ static int write_stats(const char *path, const tsr_mesh *mesh, const tsr_error_r
     free(text);
     free(s);
     return rc;
+}
+
+/* Builds the mesh and measures it (window mx, my, mw, mh). The mesher
+ * works a hair inside the bound; if the float output still lands beyond
+ * it, builds again tighter. *bound is the bound held (the default one when
+ * none was given and no budget). */
+static int build_measured(const tsr_heightfield *hf, tsr_tin_options *to, double max_error, double ztop,
+                          const char *in, uint32_t mx, uint32_t my, uint32_t mw, uint32_t mh, tsr_mesh *mesh,
+                          tsr_tin_report *rep, tsr_error_report *er, double *bound)
+{
+    tsr_error err = {0};
+    *bound = max_error;
+    to->max_error = max_error;
+    for (int attempt = 0;; attempt++) {
+        if (tsr_terrain_mesh(hf, to, mesh, rep, &err) != TSR_OK) {
+            cli_error("mesh", "%s: %s", in, err.message);
+            return err.status == TSR_ERR_ARGUMENT ? CLI_USAGE : CLI_FAIL;
+        }
+        if (tsr_terrain_measure_window(hf, mx, my, mw, mh, mesh, NULL, er) != TSR_OK) {
+            cli_error("mesh", "%s: out of memory measuring the error", in);
+            return CLI_FAIL;
+        }
+        if (*bound == 0 && !to->max_triangles && !to->max_vertices && to->method != TSR_TIN_GRID)
+            *bound = rep->bound; /* the default bound */
+        if (*bound == 0 || er->max_vertical <= *bound || to->method == TSR_TIN_GRID)
+            return CLI_OK;
+        if (rep->budget_reached) {
+            cli_error("mesh", "%s: the budget of %u %s is reached at a measured max error %g, above the bound %g", in,
+                      to->max_triangles ? to->max_triangles : to->max_vertices,
+                      to->max_triangles ? "triangles" : "vertices", er->max_vertical, *bound);
+            return CLI_FAIL;
+        }
+        if (attempt == 3) {
+            cli_error("mesh", "%s: the measured error %g exceeds the bound %g (please report this)", in,
+                      er->max_vertical, *bound);
+            return CLI_FAIL;
+        }
+        to->max_error = rep->target_error - 2 * (er->max_vertical - *bound);
+        if (!(to->max_error > 0)) {
+            double ulp = ztop * FLT_EPSILON; /* float's spacing at the highest height */
+            if (*bound < ulp)
+                cli_error("mesh", "%s: cannot meet the bound %g: heights up to %g are floats %g apart in a mesh", in,
+                          *bound, ztop, ulp);
+            else
+                cli_error("mesh", "%s: cannot meet the bound %g", in, *bound);
+            return CLI_FAIL;
+        }
+        tsr_mesh_free(mesh);
+        tsr_mesh_init(mesh, to->normals ? TSR_MESH_NORMALS : 0, NULL);
+    }
+}
+
+/* Whether the mesh is within the budgets (0: none). */
+static bool solid_fits(const tsr_mesh *m, uint32_t max_t, uint32_t max_v)
+{
+    return (!max_t || m->triangle_count <= max_t) && (!max_v || m->vertex_count <= max_v);
+}
+
+/* build_measured, then with base_z the walls and bottom down to it (split:
+ * flat-shaded, their vertices apart from the top's). */
+static int build_solid(const tsr_heightfield *hf, tsr_tin_options *to, double max_error, double ztop,
+                       const char *in, const uint32_t win[4], const double *base_z, bool split, tsr_mesh *mesh,
+                       tsr_tin_report *rep, tsr_error_report *er, double *bound)
+{
+    int rc = build_measured(hf, to, max_error, ztop, in, win[0], win[1], win[2], win[3], mesh, rep, er, bound);
+    if (rc != CLI_OK || !base_z)
+        return rc;
+    uint32_t top = mesh->triangle_count;
+    tsr_error err = {0};
+    if (tsr_mesh_add_base(mesh, *base_z, &err) != TSR_OK || (split && tsr_mesh_split_flat(mesh, top, 30, &err) != TSR_OK)) {
+        cli_error("mesh", "--base: %s", err.message);
+        return CLI_FAIL;
+    }
+    return CLI_OK;
 }
 
 static int run(int argc, char **argv)
@@ -402,66 +478,74 @@ static int run(int argc, char **argv)
     tsr_tin_report rep = {0};
     tsr_error_report er = {0};
     int rc = CLI_OK;
-    /* Build, then measure. The mesher works a hair inside the bound; if
-     * the float output still lands beyond it, build again tighter. */
     double bound = max_error;
-    to.max_error = max_error;
-    for (int attempt = 0; rc == CLI_OK; attempt++) {
-        if (tsr_terrain_mesh(hf, &to, &mesh, &rep, &err) != TSR_OK) {
-            cli_error("mesh", "%s: %s", in, err.message);
-            rc = err.status == TSR_ERR_ARGUMENT ? CLI_USAGE : CLI_FAIL;
-            break;
+    /* The bottom of a solid: DEPTH below the whole heightfield's lowest
+     * sample, the same plane for every method and every window. */
+    double base_z = fmin(st.min * sdz, st.max * sdz) - base;
+    /* with normals (not in .stl: facet normals), the walls and the bottom
+     * shade flat, their vertices apart from the top's; turns of the
+     * outline under 30 degrees stay smooth */
+    bool split = to.normals && tsr_mesh_format_from_path(out) != TSR_FORMAT_STL;
+    const uint32_t win4[4] = {mx, my, mw, mh};
+    /* With --base, a budget covers the solid as written (walls and bottom
+     * too): the top's budgets are scaled by x in (0, 1], searched for the
+     * largest x whose solid fits (within 0.5 % of the budget). */
+    uint32_t budget_t = to.max_triangles, budget_v = to.max_vertices;
+    rc = build_solid(hf, &to, max_error, ztop, in, win4, has_base ? &base_z : NULL, split, &mesh, &rep, &er, &bound);
+    if (rc == CLI_OK && has_base && (budget_t || budget_v) && !solid_fits(&mesh, budget_t, budget_v)) {
+        double lo = 0, hi = 1, x = 1;
+        bool have_lo = false, last_fits = false;
+        uint32_t most = budget_t > budget_v ? budget_t : budget_v;
+        for (int round = 0; rc == CLI_OK && round < 20; round++) {
+            if (!have_lo) { /* scale by the excess, until one fits */
+                double f = 1;
+                if (budget_t && mesh.triangle_count > budget_t)
+                    f = fmin(f, (double)budget_t / mesh.triangle_count);
+                if (budget_v && mesh.vertex_count > budget_v)
+                    f = fmin(f, (double)budget_v / mesh.vertex_count);
+                x *= 0.95 * f;
+            } else
+                x = (lo + hi) / 2;
+            uint32_t tt = budget_t ? (uint32_t)fmax(2, floor(budget_t * x)) : 0;
+            uint32_t tv = budget_v ? (uint32_t)fmax(4, floor(budget_v * x)) : 0;
+            if (!have_lo && tt == to.max_triangles && tv == to.max_vertices) {
+                char b[64];
+                snprintf(b, sizeof b, budget_t && budget_v ? "%u triangles, %u vertices" : budget_t ? "%u triangles%.0u"
+                                                                                         : "%.0u%u vertices",
+                         budget_t, budget_v);
+                cli_error("mesh", "%s: the budget (%s) is below the smallest closed solid: %u triangles, %u "
+                          "vertices with its walls and bottom", in, b, mesh.triangle_count, mesh.vertex_count);
+                rc = CLI_USAGE;
+                break;
+            }
+            to.max_triangles = tt;
+            to.max_vertices = tv;
+            tsr_mesh_free(&mesh);
+            tsr_mesh_init(&mesh, to.normals ? TSR_MESH_NORMALS : 0, NULL);
+            rc = build_solid(hf, &to, max_error, ztop, in, win4, &base_z, split, &mesh, &rep, &er, &bound);
+            last_fits = rc == CLI_OK && solid_fits(&mesh, budget_t, budget_v);
+            if (last_fits) {
+                lo = x;
+                have_lo = true;
+            } else
+                hi = x;
+            if (have_lo && (hi - lo) * most <= fmax(1, most / 200.0))
+                break;
         }
-        if (tsr_terrain_measure_window(hf, mx, my, mw, mh, &mesh, NULL, &er) != TSR_OK) {
-            cli_error("mesh", "%s: out of memory measuring the error", in);
-            rc = CLI_FAIL;
-            break;
+        if (rc == CLI_OK && !have_lo) {
+            cli_error("mesh", "%s: no closed solid within the budget found", in);
+            rc = CLI_USAGE;
+        } else if (rc == CLI_OK && !last_fits) { /* the last fitting one again */
+            to.max_triangles = budget_t ? (uint32_t)fmax(2, floor(budget_t * lo)) : 0;
+            to.max_vertices = budget_v ? (uint32_t)fmax(4, floor(budget_v * lo)) : 0;
+            tsr_mesh_free(&mesh);
+            tsr_mesh_init(&mesh, to.normals ? TSR_MESH_NORMALS : 0, NULL);
+            rc = build_solid(hf, &to, max_error, ztop, in, win4, &base_z, split, &mesh, &rep, &er, &bound);
         }
-        if (bound == 0 && !to.max_triangles && !to.max_vertices && to.method != TSR_TIN_GRID)
-            bound = rep.bound; /* the default bound */
-        if (bound == 0 || er.max_vertical <= bound || to.method == TSR_TIN_GRID)
-            break;
-        if (attempt == 3) {
-            cli_error("mesh", "%s: the measured error %g exceeds the bound %g (please report this)", in,
-                      er.max_vertical, bound);
-            rc = CLI_FAIL;
-            break;
-        }
-        to.max_error = rep.target_error - 2 * (er.max_vertical - bound);
-        if (!(to.max_error > 0)) {
-            double ulp = ztop * FLT_EPSILON; /* float's spacing at the highest height */
-            if (bound < ulp)
-                cli_error("mesh", "%s: cannot meet the bound %g: heights up to %g are floats %g apart in a mesh", in,
-                          bound, ztop, ulp);
-            else
-                cli_error("mesh", "%s: cannot meet the bound %g", in, bound);
-            rc = CLI_FAIL;
-            break;
-        }
-        tsr_mesh_free(&mesh);
-        tsr_mesh_init(&mesh, to.normals ? TSR_MESH_NORMALS : 0, NULL);
     }
+    to.max_triangles = budget_t; /* the stats give the budget asked for */
+    to.max_vertices = budget_v;
     cli_progress_end(&pr);
-    double base_z = 0;
-    if (rc == CLI_OK && has_base) {
-        double zmin = INFINITY;
-        for (uint32_t i = 0; i < mesh.vertex_count; i++)
-            zmin = fmin(zmin, mesh.positions[3 * (size_t)i + 2]);
-        base_z = zmin - base;
-        uint32_t top = mesh.triangle_count;
-        if (tsr_mesh_add_base(&mesh, base_z, &err) != TSR_OK) {
-            cli_error("mesh", "--base: %s", err.message);
-            rc = CLI_FAIL;
-        }
-        /* with normals (not in .stl: facet normals), the walls and the
-         * bottom shade flat, their vertices apart from the top's; turns of
-         * the outline under 30 degrees stay smooth */
-        if (rc == CLI_OK && to.normals && tsr_mesh_format_from_path(out) != TSR_FORMAT_STL &&
-            tsr_mesh_split_flat(&mesh, top, 30, &err) != TSR_OK) {
-            cli_error("mesh", "--base: %s", err.message);
-            rc = CLI_FAIL;
-        }
-    }
     /* the files written so far, removed when a later one fails: no
      * partial set of outputs is left behind */
     const char *written[3];

@@ -7,7 +7,8 @@
 #  - --block / --threads: blocks of 32 cells within the bound, the file the
 #    same byte for byte on 1 and 3 threads, the stats' block count; the
 #    quadtree's file the same on 1 and 3 threads;
-#  - budgets: --triangles / --vertices never exceeded;
+#  - budgets: --triangles / --vertices never exceeded, with --base counting
+#    the walls and bottom; --base's bottom one plane for every window;
 #  - --window: two adjacent windows of a real heightfield (or a generated
 #    one without the data) write identical vertices on their shared column
 #    and row, read from the OBJ files;
@@ -110,6 +111,36 @@ for m in delaunay quadtree grid; do
     done
   done
 done
+
+# budgets with --base cover the solid as written, walls and bottom too
+# (counted from the file's own v and f lines; with --normals, the walls'
+# and bottom's vertices are written apart from the top's); delaunay comes
+# within 10 % of the budget
+for m in delaunay quadtree grid; do
+  for kind in triangles vertices; do
+    for n in 100 3000; do
+      for nrm in "" --normals; do
+        "$tessera" mesh "$dir/t.png" --method $m --$kind $n --base 20 $nrm -o "$dir/b.obj" --quiet 2> "$dir/err" \
+          || fail "$m --$kind $n --base $nrm: $(cat "$dir/err")"
+        nv=$(grep -c '^v ' "$dir/b.obj") nf=$(grep -c '^f ' "$dir/b.obj")
+        got=$nf; [ $kind = vertices ] && got=$nv
+        [ "$got" -le "$n" ] || fail "$m --$kind $n --base $nrm: the file has $got $kind"
+        [ $m != delaunay ] || [ $((got * 10)) -ge $((n * 9)) ] || fail "$m --$kind $n --base $nrm: only $got $kind"
+      done
+      echo "ok $m --$kind $n --base: $got $kind in the file"
+    done
+  done
+done
+# the bottom is the same plane for every method and window: DEPTH below
+# the whole heightfield's lowest sample
+bottoms=$(for args in "--method delaunay" "--method quadtree" "--method grid --step 3" "--window 0,0,60,50" \
+  "--window 59,0,71,50" "--window 59,49,71,48"; do
+  # shellcheck disable=SC2086
+  "$tessera" mesh "$dir/t.png" $args --base 20 -o "$dir/w.obj" --quiet || fail "--base $args"
+  awk '$1 == "v" && (n++ == 0 || $4 < lo) {lo = $4} END {print lo}' "$dir/w.obj"
+done | sort -u)
+[ "$(echo "$bottoms" | wc -l)" -eq 1 ] || fail "--base: bottoms at $(echo $bottoms)"
+echo "ok --base: one bottom plane at z = $bottoms for every method and window"
 
 # seams: adjacent windows share a column (vertical seam) or a row
 if [ -n "$data" ] && [ -f "$data/terrain/bayhills-14-2625-6369-terrainrgb.png" ]; then
