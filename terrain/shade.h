@@ -53,6 +53,14 @@ typedef struct tsr_heightfield tsr_heightfield;
  * normal, so readers can tell them apart. */
 tsr_status tsr_heightfield_normal_map(const tsr_heightfield *hf, const char *path, tsr_error *err);
 
+/* The same for the window of w x h samples from column x, row y (pixel
+ * (i, j) for sample (x + i, y + j)): the window's part of the whole
+ * heightfield's map, pixel for pixel (the normals at its border use the
+ * samples beyond it), so the images of adjacent windows fit together.
+ * A window not inside the heightfield, or empty, is TSR_ERR_ARGUMENT. */
+tsr_status tsr_heightfield_normal_map_window(const tsr_heightfield *hf, uint32_t x, uint32_t y, uint32_t w,
+                                             uint32_t h, const char *path, tsr_error *err);
+
 /* The defaults of tsr_heightfield_hillshade (those of GDAL's gdaldem). */
 #define TSR_HILLSHADE_AZIMUTH 315.0
 #define TSR_HILLSHADE_ALTITUDE 45.0
@@ -76,6 +84,12 @@ tsr_status tsr_heightfield_normal_map(const tsr_heightfield *hf, const char *pat
  * scale (dz acts as GDAL's z factor). */
 tsr_status tsr_heightfield_hillshade(const tsr_heightfield *hf, const char *path, double azimuth_deg,
                                      double altitude_deg, tsr_error *err);
+
+/* The same for a window, as tsr_heightfield_normal_map_window (the alpha
+ * channel where the window has no-data). */
+tsr_status tsr_heightfield_hillshade_window(const tsr_heightfield *hf, uint32_t x, uint32_t y, uint32_t w,
+                                            uint32_t h, const char *path, double azimuth_deg, double altitude_deg,
+                                            tsr_error *err);
 
 #ifdef __cplusplus
 }

@@ -71,9 +71,10 @@ static void help(FILE *f)
             "  --normals             per-vertex normals from the heightfield's gradients (with --base,\n"
             "                        the walls and bottom flat-shaded: their vertices are written apart\n"
             "                        from the top's, except in .stl, which has facet normals)\n"
-            "  --normal-map FILE     a normal map image at the heightfield's resolution (.png, .tif)\n"
-            "  --hillshade FILE      a hillshade image at the heightfield's resolution (.png, .tif;\n"
-            "                        with no-data, an alpha channel: 0 there)\n"
+            "  --normal-map FILE     a normal map image, one pixel per sample (.png, .tif); with\n"
+            "                        --window, of the window (the whole map's pixels there)\n"
+            "  --hillshade FILE      a hillshade image, one pixel per sample (.png, .tif; with\n"
+            "                        no-data, an alpha channel: 0 there); with --window, of the window\n"
             "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
             "                        peak_bytes, method and the input's size, range and no-data count\n"
             "  --quiet               print nothing on success (no summary, no progress bar)\n" CLI_HEIGHTFIELD_HELP
@@ -551,14 +552,14 @@ static int run(int argc, char **argv)
     const char *written[3];
     int nwritten = 0;
     if (rc == CLI_OK && normal_map) {
-        if (tsr_heightfield_normal_map(hf, normal_map, &err) != TSR_OK) {
+        if (tsr_heightfield_normal_map_window(hf, mx, my, mw, mh, normal_map, &err) != TSR_OK) {
             cli_error("mesh", "%s", err.message);
             rc = CLI_FAIL;
         } else
             written[nwritten++] = normal_map;
     }
     if (rc == CLI_OK && hillshade) {
-        if (tsr_heightfield_hillshade(hf, hillshade, 315, 45, &err) != TSR_OK) {
+        if (tsr_heightfield_hillshade_window(hf, mx, my, mw, mh, hillshade, 315, 45, &err) != TSR_OK) {
             cli_error("mesh", "%s", err.message);
             rc = CLI_FAIL;
         } else

@@ -286,6 +286,55 @@ TEST(hillshade_nan_is_zero)
     tsr_heightfield_destroy(hf);
 }
 
+/* A window's images are the whole heightfield's pixels there (a window
+ * inside: its border normals use the samples beyond it; one at the
+ * corner), checked against a crop of the whole image; the hillshade gets
+ * its alpha channel only where the window holds no-data. */
+TEST(window_images_are_crops)
+{
+    const char *dir = check_temp_dir();
+    const double k[3] = {0.02, 9, 6};
+    uint32_t w = 23, h = 19;
+    tsr_heightfield *hf = make_hf(w, h, 1.5, 1.0, 0.25, paraboloid, k);
+    tsr_heightfield_data(hf)[17 * w + 20] = NAN; /* inside the second window only */
+    const char *fn = tmp_path(dir, "fn.png"), *fh = tmp_path(dir, "fh.png");
+    CHECK(tsr_heightfield_normal_map(hf, fn, NULL) == TSR_OK);
+    CHECK(tsr_heightfield_hillshade(hf, fh, 315, 45, NULL) == TSR_OK);
+    float *full_n = read_back(fn, w, h, 3), *full_h = read_back(fh, w, h, 2);
+    const uint32_t wins[2][4] = {{4, 3, 9, 7}, {14, 10, 9, 9}};
+    for (int k2 = 0; k2 < 2 && full_n && full_h; k2++) {
+        const uint32_t *v = wins[k2];
+        const char *wn = tmp_path(dir, "wn.png"), *wh = tmp_path(dir, "wh.png");
+        tsr_error err = {0};
+        CHECK_MSG(tsr_heightfield_normal_map_window(hf, v[0], v[1], v[2], v[3], wn, &err) == TSR_OK, "%s",
+                  err.message);
+        CHECK_MSG(tsr_heightfield_hillshade_window(hf, v[0], v[1], v[2], v[3], wh, NAN, NAN, &err) == TSR_OK, "%s",
+                  err.message);
+        uint32_t hc = k2 == 0 ? 1 : 2; /* alpha where the window has no-data */
+        float *pn = read_back(wn, v[2], v[3], 3), *ph = read_back(wh, v[2], v[3], hc);
+        int bad = 0;
+        for (uint32_t j = 0; pn && ph && j < v[3]; j++)
+            for (uint32_t i = 0; i < v[2]; i++) {
+                size_t f = (size_t)(v[1] + j) * w + v[0] + i, q = (size_t)j * v[2] + i;
+                for (int c = 0; c < 3; c++)
+                    bad += pn[3 * q + c] != full_n[3 * f + c];
+                bad += ph[hc * q] != full_h[2 * f];
+                if (hc == 2)
+                    bad += ph[2 * q + 1] != full_h[2 * f + 1];
+            }
+        CHECK_MSG(bad == 0, "window %u,%u,%u,%u: %d values differ from the whole image's", v[0], v[1], v[2], v[3],
+                  bad);
+        tsr_free(NULL, pn);
+        tsr_free(NULL, ph);
+    }
+    tsr_free(NULL, full_n);
+    tsr_free(NULL, full_h);
+    const char *bad_path = tmp_path(dir, "out.png");
+    CHECK(tsr_heightfield_hillshade_window(hf, 20, 0, 4, 5, bad_path, 315, 45, NULL) == TSR_ERR_ARGUMENT);
+    CHECK(tsr_heightfield_normal_map_window(hf, 0, 0, 0, 5, bad_path, NULL) == TSR_ERR_ARGUMENT);
+    tsr_heightfield_destroy(hf);
+}
+
 /* ---- Failures leave nothing behind ----------------------------------------- */
 
 static void check_fails(const tsr_heightfield *hf, const char *path, bool hillshade, double az, double alt,
@@ -373,5 +422,5 @@ TEST(images_in_bands_of_rows)
 
 TEST_MAIN(T(plane_normal_map_exact), T(flat_normal_map_is_128_128_255), T(paraboloid_normal_map),
           T(nan_height_normal_map), T(hillshade_flat_facing_and_away), T(hillshade_azimuth_convention),
-          T(hillshade_nan_is_zero), T(bad_paths_and_arguments),
+          T(hillshade_nan_is_zero), T(window_images_are_crops), T(bad_paths_and_arguments),
           T(images_in_bands_of_rows))

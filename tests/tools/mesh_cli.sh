@@ -13,8 +13,8 @@
 #    one without the data) write identical vertices on their shared column
 #    and row, read from the OBJ files;
 #  - --base: assimp reads the closed solid; --normal-map and --hillshade
-#    images have the heightfield's size (oiiotool); .glb with normals passes
-#    the Khronos validator.
+#    images have the heightfield's size, or the window's (oiiotool); .glb
+#    with normals passes the Khronos validator.
 set -u
 tessera=$1 modules=$2 data=${3:-}
 dir=$(mktemp -d "${TMPDIR:-/tmp}/tsr-meshcli-XXXXXX")
@@ -196,6 +196,11 @@ bad=$(awk '$1 == "v" {z[++n] = $4; if (n == 1 || $4 < lo) lo = $4}
     else if (k > 0) { for (i = 2; i <= 4; i++) if (nz[v[i]] > 1e-6 || nz[v[i]] < -1e-6) b++ } }
   END {print b + 0}' "$dir/solid_n.obj")
 [ "$bad" -eq 0 ] || fail "--base --normals: $bad wall or bottom corners not flat-shaded"
+"$tessera" mesh "$dir/t.png" --window 5,6,40,30 --max-error 3 -o "$dir/w.ply" --normal-map "$dir/wn.png" \
+  --hillshade "$dir/wh.png" --quiet || fail "window images"
+for img in wn.png wh.png; do
+  oiiotool --info "$dir/$img" | grep -q "40 x  *30" || fail "--window: $img: $(oiiotool --info "$dir/$img")"
+done
 echo "ok solid, images"
 
 # over_limit WHAT FILE INPUT ARGS...: meshes INPUT with -o full.ply and
