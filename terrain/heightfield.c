@@ -451,7 +451,7 @@ tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts, 
         }
         valid += !isnan(v);
     }
-    if (valid == 0) {
+    if (valid == 0 && !o->all_nodata_ok) {
         bool file_value = (file_nd || nodata_done) && hf->has_georef && hf->georef.has_nodata;
         tsr_heightfield_destroy(hf);
         return tsr_error_set(err, TSR_ERR_VALUE, "%s: every sample is no-data (NaN%s)", path,

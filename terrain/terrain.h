@@ -51,6 +51,8 @@ typedef struct tsr_load_options {
     uint32_t raw_height;
     bool has_nodata;        /* samples equal to nodata become NaN */
     double nodata;
+    bool all_nodata_ok;     /* accept a file with no valid sample (the caller
+                               handles a heightfield of no-data only) */
 } tsr_load_options;
 
 /* Parses "u16", "i16" or "f32" (also "uint16", "int16", "float32"). */
@@ -65,7 +67,7 @@ tsr_raw_type tsr_raw_type_parse(const char *s);
  * .bt and XYZ grids. A GeoTIFF's georeferencing and no-data value
  * (GDAL_NODATA) are read through GDAL too (tsr_heightfield_georef).
  * Rejects sizes outside the limits above, infinite heights, and files
- * with no valid (non-NaN) sample. No-data: samples equal to
+ * with no valid (non-NaN) sample (unless opts->all_nodata_ok). No-data: samples equal to
  * opts->nodata when given, else to the file's own no-data value; also
  * +-3.4028235e38 (FLT_MAX, what GIS tools write for no-data when the file
  * names none). Values are compared as float32 (the samples' type). On

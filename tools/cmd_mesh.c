@@ -78,7 +78,9 @@ static void help(FILE *f)
             "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
             "                        peak_bytes, method and the input's size, range and no-data count\n"
             "  --quiet               print nothing on success (no summary, no progress bar)\n" CLI_HEIGHTFIELD_HELP
-            "  -h, --help            this help\n");
+            "  -h, --help            this help\n\n"
+            "exit status: 0 written, 1 bad input or failed output, 2 bad usage, 3 nothing to mesh\n"
+            "(the heightfield or window all no-data, or no triangle of valid samples; nothing written)\n");
 }
 
 /* --north-up: y = -r dy instead of r dy, so +y is the image's up (north
@@ -215,8 +217,18 @@ static int build_measured(const tsr_heightfield *hf, tsr_tin_options *to, double
     to->max_error = max_error;
     for (int attempt = 0;; attempt++) {
         if (tsr_terrain_mesh(hf, to, mesh, rep, &err) != TSR_OK) {
+            if (err.status == TSR_ERR_VALUE) { /* no valid sample */
+                cli_error("mesh", "%s: nothing to mesh: no valid sample in the %s (all no-data); nothing written", in,
+                          to->window_w ? "window" : "heightfield");
+                return CLI_EMPTY;
+            }
             cli_error("mesh", "%s: %s", in, err.message);
             return err.status == TSR_ERR_ARGUMENT ? CLI_USAGE : CLI_FAIL;
+        }
+        if (mesh->triangle_count == 0) {
+            cli_error("mesh", "%s: nothing to mesh: the valid samples of the %s form no triangle (no-data around "
+                      "each); nothing written", in, to->window_w ? "window" : "heightfield");
+            return CLI_EMPTY;
         }
         if (tsr_terrain_measure_window(hf, mx, my, mw, mh, mesh, NULL, er) != TSR_OK) {
             cli_error("mesh", "%s: out of memory measuring the error", in);
@@ -443,6 +455,7 @@ static int run(int argc, char **argv)
     if (!cli_outputs_writable("mesh", 2, outputs))
         return CLI_FAIL;
     double t0 = cli_now();
+    o.load.all_nodata_ok = true; /* nothing to mesh: exit 3, not a bad file */
     tsr_heightfield *hf = cli_load_heightfield("mesh", in, &o);
     if (!hf)
         return CLI_FAIL;

@@ -60,7 +60,25 @@ nan_height)
   done
   echo "ok [$case]" ;;
 all_nan_height)
-  expect_error 1 "allnan\.f32: every sample is no-data" -- "$tessera" mesh "$dir/allnan.f32" --raw 4 4 f32 -o "$out" ;;
+  # mesh: nothing to mesh is exit 3 (a tile over the sea), not a bad file;
+  # other commands refuse the file
+  expect_error 3 "allnan\.f32: nothing to mesh: no valid sample in the heightfield" -- \
+    "$tessera" mesh "$dir/allnan.f32" --raw 4 4 f32 -o "$out" --stats "$dir/a.json" --hillshade "$dir/a.png"
+  [ ! -e "$dir/a.json" ] && [ ! -e "$dir/a.png" ] || fail "all no-data: an output was written"
+  expect_error 1 "allnan\.f32: every sample is no-data" -- "$tessera" info "$dir/allnan.f32" --raw 4 4 f32
+  # a window of no-data only, and one whose valid samples form no triangle
+  # (8 x 8 f32: 1.0 where (row + column) % 3 == 0, else NaN: no two valid
+  # samples side by side)
+  for r in 0 1 2 3 4 5 6 7; do for c in 0 1 2 3 4 5 6 7; do
+    if [ $(((r + c) % 3)) -eq 0 ]; then printf '\000\000\200\077'; else printf '\000\000\300\177'; fi
+  done; done > "$dir/sparse.f32"
+  expect_error 3 "allnan\.f32: nothing to mesh: no valid sample in the window" -- \
+    "$tessera" mesh "$dir/allnan.f32" --raw 4 4 f32 --window 1,1,3,3 -o "$out"
+  for m in delaunay quadtree grid; do
+    expect_error 3 "sparse\.f32: nothing to mesh: the valid samples of the window form no triangle" -- \
+      "$tessera" mesh "$dir/sparse.f32" --raw 8 8 f32 --window 0,0,8,8 --method $m -o "$out"
+  done
+  echo "ok [$case]" ;;
 inf_height)
   expect_error 1 "inf\.f32: infinite height at column 1, row 2" -- "$tessera" mesh "$dir/inf.f32" --raw 4 4 f32 -o "$out" ;;
 unwritable_output)
