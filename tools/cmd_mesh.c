@@ -76,7 +76,8 @@ static void help(FILE *f)
             "  --hillshade FILE      a hillshade image, one pixel per sample (.png, .tif; with\n"
             "                        no-data, an alpha channel: 0 there); with --window, of the window\n"
             "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
-            "                        peak_bytes, method and the input's size, range and no-data count\n"
+            "                        peak_bytes, method, the input's size, range, no-data count and\n"
+            "                        dz (with --nodata, its value), and the window's own range\n"
             "  --quiet               print nothing on success (no summary, no progress bar)\n" CLI_HEIGHTFIELD_HELP
             "  -h, --help            this help\n\n"
             "exit status: 0 written, 1 bad input or failed output, 2 bad usage, 3 nothing to mesh\n"
@@ -172,6 +173,11 @@ static int write_stats(const char *path, const tsr_mesh *mesh, const tsr_error_r
     cJSON_AddNumberToObject(inp, "min", st->min);
     cJSON_AddNumberToObject(inp, "max", st->max);
     cJSON_AddNumberToObject(inp, "nodata", (double)st->nodata);
+    if (o->load.has_nodata) /* the --nodata value (a file's own is in georef) */
+        cJSON_AddNumberToObject(inp, "nodata_value", o->load.nodata);
+    double sdx, sdy, sdz;
+    tsr_heightfield_spacing(hf, &sdx, &sdy, &sdz);
+    cJSON_AddNumberToObject(inp, "dz", sdz); /* z = sample * dz: min and max are samples, errors in z */
     cli_georef_json(inp, hf, o);
     if (to->window_w) {
         cJSON *w = cJSON_AddObjectToObject(j, "window");
@@ -179,6 +185,21 @@ static int write_stats(const char *path, const tsr_mesh *mesh, const tsr_error_r
         cJSON_AddNumberToObject(w, "y", to->window_y);
         cJSON_AddNumberToObject(w, "width", to->window_w);
         cJSON_AddNumberToObject(w, "height", to->window_h);
+        /* the window's own range and no-data count, as the input's */
+        const float *d = tsr_heightfield_cdata(hf);
+        uint32_t W = tsr_heightfield_width(hf);
+        double lo = INFINITY, hi = -INFINITY;
+        uint64_t nd = 0;
+        for (uint32_t r = to->window_y; r < to->window_y + to->window_h; r++)
+            for (uint32_t c = to->window_x; c < to->window_x + to->window_w; c++) {
+                float v = d[(size_t)r * W + c];
+                nd += isnan(v);
+                lo = v < lo ? v : lo;
+                hi = v > hi ? v : hi;
+            }
+        cJSON_AddNumberToObject(w, "min", lo);
+        cJSON_AddNumberToObject(w, "max", hi);
+        cJSON_AddNumberToObject(w, "nodata", (double)nd);
     }
     char *s = cJSON_Print(j);
     cJSON_Delete(j);

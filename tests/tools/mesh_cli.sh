@@ -196,8 +196,19 @@ bad=$(awk '$1 == "v" {z[++n] = $4; if (n == 1 || $4 < lo) lo = $4}
     else if (k > 0) { for (i = 2; i <= 4; i++) if (nz[v[i]] > 1e-6 || nz[v[i]] < -1e-6) b++ } }
   END {print b + 0}' "$dir/solid_n.obj")
 [ "$bad" -eq 0 ] || fail "--base --normals: $bad wall or bottom corners not flat-shaded"
-"$tessera" mesh "$dir/t.png" --window 5,6,40,30 --max-error 3 -o "$dir/w.ply" --normal-map "$dir/wn.png" \
-  --hillshade "$dir/wh.png" --quiet || fail "window images"
+"$tessera" mesh "$dir/t.png" --window 5,6,40,30 --max-error 3 --dz 0.5 -o "$dir/w.ply" --normal-map "$dir/wn.png" \
+  --hillshade "$dir/wh.png" --stats "$dir/w.json" --quiet || fail "window images"
+# the stats give dz and the window's own range (against the grid mesh's
+# vertices: every sample of the window, z = sample * dz)
+"$tessera" mesh "$dir/t.png" --window 5,6,40,30 --method grid -o "$dir/wg.obj" --quiet || fail "window grid"
+range=$(awk '$1 == "v" {if (n++ == 0 || $4 < lo) lo = $4; if (n == 1 || $4 > hi) hi = $4} END {print lo, hi}' \
+  "$dir/wg.obj")
+[ "$(json_num "$dir/w.json" dz)" = 0.5 ] || fail "stats: dz $(json_num "$dir/w.json" dz)"
+wmin=$(sed -n '/"window"/,/}/p' "$dir/w.json" | grep -o '"min":[[:space:]]*[-0-9.e+]*' | sed 's/.*:[[:space:]]*//')
+wmax=$(sed -n '/"window"/,/}/p' "$dir/w.json" | grep -o '"max":[[:space:]]*[-0-9.e+]*' | sed 's/.*:[[:space:]]*//')
+awk -v r="$range" -v a="$wmin" -v b="$wmax" 'function off(x, y) { return x > y ? x - y : y - x }
+  BEGIN { split(r, z, " "); exit !(off(z[1], a) <= 1e-6 * off(a, 0) && off(z[2], b) <= 1e-6 * off(b, 0)) }' \
+  || fail "stats: window range $wmin..$wmax, the window's samples $range"
 for img in wn.png wh.png; do
   oiiotool --info "$dir/$img" | grep -q "40 x  *30" || fail "--window: $img: $(oiiotool --info "$dir/$img")"
 done
