@@ -340,6 +340,18 @@ static tsr_status load_image(const char *path, const tsr_load_options *o, tsr_he
             *nodata_done = !o->has_nodata;
         }
     }
+    if (hs == TSR_OK && info.has_spacing && !(*out)->georef.has_spacing) {
+        /* the spacing tsr_heightfield_save stored (tessera generate's) */
+        tsr_heightfield *hf = *out;
+        if (!hf->has_georef) {
+            memset(&hf->georef, 0, sizeof hf->georef);
+            hf->georef.z_scale = 1;
+        }
+        hf->has_georef = true;
+        hf->georef.has_spacing = true;
+        hf->georef.spacing[0] = info.spacing[0];
+        hf->georef.spacing[1] = info.spacing[1];
+    }
     return hs;
 }
 
@@ -514,7 +526,9 @@ tsr_status tsr_heightfield_save(const tsr_heightfield *hf, const char *path, tsr
     char tmp[4096];
     tsr_status s = tsr_atomic_begin(path, tmp, sizeof tmp, err);
     if (s == TSR_OK) {
-        s = tsr_image_write(path, tmp, hf->width, hf->height, values, png, scale, offset, err);
+        bool spaced = hf->dx != 1 || hf->dy != 1; /* the default spacing is not stored */
+        s = tsr_image_write(path, tmp, hf->width, hf->height, values, png, scale, offset, spaced ? hf->dx : 0,
+                            spaced ? hf->dy : 0, err);
         if (s == TSR_OK)
             s = tsr_atomic_commit(tmp, path, err);
         else

@@ -34,6 +34,8 @@ static std::string one_line(std::string s)
 }
 
 static const char *attr_name = "Tessera:HeightScaleOffset";
+static const char *spacing_attr = "Tessera:Spacing";
+static const char *desc_spacing = "Tessera heightfield: spacing ";
 
 // The file an image is written to, remembering a write that fell short (a
 // full disk, a file size limit): OpenImageIO's PNG writer does not look at
@@ -148,6 +150,18 @@ tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint6
     if (!so.empty() && std::sscanf(so.c_str(), "%lf %lf", &info->scale, &info->offset) == 2 &&
         std::isfinite(info->scale) && std::isfinite(info->offset) && info->scale != 0)
         info->has_scale = true;
+    // the spacing: its own attribute (PNG, EXR), else the description
+    // (TIFF keeps no attribute of ours)
+    std::string sp = spec.get_string_attribute(spacing_attr);
+    std::string desc = spec.get_string_attribute("ImageDescription");
+    size_t dn = std::strlen(desc_spacing);
+    const char *sp_text = !sp.empty()                                 ? sp.c_str()
+                          : desc.compare(0, dn, desc_spacing) == 0 ? desc.c_str() + dn
+                                                                      : nullptr;
+    if (sp_text && std::sscanf(sp_text, "%lf %lf", &info->spacing[0], &info->spacing[1]) == 2 &&
+        std::isfinite(info->spacing[0]) && std::isfinite(info->spacing[1]) && info->spacing[0] > 0 &&
+        info->spacing[1] > 0)
+        info->has_spacing = true;
 
     // Integer samples are read in their own type so they keep their
     // integer values; everything else is read as float.
@@ -215,8 +229,8 @@ tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint6
 }
 
 tsr_status tsr_io_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
-                                      const float *values, bool as_u16, double scale, double offset,
-                                      tsr_error *err)
+                                      const float *values, bool as_u16, double scale, double offset, double dx,
+                                      double dy, tsr_error *err)
 {
     std::unique_ptr<CheckedFile> proxy; // (before out: destroyed after it)
     auto out = ImageOutput::create(tmp);
@@ -226,16 +240,25 @@ tsr_status tsr_io_image_write(const char *path, const char *tmp, uint32_t width,
     }
     ImageSpec spec((int)width, (int)height, 1, as_u16 ? TypeDesc::UINT16 : TypeDesc::FLOAT);
     spec.channelnames = {"Y"};
+    char desc[256] = "";
+    if (dx > 0 && dy > 0) {
+        char sp[96];
+        std::snprintf(sp, sizeof sp, "%.17g %.17g", dx, dy);
+        spec.attribute(spacing_attr, sp);
+        std::snprintf(desc, sizeof desc, "%s%s; ", desc_spacing, sp);
+    }
     if (as_u16) {
         char so[96];
         std::snprintf(so, sizeof so, "%.17g %.17g", scale, offset);
         spec.attribute(attr_name, so);
-        char desc[160];
-        std::snprintf(desc, sizeof desc, "Tessera heightfield: height = value * %.17g + %.17g", scale, offset);
-        spec.attribute("ImageDescription", desc);
+        size_t n = std::strlen(desc);
+        std::snprintf(desc + n, sizeof desc - n, "%sheight = value * %.17g + %.17g",
+                      n ? "" : "Tessera heightfield: ", scale, offset);
     } else {
         spec.attribute("compression", "zip");
     }
+    if (desc[0])
+        spec.attribute("ImageDescription", desc);
     errno = 0;
     if (!use_checked_file(out.get(), tmp, proxy) || !out->open(tmp, spec)) {
         int en = errno;

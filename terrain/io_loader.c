@@ -85,10 +85,11 @@ tsr_status tsr_image_read(const char *path, const tsr_allocator *alloc, uint64_t
 }
 
 tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height, const float *values,
-                           bool as_u16, double scale, double offset, tsr_error *err)
+                           bool as_u16, double scale, double offset, double dx, double dy, tsr_error *err)
 {
     const tsr_io_api *a = module(err);
-    return a ? a->image_write(path, tmp, width, height, values, as_u16, scale, offset, err) : TSR_ERR_UNSUPPORTED;
+    return a ? a->image_write(path, tmp, width, height, values, as_u16, scale, offset, dx, dy, err)
+             : TSR_ERR_UNSUPPORTED;
 }
 
 tsr_status tsr_image_save_check(const char *path, tsr_error *err)

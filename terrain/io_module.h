@@ -23,7 +23,7 @@ extern "C" {
 
 #define TSR_IO_MODULE_FILE "libtessera_io.so"
 #define TSR_IO_MODULE_SYMBOL "tsr_io_module_api"
-#define TSR_IO_MODULE_VERSION 2
+#define TSR_IO_MODULE_VERSION 3
 
 typedef struct tsr_io_api {
     int version; /* TSR_IO_MODULE_VERSION */
@@ -31,7 +31,8 @@ typedef struct tsr_io_api {
     tsr_status (*image_read)(const char *path, const tsr_allocator *alloc, uint64_t max_samples, float **pixels,
                              tsr_image_info *info, tsr_error *err);
     tsr_status (*image_write)(const char *path, const char *tmp, uint32_t width, uint32_t height,
-                              const float *values, bool as_u16, double scale, double offset, tsr_error *err);
+                              const float *values, bool as_u16, double scale, double offset, double dx, double dy,
+                              tsr_error *err);
     tsr_status (*image_save_check)(const char *path, tsr_error *err);
     tsr_status (*image_save_u8_rows)(const char *path, uint32_t width, uint32_t height, uint32_t channels,
                                      void (*fill)(void *user, uint32_t y0, uint32_t y1, uint8_t *rows), void *user,
@@ -45,7 +46,8 @@ typedef struct tsr_io_api {
 tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, float **pixels,
                              tsr_image_info *info, tsr_error *err);
 tsr_status tsr_io_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
-                              const float *values, bool as_u16, double scale, double offset, tsr_error *err);
+                              const float *values, bool as_u16, double scale, double offset, double dx, double dy,
+                              tsr_error *err);
 tsr_status tsr_io_image_save_check(const char *path, tsr_error *err);
 tsr_status tsr_io_image_save_u8_rows(const char *path, uint32_t width, uint32_t height, uint32_t channels,
                                      void (*fill)(void *user, uint32_t y0, uint32_t y1, uint8_t *rows), void *user,

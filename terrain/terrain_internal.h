@@ -49,6 +49,8 @@ typedef struct tsr_image_info {
     char type[16];   /* sample type: "uint8", "uint16", "float"... */
     bool has_scale;  /* a Tessera scale/offset found in the metadata */
     double scale, offset;
+    bool has_spacing; /* a Tessera sample spacing found in the metadata */
+    double spacing[2];
 } tsr_image_info;
 
 /* Reads every channel of the first subimage as float values in the file's
@@ -64,9 +66,13 @@ tsr_status tsr_image_read(const char *path, const tsr_allocator *alloc, uint64_t
 
 /* Writes one channel to `tmp` (whose extension picks the format); messages
  * name `path`. float32 unless as_u16, in which case the values are rounded
- * and clamped to 0..65535 and scale/offset are stored in the metadata. */
+ * and clamped to 0..65535 and scale/offset are stored in the metadata.
+ * With dx, dy > 0, the sample spacing is stored in the metadata too (the
+ * Tessera:Spacing attribute, and the image description, which TIFF keeps);
+ * tsr_image_read gives it back. */
 tsr_status tsr_image_write(const char *path, const char *tmp, uint32_t width, uint32_t height,
-                           const float *values, bool as_u16, double scale, double offset, tsr_error *err);
+                           const float *values, bool as_u16, double scale, double offset, double dx, double dy,
+                           tsr_error *err);
 
 
 /* GIS rasters through GDAL (gdal_io.c, in the I/O module like

@@ -8,7 +8,9 @@ static void help(FILE *f)
     fprintf(f, "usage: tessera generate -o OUT [options]\n\n"
                "Generates a realistic sample terrain (fractal noise, ridged mountains, hydraulic and\n"
                "thermal erosion), deterministic by seed, and saves it. OUT's extension picks the format:\n"
-               ".png (16-bit, with the height scale and offset stored in the file), .tif or .exr (float32).\n\n"
+               ".png (16-bit, with the height scale and offset stored in the file), .tif or .exr (float32).\n"
+               "The sample spacing is stored in the file too: mesh, fly, check and info use it unless\n"
+               "given --dx.\n\n"
                "options:\n"
                "  -o, --output OUT   file to write (required)\n"
                "  --size N           width and height in samples (default 1025)\n"
@@ -16,6 +18,8 @@ static void help(FILE *f)
                "  --height H         height in samples (default: --size)\n"
                "  --seed S           random seed, 0..4294967295 (default 1)\n"
                "  --relief M         height range in metres (default 1200)\n"
+               "  --spacing S        metres between samples (default 30, as the SRTM's 1 arc-second;\n"
+               "                     with the default size and relief, 30.7 km across, 1200 m high)\n"
                "  --quiet            print nothing on success (no summary, no progress bar)\n"
                "  -h, --help         this help\n\n"
                "The noise runs on every processor, the erosion on one (about 35 s for 4097 x 4097 on\n"
@@ -29,7 +33,7 @@ static int run(int argc, char **argv)
     const char *out = NULL;
     uint32_t w = 1025, h = 1025, seed = 1;
     bool w_set = false, h_set = false, quiet = false;
-    double relief = 1200;
+    double relief = 1200, spacing = 30;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (cli_is_help(a)) {
@@ -64,6 +68,11 @@ static int run(int argc, char **argv)
         } else if (!strcmp(a, "--seed") && has_value) {
             if (!cli_parse_u32(argv[++i], 0, UINT32_MAX, &seed)) {
                 cli_error("generate", "--seed %s: must be an integer from 0 to 4294967295", argv[i]);
+                return CLI_USAGE;
+            }
+        } else if (!strcmp(a, "--spacing") && has_value) {
+            if (!cli_parse_double(argv[++i], &spacing) || !(spacing > 0) || !(spacing <= 1e9)) {
+                cli_error("generate", "--spacing %s: must be a positive number of metres, at most 1e9", argv[i]);
                 return CLI_USAGE;
             }
         } else if (!strcmp(a, "--relief") && has_value) {
@@ -106,6 +115,7 @@ static int run(int argc, char **argv)
     tsr_terrain_generate(hf, &go);
     cli_progress_end(&pr);
     double t1 = cli_now();
+    tsr_heightfield_set_spacing(hf, spacing, spacing, 1);
     tsr_save_info info;
     if (tsr_heightfield_save(hf, out, &info, &err) != TSR_OK) {
         cli_error("generate", "%s", err.message);
@@ -113,8 +123,8 @@ static int run(int argc, char **argv)
         return CLI_FAIL;
     }
     if (!quiet)
-        fprintf(stderr, "tessera generate: wrote %s (%ux%u, seed %u, relief %g m; generated in %.2f s)\n", out, w, h,
-                seed, relief, t1 - t0);
+        fprintf(stderr, "tessera generate: wrote %s (%ux%u, %g m apart, seed %u, relief %g m; generated in %.2f s)\n",
+                out, w, h, spacing, seed, relief, t1 - t0);
     tsr_heightfield_destroy(hf);
     return CLI_OK;
 }

@@ -326,6 +326,35 @@ TEST(generator_same_on_any_thread_count_with_progress)
     tsr_heightfield_destroy(b);
 }
 
+/* tsr_heightfield_save stores a spacing other than 1 x 1 (the attribute in
+ * PNG and EXR, the image description in TIFF), and loading gives it back
+ * as the file's ground spacing; the default spacing is not stored. */
+TEST(saved_spacing_comes_back)
+{
+    const char *dir = check_temp_dir();
+    const char *names[] = {"s.png", "s.tif", "s.exr"};
+    for (int k = 0; k < 3; k++)
+        for (int spaced = 0; spaced < 2; spaced++) {
+            tsr_heightfield *hf = make_field(9, 7);
+            if (spaced)
+                tsr_heightfield_set_spacing(hf, 12.5, 30.25, 1);
+            const char *p = tmp_path(dir, names[k]);
+            tsr_error err = {0};
+            CHECK_MSG(tsr_heightfield_save(hf, p, NULL, &err) == TSR_OK, "%s", err.message);
+            tsr_heightfield *back = NULL;
+            CHECK_MSG(tsr_heightfield_load(p, NULL, NULL, &back, &err) == TSR_OK, "%s", err.message);
+            const tsr_georef *g = back ? tsr_heightfield_georef(back) : NULL;
+            if (spaced)
+                CHECK_MSG(g && g->has_spacing && g->spacing[0] == 12.5 && g->spacing[1] == 30.25, "%s: spacing %s",
+                          names[k], g ? "not as saved" : "lost");
+            else
+                CHECK_MSG(!g || !g->has_spacing, "%s: a spacing read where none was saved", names[k]);
+            tsr_heightfield_destroy(hf);
+            tsr_heightfield_destroy(back);
+            remove(p);
+        }
+}
+
 TEST(grid_mesh_is_valid_and_exact)
 {
     tsr_heightfield *hf = make_field(23, 17);
@@ -484,6 +513,6 @@ TEST(stats_against_a_plain_scan)
 TEST_MAIN(T(save_and_load_float_formats), T(png16_keeps_scale_and_offset), T(pgm_16bit_written_by_hand), T(raw_types),
           T(nan_height_is_nodata_and_inf_height_is_refused), T(size_limits), T(data_terrain_rgb_real_tile),
           T(data_real_float_tiffs), T(generator_is_deterministic_and_terrain_like),
-          T(generator_same_on_any_thread_count_with_progress), T(grid_mesh_is_valid_and_exact), T(nodata_becomes_hole),
+          T(generator_same_on_any_thread_count_with_progress), T(saved_spacing_comes_back), T(grid_mesh_is_valid_and_exact), T(nodata_becomes_hole),
           T(grid_step_leaves_nodata_uncovered),
           T(stats_against_a_plain_scan))

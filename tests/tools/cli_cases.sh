@@ -225,6 +225,19 @@ patch_crease_normals)
     "$tessera" patch "$dir/box.obj" -o "$out" --normals --crease-angle 200
   rm -f "$dir/box_n.obj" "$dir/box_w.obj" "$dir/box.stl" "$dir/s.json" "$dir/s2.json"
   echo "ok [$case]: $welded welded vertices, $written written" ;;
+generate_spacing)
+  # generate stores its spacing (30 m unless --spacing): info reads it from
+  # the file, --dx overrides it, and a mesh's vertices lie that far apart
+  "$tessera" generate --size 9 -o "$dir/s.png" --quiet || fail generate
+  "$tessera" generate --size 9 --spacing 12.5 -o "$dir/s.tif" --quiet || fail "generate --spacing"
+  "$tessera" info "$dir/s.png" | grep -q "^spacing: 30 x 30 (.*from the file)" || fail "info: $("$tessera" info "$dir/s.png")"
+  "$tessera" info "$dir/s.tif" | grep -q "^spacing: 12.5 x 12.5 (.*from the file)" || fail "info s.tif"
+  "$tessera" info "$dir/s.tif" --dx 2 | grep -q "^spacing: 2 x 2 (as given)" || fail "info --dx"
+  "$tessera" mesh "$dir/s.tif" --method grid -o "$dir/s.obj" --quiet || fail "mesh"
+  xs=$(awk '$1 == "v" {print $2}' "$dir/s.obj" | sort -gu | tr '\n' ' ')
+  [ "$xs" = "0 12.5 25 37.5 50 62.5 75 87.5 100 " ] || fail "vertex x: $xs"
+  expect_error 2 "--spacing 0: must be a positive number" -- "$tessera" generate --size 9 --spacing 0 -o "$dir/z.png"
+  echo "ok [$case]" ;;
 raw_wrong_size)
   expect_error 1 "nan\.f32: raw f32 5x4 needs 80 bytes but the file has 64" -- "$tessera" info "$dir/nan.f32" --raw 5 4 f32 ;;
 bad_options)
