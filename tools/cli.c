@@ -6,6 +6,7 @@
 #include <cjson/cJSON.h>
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
@@ -243,6 +244,12 @@ int cli_heightfield_option(const char *cmd, int argc, char **argv, int *i, cli_h
         cli_error(cmd, "%s %s: must be positive", a, argv[*i + 1]);
         return -1;
     }
+    /* vertices and cameras are floats: a scale beyond these makes samples
+     * one point (1e-300 is 0 as a float) or positions infinite */
+    if (target != &o->load.nodata && !(v >= 1e-15 && v <= 1e15)) {
+        cli_error(cmd, "%s %s: must be between 1e-15 and 1e15", a, argv[*i + 1]);
+        return -1;
+    }
     if (target == &o->load.nodata)
         o->load.has_nodata = true;
     *target = v;
@@ -337,6 +344,19 @@ tsr_heightfield *cli_load_heightfield(const char *cmd, const char *path, const c
     double dx, dy, dz = o->dz > 0 ? o->dz : 1;
     cli_spacing(hf, o, &dx, &dy);
     tsr_heightfield_set_spacing(hf, dx, dy, dz);
+    /* positions are floats: the heights times dz must fit (the extents
+     * do: at most 65536 samples a side times 1e15) */
+    if (dz > 1) {
+        tsr_heightfield_stats st;
+        tsr_heightfield_stats_compute(hf, &st);
+        double zmax = st.valid ? fmax(fabs(st.min), fabs(st.max)) * dz : 0;
+        if (!(zmax <= FLT_MAX)) {
+            cli_error(cmd, "%s: the heights times --dz %g reach %.3g, past the largest float (%.3g) that positions are "
+                      "kept in", path, dz, zmax, FLT_MAX);
+            tsr_heightfield_destroy(hf);
+            return NULL;
+        }
+    }
     return hf;
 }
 

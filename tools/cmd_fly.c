@@ -38,7 +38,7 @@ static void help(FILE *f)
                "  --width W, --height H viewport in pixels (default 1280 x 720)\n"
                "  --pixel-error T       screen-space error allowed, pixels (default 2)\n"
                "  --tile N              tile size: 2, 4, ..., 128 quads (default 16)\n"
-               "  --fov DEG             vertical field of view (default 60)\n"
+               "  --fov DEG             vertical field of view, 1 to 170 degrees (default 60)\n"
                "  --wireframe           start with the wireframe overlay\n"
                "  --no-geomorph         start without geomorphing\n"
                "  --show-normals        draw the shading normals as colours (x red, y green, z blue), unlit\n"
@@ -542,8 +542,8 @@ static int run(int argc, char **argv)
                 return CLI_USAGE;
             }
         } else if (!strcmp(arg, "--fov") && more) {
-            if (!cli_parse_double(argv[++i], &a.o.fovy_deg) || !(a.o.fovy_deg > 1 && a.o.fovy_deg < 170)) {
-                cli_error("fly", "--fov wants degrees between 1 and 170, not '%s'", argv[i]);
+            if (!cli_parse_double(argv[++i], &a.o.fovy_deg) || !(a.o.fovy_deg >= 1 && a.o.fovy_deg <= 170)) {
+                cli_error("fly", "--fov wants degrees from 1 to 170, not '%s'", argv[i]);
                 return CLI_USAGE;
             }
         } else if (!strcmp(arg, "--tile") && more) {

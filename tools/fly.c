@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -281,6 +282,11 @@ tsr_status fly_path_read(const char *path, fly_path *p, tsr_error *err)
     FILE *fp = fopen(path, "r");
     if (!fp)
         return tsr_error_set(err, errno == ENOENT ? TSR_ERR_NOT_FOUND : TSR_ERR_IO, "%s: %s", path, strerror(errno));
+    struct stat sb;
+    if (fstat(fileno(fp), &sb) == 0 && S_ISDIR(sb.st_mode)) {
+        fclose(fp);
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: is a folder, not a path file", path);
+    }
     char line[1024];
     uint32_t cap = 0, lineno = 0;
     int per_line = 0;
@@ -300,9 +306,17 @@ tsr_status fly_path_read(const char *path, fly_path *p, tsr_error *err)
                 break;
             v[n] = strtod(s, &end);
             if (end == s || !isfinite(v[n])) {
-                int len = (int)strcspn(s, " \t\r\n,");
-                st = tsr_error_set(err, TSR_ERR_FORMAT, "%s:%u: expected a number, found '%.*s'", path, lineno,
-                                   len > 20 ? 20 : len, s);
+                /* what was found, printable (a binary file's bytes as ?) */
+                char shown[24];
+                size_t len = strcspn(s, " \t\r\n,"), k;
+                for (k = 0; k < len && k < 20; k++)
+                    shown[k] = s[k] >= 0x20 && s[k] < 0x7f ? s[k] : '?';
+                shown[k] = 0;
+                st = tsr_error_set(err, TSR_ERR_FORMAT, "%s:%u: expected a number, found '%s'", path, lineno, shown);
+                goto done;
+            }
+            if (fabs(v[n]) > 1e15) { /* cameras are floats on the GPU */
+                st = tsr_error_set(err, TSR_ERR_VALUE, "%s:%u: %g is beyond 1e15 world units", path, lineno, v[n]);
                 goto done;
             }
             n++;

@@ -115,7 +115,7 @@ bad() { # name expected-message args...
   err=$("$tessera" fly "$@" --headless --frames 2 --width 32 --height 32 --out "$dir/bad" --quiet 2>&1)
   local rc=$?
   [ $rc -ne 0 ] || fail "$name: exit 0"
-  echo "$err" | grep -q "$msg" || fail "$name: message '$err' lacks '$msg'"
+  echo "$err" | grep -q -- "$msg" || fail "$name: message '$err' lacks '$msg'"
   [ -z "$(ls "$dir/bad" 2>/dev/null)" ] || fail "$name: left frames behind"
   echo "ok bad input $name: $err"
 }
@@ -127,6 +127,20 @@ bad path_wrong_count "short.txt:2" "$dir/t.png" --path "$dir/short.txt"
 bad path_one_keyframe "at least 2" "$dir/t.png" --path "$dir/one.txt"
 bad path_not_number "nan.txt:1" "$dir/t.png" --path "$dir/nan.txt"
 bad path_missing "nosuch.txt" "$dir/t.png" --path "$dir/nosuch.txt"
+mkdir -p "$dir/pathdir"
+printf '1 2 \001\377\n4 5 6\n' > "$dir/bin.txt"
+printf '0 0 1e300\n1 1 1\n' > "$dir/far.txt"
+bad path_folder "pathdir: is a folder" "$dir/t.png" --path "$dir/pathdir"
+bad path_binary "bin.txt:1: expected a number, found '??'" "$dir/t.png" --path "$dir/bin.txt"
+bad path_far "far.txt:1: 1e+300 is beyond 1e15" "$dir/t.png" --path "$dir/far.txt"
+bad tiny_dx "--dx 1e-300: must be between 1e-15 and 1e15" "$dir/t.png" --dx 1e-300
+bad huge_dz "--dz 1e300: must be between 1e-15 and 1e15" "$dir/t.png" --dz 1e300
+# the ends of --fov's range, as its help gives them, are taken
+for fov in 1 170; do
+  "$tessera" fly "$dir/t.png" --headless --frames 1 --width 32 --height 24 --fov $fov --out "$dir/fov" --quiet ||
+    fail "--fov $fov refused"
+done
+echo "ok --fov 1 and 170"
 bad empty_input "empty.png" "$dir/empty.png"
 bad missing_input "nosuch.png" "$dir/nosuch.png"
 bad bad_tile "tile" "$dir/t.png" --tile 12
