@@ -82,7 +82,7 @@ static int fly_run(const tsr_heightfield *hf, tsr_hw_backend *be, const fly_opti
     int rc = CLI_OK;
     for (uint32_t i = 0; i <= frames; i++) {
         tsr_camera cam;
-        if (!fly_path_camera(&f, &path, fmod((double)i / loop, 1.0), clearance, &cam))
+        if (!fly_path_camera(&f, &path, fmod((double)i / loop, 1.0), clearance, &cam, NULL))
             continue;
         fly_frame_stats fs;
         if (fly_frame(&f, &cam, &fs, &err) != TSR_OK) {

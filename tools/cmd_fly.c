@@ -34,7 +34,8 @@ static void help(FILE *f)
                "  --video FILE.mp4      headless: assemble the frames with ffmpeg (30 fps, MP4; refused before\n"
                "                        rendering when ffmpeg is not installed)\n"
                "  --path FILE           keyframes, one per line: EX EY EZ [TX TY TZ] (world units); default: an\n"
-               "                        automatic loop over the terrain, kept above the ground\n"
+               "                        automatic loop over the terrain; cameras are kept above the ground\n"
+               "                        (a path's too: a note says how many were raised)\n"
                "  --width W, --height H viewport in pixels (default 1280 x 720)\n"
                "  --pixel-error T       screen-space error allowed, pixels (default 2)\n"
                "  --tile N              tile size: 2, 4, ..., 128 quads (default 16)\n"
@@ -270,15 +271,23 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
     bool tty = !a->quiet && isatty(2);
     double t_start = cli_now();
     /* every frame's camera, before any frame is written */
+    uint32_t lifted = 0, first_lifted = 0;
     for (uint32_t i = 0; i < a->frames; i++) {
         double s = path.closed ? (double)i / a->frames : a->frames > 1 ? (double)i / (a->frames - 1) : 0;
-        if (!fly_path_camera(&f, &path, s, clearance, &cams[i])) {
+        bool low = false;
+        if (!fly_path_camera(&f, &path, s, clearance, &cams[i], &low)) {
             cli_error("fly", "%s: frame %u: the camera is degenerate (the target at the eye, or no view)",
                       a->path_file ? a->path_file : "the automatic path", i);
             rc = CLI_FAIL;
             goto done;
         }
+        if (low && !lifted++)
+            first_lifted = i;
     }
+    if (lifted && a->path_file && !a->quiet)
+        fprintf(stderr, "tessera fly: note: %s: %u of %u cameras (the first at frame %u) were less than %g above "
+                "the ground; they were raised to %g above it\n", a->path_file, lifted, a->frames, first_lifted,
+                clearance, clearance);
     written = 0;
     for (uint32_t i = 0; i < a->frames; i++) {
         double t0 = cli_now();
@@ -404,7 +413,7 @@ static int run_window(fly_args *a, const tsr_heightfield *hf)
     tsr_camera cam;
     double eye[3], yaw = 0, pitch = -0.2;
     if ((a->path_file ? fly_path_read(a->path_file, &path, &err) : fly_path_auto(&f, &path, &err)) == TSR_OK &&
-        fly_path_camera(&f, &path, 0, 1, &cam)) {
+        fly_path_camera(&f, &path, 0, 1, &cam, NULL)) {
         memcpy(eye, cam.eye, sizeof eye);
         yaw = atan2(cam.fwd[1], cam.fwd[0]);
         pitch = asin(fmax(-0.99, fmin(0.99, cam.fwd[2])));

@@ -420,7 +420,8 @@ static void catmull_rom(const double (*pts)[3], uint32_t n, bool closed, double 
     }
 }
 
-bool fly_path_camera(const fly_ctx *f, const fly_path *p, double s, double clearance, tsr_camera *cam)
+bool fly_path_camera(const fly_ctx *f, const fly_path *p, double s, double clearance, tsr_camera *cam,
+                     bool *lifted)
 {
     if (p->count < 2)
         return false;
@@ -428,8 +429,11 @@ bool fly_path_camera(const fly_ctx *f, const fly_path *p, double s, double clear
     double eye[3], tan[3], target[3];
     catmull_rom((const double(*)[3])p->eye, p->count, p->closed, s, eye, tan);
     double g = ground_height(f->terrain, eye[0], eye[1]);
-    if (!isnan(g) && eye[2] < g + clearance)
+    bool low = !isnan(g) && eye[2] < g + clearance;
+    if (low)
         eye[2] = g + clearance;
+    if (lifted)
+        *lifted = low;
     if (p->target) {
         catmull_rom((const double(*)[3])p->target, p->count, p->closed, s, target, NULL);
     } else {

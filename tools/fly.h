@@ -78,7 +78,9 @@ tsr_status fly_path_auto(const fly_ctx *f, fly_path *p, tsr_error *err);
 void fly_path_free(fly_path *p);
 
 /* The camera at s in [0, 1] along the path (a Catmull-Rom spline through
- * the keyframes), kept at least `clearance` above the ground (picking). */
-bool fly_path_camera(const fly_ctx *f, const fly_path *p, double s, double clearance, tsr_camera *cam);
+ * the keyframes), kept at least `clearance` above the ground (picking);
+ * *lifted (when not NULL) says whether it had to be raised. */
+bool fly_path_camera(const fly_ctx *f, const fly_path *p, double s, double clearance, tsr_camera *cam,
+                     bool *lifted);
 
 #endif

@@ -135,6 +135,13 @@ bad path_binary "bin.txt:1: expected a number, found '??'" "$dir/t.png" --path "
 bad path_far "far.txt:1: 1e+300 is beyond 1e15" "$dir/t.png" --path "$dir/far.txt"
 bad tiny_dx "--dx 1e-300: must be between 1e-15 and 1e15" "$dir/t.png" --dx 1e-300
 bad huge_dz "--dz 1e300: must be between 1e-15 and 1e15" "$dir/t.png" --dz 1e300
+# a path's cameras under the ground are raised, and a note says so
+printf '2560 2300 -5000 2560 2600 -5000\n2600 2300 -5000 2600 2600 -5000\n' > "$dir/under.txt"
+err=$("$tessera" fly "$dir/t.png" --dx 20 --headless --frames 2 --width 32 --height 24 --path "$dir/under.txt" \
+      --out "$dir/under" 2>&1) || fail "under the ground: $err"
+echo "$err" | grep -q "note: .*under.txt: 2 of 2 cameras (the first at frame 0) were less than" ||
+  fail "under the ground: no note: '$err'"
+echo "ok a path under the ground: raised, with a note"
 # the ends of --fov's range, as its help gives them, are taken
 for fov in 1 170; do
   "$tessera" fly "$dir/t.png" --headless --frames 1 --width 32 --height 24 --fov $fov --out "$dir/fov" --quiet ||
