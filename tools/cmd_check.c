@@ -871,8 +871,10 @@ static int run_patches(int argc, char **argv)
     memset(&p, 0, sizeof p);
     if (rc == CLI_OK && !cli_patch_model_load_weld("check", in, scheme, weld, &p))
         rc = CLI_FAIL;
-    if (rc == CLI_OK)
+    if (rc == CLI_OK) {
+        cli_patch_flat_warnings("check", in, &p, 5);
         cli_patch_trim_warnings("check", in, &p, 5);
+    }
     if (rc != CLI_OK) {
         free(cam_args);
         return rc;

@@ -226,6 +226,7 @@ static int run(int argc, char **argv)
                 "surfaces are not tessellated, the first at line %u (a file without surfaces is read as a "
                 "subdivision cage)\n",
                 in, pm.set.num_polygons, pm.set.first_polygon_line);
+    uint32_t flat = cli_patch_flat_warnings("patch", in, &pm, quiet ? 0 : 5);
     if (!quiet)
         cli_patch_trim_warnings("patch", in, &pm, 5);
     if (!quiet && pm.is_subd && pm.cage.num_skipped_tags)
@@ -369,9 +370,9 @@ static int run(int argc, char **argv)
             fprintf(stderr,
                     "tessera patch: %s: warning: %u T-junctions and %u zero-area triangles, where surfaces meet "
                     "without matching edges (farther apart than --weld, parameterised differently, sharing "
-                    "part of an edge, a trim curve across it, a degenerate trim); tessera check patches locates "
+                    "part of an edge, a trim curve across it, a degenerate trim)%s; tessera check patches locates "
                     "them\n",
-                    in, tj, zero);
+                    in, tj, zero, flat ? ", or on the patches with no area above" : "");
     }
     tsr_mesh_free(&split);
     tsr_ptess_result_free(&r);

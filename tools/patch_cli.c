@@ -160,6 +160,53 @@ tsr_status cli_patch_tessellate(const tsr_pmodel *m, const tsr_ptess_options *op
     return st;
 }
 
+/* Whether the n points pts (x, y, z) lie on one line (or at one point),
+ * within 1e-12 of their extent; *point says which. */
+static bool points_on_a_line(const double *pts, uint32_t n, bool *point)
+{
+    const double *a = pts, *b = pts;
+    double far = 0;
+    for (uint32_t i = 1; i < n; i++) {
+        const double *p = pts + 3 * i;
+        double d = hypot(hypot(p[0] - a[0], p[1] - a[1]), p[2] - a[2]);
+        if (d > far) {
+            far = d;
+            b = p;
+        }
+    }
+    *point = far == 0;
+    if (*point)
+        return true;
+    double u[3] = {(b[0] - a[0]) / far, (b[1] - a[1]) / far, (b[2] - a[2]) / far};
+    for (uint32_t i = 1; i < n; i++) {
+        const double *p = pts + 3 * i;
+        double w[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+        double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+        if (hypot(hypot(c[0], c[1]), c[2]) > 1e-12 * far)
+            return false;
+    }
+    return true;
+}
+
+uint32_t cli_patch_flat_warnings(const char *cmd, const char *path, const cli_patch_model *pm, uint32_t max)
+{
+    if (pm->is_subd)
+        return 0;
+    uint32_t flat = 0;
+    for (uint32_t i = 0; i < pm->set.num_patches; i++) {
+        const tsr_patch *p = &pm->set.patches[i];
+        bool point;
+        if (!points_on_a_line(p->ctrl, p->count_u * p->count_v, &point))
+            continue;
+        if (flat++ < max)
+            fprintf(stderr, "tessera %s: %s: warning: patch %u has no area (its control points lie %s): its "
+                    "triangles have zero area\n", cmd, path, i + 1, point ? "at one point" : "on one line");
+    }
+    if (flat > max && max > 0)
+        fprintf(stderr, "tessera %s: %s: warning: %u more patches with no area\n", cmd, path, flat - max);
+    return flat;
+}
+
 uint32_t cli_patch_trim_warnings(const char *cmd, const char *path, const cli_patch_model *pm, uint32_t max)
 {
     if (pm->is_subd)

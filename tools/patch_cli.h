@@ -43,6 +43,12 @@ void cli_patch_model_free(cli_patch_model *m);
  * lines, then a count of the rest. Returns how many loops were warned of. */
 uint32_t cli_patch_trim_warnings(const char *cmd, const char *path, const cli_patch_model *pm, uint32_t max);
 
+/* Warns of patches with no area: all control points on one line or at one
+ * point (the surface lies in their convex hull, so it is that line or
+ * point), whose triangles have zero area; at most `max` lines. Returns how
+ * many such patches there are (0 for a cage). */
+uint32_t cli_patch_flat_warnings(const char *cmd, const char *path, const cli_patch_model *pm, uint32_t max);
+
 /* Rebuilds a free-form model (not a cage) for tessellation at max_error
  * with tiles of `tile` (tsr_pmodel_set_options.split_error: knot spans
  * curved one way and straight the other cut across the curve). false

@@ -225,6 +225,20 @@ patch_crease_normals)
     "$tessera" patch "$dir/box.obj" -o "$out" --normals --crease-angle 200
   rm -f "$dir/box_n.obj" "$dir/box_w.obj" "$dir/box.stl" "$dir/s.json" "$dir/s2.json"
   echo "ok [$case]: $welded welded vertices, $written written" ;;
+patch_no_area)
+  # a patch whose control points lie on one line has no area: warned of by
+  # patch and check patches (not blamed on surfaces meeting); a plane is not
+  { echo 2; echo 3 3; for j in 0 1 2 3; do for i in 0 1 2 3; do echo "$((i + j)) $((2 * (i + j))) 0"; done; done
+    echo 3 3; for j in 0 1 2 3; do for i in 0 1 2 3; do echo "$i $j 1"; done; done; } > "$dir/flat.bpt"
+  "$tessera" patch "$dir/flat.bpt" -o "$dir/flat.ply" 2> "$cap/stderr" || fail "patch: $(cat "$cap/stderr")"
+  grep -q "flat\.bpt: warning: patch 1 has no area (its control points lie on one line)" "$cap/stderr" ||
+    fail "no warning: $(cat "$cap/stderr")"
+  grep -q "patch 2 has no area" "$cap/stderr" && fail "the plane was warned of"
+  "$tessera" check patches "$dir/flat.bpt" --cameras 1 > /dev/null 2> "$cap/stderr"
+  grep -q "warning: patch 1 has no area" "$cap/stderr" || fail "check: no warning: $(cat "$cap/stderr")"
+  "$tessera" patch "$dir/flat.bpt" -o "$dir/flat.ply" --quiet 2> "$cap/stderr" || fail "patch --quiet"
+  [ ! -s "$cap/stderr" ] || fail "--quiet printed: $(cat "$cap/stderr")"
+  echo "ok [$case]" ;;
 generate_spacing)
   # generate stores its spacing (30 m unless --spacing): info reads it from
   # the file, --dx overrides it, and a mesh's vertices lie that far apart
