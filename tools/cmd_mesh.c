@@ -545,9 +545,10 @@ static int run(int argc, char **argv)
             uint32_t tv = budget_v ? (uint32_t)fmax(4, floor(budget_v * x)) : 0;
             if (!have_lo && tt == to.max_triangles && tv == to.max_vertices) {
                 char b[64];
-                snprintf(b, sizeof b, budget_t && budget_v ? "%u triangles, %u vertices" : budget_t ? "%u triangles%.0u"
-                                                                                         : "%.0u%u vertices",
-                         budget_t, budget_v);
+                if (budget_t && budget_v)
+                    snprintf(b, sizeof b, "%u triangles, %u vertices", budget_t, budget_v);
+                else
+                    snprintf(b, sizeof b, "%u %s", budget_t ? budget_t : budget_v, budget_t ? "triangles" : "vertices");
                 cli_error("mesh", "%s: the budget (%s) is below the smallest closed solid: %u triangles, %u "
                           "vertices with its walls and bottom", in, b, mesh.triangle_count, mesh.vertex_count);
                 rc = CLI_USAGE;
