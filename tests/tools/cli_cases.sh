@@ -34,9 +34,15 @@ alpha_png)
   done ;;
 height_overflow)
   # heights times --dz beyond float32 (which vertices are written in): an
-  # error, not a mesh of infinities
-  expect_error 2 "nan\.f32: mesh: the heights times dz pass the largest float" -- \
-    "$tessera" mesh "$dir/nan.f32" --raw 4 4 f32 --dz 1e38 -o "$out" ;;
+  # error, not a mesh of infinities; --dz itself is at most 1e15
+  expect_error 2 "--dz 1e38: must be between 1e-15 and 1e15" -- \
+    "$tessera" mesh "$dir/nan.f32" --raw 4 4 f32 --dz 1e38 -o "$out"
+  for k in $(seq 16); do printf '\312\362\111\161'; done > "$dir/big.f32" # 1e30 each
+  for cmd in mesh fly "check terrain"; do
+    # shellcheck disable=SC2086
+    expect_error 1 "big\.f32: the heights times --dz 1e\+15 reach 1e\+45, past the largest float" -- \
+      "$tessera" $cmd "$dir/big.f32" --raw 4 4 f32 --dz 1e15 $([ "$cmd" = mesh ] && echo -o "$out")
+  done ;;
 one_by_one_image)
   oiiotool --create 1x1 1 -d uint16 -o "$dir/one.png" || fail "oiiotool failed"
   expect_error 1 "one\.png: image is 1x1; a heightfield needs at least 2x2" -- "$tessera" mesh "$dir/one.png" -o "$out" ;;
