@@ -277,6 +277,7 @@ typedef struct tsr_tin_report {
     uint32_t flips;           /* delaunay: data-dependent edge flips made */
     uint32_t blocks;          /* delaunay: blocks meshed (tsr_tin_options.block) */
     bool budget_reached;      /* a budget stopped refinement */
+    tsr_heightfield_stats window; /* the window's samples (the whole heightfield's without one) */
 } tsr_tin_report;
 
 /* Meshes the heightfield by opts->method into mesh (initialised, empty;

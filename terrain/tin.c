@@ -1879,6 +1879,7 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
     }
     tsr_heightfield_stats hs;
     tsr_heightfield_stats_compute(src, &hs);
+    rep->window = hs;
     double range = hs.valid ? (hs.max - hs.min) * hf->dz : 0;
     /* the default bound from the whole heightfield's range, so windows
      * meshed with the same options get the same bound, and so the same

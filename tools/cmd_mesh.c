@@ -186,20 +186,9 @@ static int write_stats(const char *path, const tsr_mesh *mesh, const tsr_error_r
         cJSON_AddNumberToObject(w, "width", to->window_w);
         cJSON_AddNumberToObject(w, "height", to->window_h);
         /* the window's own range and no-data count, as the input's */
-        const float *d = tsr_heightfield_cdata(hf);
-        uint32_t W = tsr_heightfield_width(hf);
-        double lo = INFINITY, hi = -INFINITY;
-        uint64_t nd = 0;
-        for (uint32_t r = to->window_y; r < to->window_y + to->window_h; r++)
-            for (uint32_t c = to->window_x; c < to->window_x + to->window_w; c++) {
-                float v = d[(size_t)r * W + c];
-                nd += isnan(v);
-                lo = v < lo ? v : lo;
-                hi = v > hi ? v : hi;
-            }
-        cJSON_AddNumberToObject(w, "min", lo);
-        cJSON_AddNumberToObject(w, "max", hi);
-        cJSON_AddNumberToObject(w, "nodata", (double)nd);
+        cJSON_AddNumberToObject(w, "min", rep->window.min);
+        cJSON_AddNumberToObject(w, "max", rep->window.max);
+        cJSON_AddNumberToObject(w, "nodata", (double)rep->window.nodata);
     }
     char *s = cJSON_Print(j);
     cJSON_Delete(j);
