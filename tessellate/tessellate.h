@@ -307,6 +307,13 @@ typedef struct tsr_validate_options {
     /* When true, triangles whose normal has z <= 0 are counted as wrongly
      * oriented (a terrain's triangles all face +z). */
     bool expect_up;
+    /* When true, the mesh is a height field z(x, y) (a terrain): coincident
+     * vertices and T-junctions are judged in the xy plane, and a 0 epsilon
+     * means 1e-6 of the xy diagonal. A terrain's crack opens vertically, so
+     * in 3D its T-junction vertex lies off the long edge; and on a steep
+     * terrain (heights far beyond the extent) every vertex lies within
+     * 1e-6 of the 3D diagonal of some nearly vertical edge. */
+    bool height_field;
 } tsr_validate_options;
 
 #define TSR_VALIDATE_MAX_LOOPS 16

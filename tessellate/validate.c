@@ -91,6 +91,7 @@ static uint32_t he_to(const tsr_mesh *m, uint32_t h) { return m->indices[3 * (h 
 
 typedef struct grid {
     double origin[3], inv_cell;
+    int dims;        /* 3, or 2 for a height field (cells in xy, z ignored) */
     uint32_t mask;   /* table size - 1 */
     uint32_t *start; /* mask + 2 entries */
     uint32_t *items; /* vertex indices grouped by bucket */
@@ -106,14 +107,16 @@ static uint32_t cell_hash(int64_t x, int64_t y, int64_t z, uint32_t mask)
 
 static void cell_of(const grid *g, const float *p, int64_t c[3])
 {
-    for (int k = 0; k < 3; k++)
+    c[2] = 0;
+    for (int k = 0; k < g->dims; k++)
         c[k] = (int64_t)floor((p[k] - g->origin[k]) * g->inv_cell);
 }
 
-bool tsr_point_on_open_segment(const float p[3], const float a[3], const float b[3], double eps)
+/* tsr_point_on_open_segment in the first dims coordinates */
+static bool on_open_segment(const float p[3], const float a[3], const float b[3], double eps, int dims)
 {
-    double ab[3], ap[3], l2 = 0, t = 0;
-    for (int k = 0; k < 3; k++) {
+    double ab[3] = {0, 0, 0}, ap[3] = {0, 0, 0}, l2 = 0, t = 0;
+    for (int k = 0; k < dims; k++) {
         ab[k] = (double)b[k] - a[k];
         ap[k] = (double)p[k] - a[k];
         l2 += ab[k] * ab[k];
@@ -127,11 +130,16 @@ bool tsr_point_on_open_segment(const float p[3], const float a[3], const float b
     if (t * len <= eps || (1 - t) * len <= eps)
         return false;
     double d2 = 0;
-    for (int k = 0; k < 3; k++) {
+    for (int k = 0; k < dims; k++) {
         double q = ap[k] - t * ab[k];
         d2 += q * q;
     }
     return d2 <= eps * eps;
+}
+
+bool tsr_point_on_open_segment(const float p[3], const float a[3], const float b[3], double eps)
+{
+    return on_open_segment(p, a, b, eps, 3);
 }
 
 tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts, tsr_validation *v)
@@ -169,8 +177,9 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
             hi[k] = p[k] > hi[k] ? p[k] : hi[k];
         }
     }
+    int dims = opts && opts->height_field ? 2 : 3;
     double diag = 0;
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < dims; k++)
         diag += hi[k] > lo[k] ? (hi[k] - lo[k]) * (hi[k] - lo[k]) : 0;
     diag = sqrt(diag);
     double eps = opts && opts->epsilon > 0 ? opts->epsilon : 1e-6 * (diag > 0 ? diag : 1);
@@ -397,7 +406,8 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
         while (tsize < 2 * v->vertices)
             tsize <<= 1;
         g.mask = tsize - 1;
-        /* cell: the mean edge length, never below 4 eps */
+        g.dims = dims;
+        /* cell: the mean edge length (in xy for a height field), never below 4 eps */
         double sum = 0;
         uint32_t cnt = 0;
         for (uint32_t h = 0; h < he.count; h++) {
@@ -406,7 +416,7 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                 continue;
             const float *pa = m->positions + 3 * (size_t)a, *pb = m->positions + 3 * (size_t)b;
             double d2 = 0;
-            for (int k = 0; k < 3; k++)
+            for (int k = 0; k < dims; k++)
                 d2 += ((double)pa[k] - pb[k]) * ((double)pa[k] - pb[k]);
             sum += sqrt(d2);
             cnt++;
@@ -448,7 +458,7 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                 cell_of(&g, p, c);
                 for (int dx = -1; dx <= 1; dx++)
                     for (int dy = -1; dy <= 1; dy++)
-                        for (int dz = -1; dz <= 1; dz++) {
+                        for (int dz = dims == 3 ? -1 : 0; dz <= (dims == 3 ? 1 : 0); dz++) {
                             uint32_t b = cell_hash(c[0] + dx, c[1] + dy, c[2] + dz, g.mask);
                             for (uint32_t k = g.start[b]; k < g.start[b + 1]; k++) {
                                 uint32_t j = g.items[k];
@@ -460,7 +470,7 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                                 if (cj[0] != c[0] + dx || cj[1] != c[1] + dy || cj[2] != c[2] + dz)
                                     continue; /* hash collision: another cell */
                                 double d2 = 0;
-                                for (int a = 0; a < 3; a++)
+                                for (int a = 0; a < dims; a++)
                                     d2 += ((double)p[a] - q[a]) * ((double)p[a] - q[a]);
                                 if (d2 <= eps * eps) {
                                     v->coincident_vertices++;
@@ -501,7 +511,7 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                     for (size_t j = 0; j < nv; j++) {
                         if (!used[j] || j == a || j == b)
                             continue;
-                        if (tsr_point_on_open_segment(m->positions + 3 * j, pa, pb, eps)) {
+                        if (on_open_segment(m->positions + 3 * j, pa, pb, eps, dims)) {
                             v->t_junctions++;
                             if (v->first_t_junction[0] == UINT32_MAX) {
                                 v->first_t_junction[0] = (uint32_t)j;
@@ -524,7 +534,7 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                                 cell_of(&g, m->positions + 3 * (size_t)j, cj);
                                 if (cj[0] != x || cj[1] != y || cj[2] != z)
                                     continue; /* hash collision: another cell */
-                                if (tsr_point_on_open_segment(m->positions + 3 * (size_t)j, pa, pb, eps)) {
+                                if (on_open_segment(m->positions + 3 * (size_t)j, pa, pb, eps, dims)) {
                                     v->t_junctions++;
                                     if (v->first_t_junction[0] == UINT32_MAX) {
                                         v->first_t_junction[0] = j;

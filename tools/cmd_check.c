@@ -212,8 +212,9 @@ static int run_terrain(int argc, char **argv)
         tsr_mesh_init(&m, export_mesh ? TSR_MESH_NORMALS : 0, NULL);
         tsr_error_report rep;
         tsr_validation val;
+        tsr_validate_options vo = {.height_field = true};
         if (tsr_quadtree_mesh(qt, false, &m) != TSR_OK || tsr_terrain_measure(hf, &m, &cams[k], &rep) != TSR_OK ||
-            tsr_mesh_validate(&m, NULL, &val) != TSR_OK) {
+            tsr_mesh_validate(&m, &vo, &val) != TSR_OK) {
             cli_error("check", "out of memory");
             rc = CLI_FAIL;
             tsr_mesh_free(&m);
@@ -238,7 +239,7 @@ static int run_terrain(int argc, char **argv)
         }
         tsr_mesh_free(&m);
         if (!json)
-            printf("camera %3d  eye %.1f,%.1f,%.1f  max_pixel_error %.4f  tiles %5u  triangles %7u  select_us %8.1f  "
+            printf("camera %3d  eye %.6g,%.6g,%.6g  max_pixel_error %.4f  tiles %5u  triangles %7u  select_us %8.1f  "
                    "%s%s%s%s\n",
                    k, cams[k].eye[0], cams[k].eye[1], cams[k].eye[2], r->max_px, r->tiles, r->triangles, r->select_us,
                    ok ? "ok" : "FAIL", r->watertight ? "" : " not-watertight", r->conforming ? "" : " t-junctions",

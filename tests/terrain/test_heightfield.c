@@ -368,7 +368,7 @@ TEST(grid_mesh_is_valid_and_exact)
         CHECK(m.vertex_count == nc * nr && m.triangle_count == 2 * (nc - 1) * (nr - 1));
         tsr_validation v;
         tsr_validate_options vo = {0};
-        vo.expect_up = true;
+        vo.expect_up = vo.height_field = true;
         CHECK(tsr_mesh_validate(&m, &vo, &v) == TSR_OK);
         char msg[512];
         tsr_validation_describe(&v, msg, sizeof msg);

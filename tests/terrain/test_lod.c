@@ -212,7 +212,7 @@ static void check_mesh(const tsr_heightfield *hf, const tsr_quadtree *qt, const 
     CHECK(tsr_quadtree_mesh(qt, false, &m) == TSR_OK);
     tsr_validation v;
     tsr_validate_options vo = {0};
-    vo.expect_up = true;
+    vo.expect_up = vo.height_field = true;
     CHECK(tsr_mesh_validate(&m, &vo, &v) == TSR_OK);
     char msg[512];
     tsr_validation_describe(&v, msg, sizeof msg);

@@ -90,7 +90,7 @@ static bool valid_mesh_3d(const tsr_mesh *m, const char *what)
 {
     tsr_validation v;
     tsr_validate_options vo = {0};
-    vo.expect_up = true;
+    vo.expect_up = vo.height_field = true;
     if (tsr_mesh_validate(m, &vo, &v) != TSR_OK)
         return false;
     if (!tsr_validation_ok(&v) || v.downward_triangles) {

@@ -39,7 +39,7 @@ TEST(patterns_conform_for_every_mask)
              * vertices in the check by validating (unreferenced are ignored) */
             tsr_validation v;
             tsr_validate_options o = {0};
-            o.expect_up = true;
+            o.expect_up = o.height_field = true;
             CHECK(tsr_mesh_validate(&m, &o, &v) == TSR_OK);
             char msg[512];
             tsr_validation_describe(&v, msg, sizeof msg);
@@ -272,7 +272,7 @@ static void check_surface(int kind, const double *tols, int ntols)
         CHECK(tsr_quadtree_mesh(qt, false, &m) == TSR_OK);
         tsr_validation v;
         tsr_validate_options o = {0};
-        o.expect_up = kind == 0;
+        o.expect_up = o.height_field = kind == 0;
         CHECK(tsr_mesh_validate(&m, &o, &v) == TSR_OK);
         char msg[512];
         tsr_validation_describe(&v, msg, sizeof msg);
@@ -363,7 +363,7 @@ TEST(random_cuts_are_balanced_and_conforming)
             CHECK(tsr_quadtree_mesh(qt, false, &m) == TSR_OK);
             tsr_validation v;
             tsr_validate_options o = {0};
-            o.expect_up = true;
+            o.expect_up = o.height_field = true;
             tsr_mesh_validate(&m, &o, &v);
             char msg[512];
             tsr_validation_describe(&v, msg, sizeof msg);

@@ -156,6 +156,57 @@ TEST(t_junction_in_3d_long_edge)
     tsr_mesh_free(&m);
 }
 
+static tsr_validation validate_hf(const tsr_mesh *m)
+{
+    tsr_validation v;
+    tsr_validate_options o = {0};
+    o.expect_up = true;
+    o.height_field = true;
+    CHECK(tsr_mesh_validate(m, &o, &v) == TSR_OK);
+    return v;
+}
+
+TEST(height_field_junctions_in_xy)
+{
+    /* The t_junction layout as a terrain: the right column's middle vertex
+     * (2, 1) stands 5 above the left square's edge (2,0)-(2,2) at height
+     * 0, as a crack between a fine and a coarse tile does. In 3D it lies
+     * off the edge; as a height field it is the T-junction it is. */
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    float pts[][3] = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {2, 2, 0}, {3, 0, 0}, {3, 1, 4}, {3, 2, 0}, {2, 1, 5}};
+    for (int i = 0; i < 8; i++)
+        tsr_mesh_add_vertex(&m, pts[i], NULL, NULL);
+    uint32_t tris[][3] = {{0, 1, 3}, {0, 3, 2}, {1, 4, 5}, {1, 5, 7}, {7, 5, 6}, {7, 6, 3}};
+    for (int t = 0; t < 6; t++)
+        tsr_mesh_add_triangle(&m, tris[t][0], tris[t][1], tris[t][2]);
+    CHECK(validate(&m, true).t_junctions == 0);
+    tsr_validation v = validate_hf(&m);
+    CHECK(v.t_junctions == 1 && v.first_t_junction[0] == 7);
+    tsr_mesh_free(&m);
+
+    /* A steep, narrow, valid terrain: samples 1e-4 apart with heights up
+     * to 300. Every vertex lies within 1e-6 of the 3D diagonal (3e-4) of
+     * some nearly vertical edge, so the 3D test reports junctions that
+     * are not there; in xy there are none. */
+    grid(&m, 16);
+    uint64_t r = 12345;
+    for (uint32_t i = 0; i < m.vertex_count; i++) {
+        r = r * 6364136223846793005ull + 1442695040888963407ull;
+        float *p = m.positions + 3 * i;
+        p[0] *= 1e-4f;
+        p[1] *= 1e-4f;
+        p[2] = (float)((r >> 40) % 300000) * 1e-3f;
+    }
+    CHECK(validate(&m, false).t_junctions > 0);
+    v = validate_hf(&m);
+    char msg[512];
+    tsr_validation_describe(&v, msg, sizeof msg);
+    CHECK_MSG(tsr_validation_ok(&v), "%s", msg);
+    CHECK(v.coincident_vertices == 0 && v.boundary_loops == 1);
+    tsr_mesh_free(&m);
+}
+
 TEST(degenerate_and_duplicate)
 {
     tsr_mesh m;
@@ -287,6 +338,6 @@ TEST(random_grids_with_one_defect)
 }
 
 TEST_MAIN(T(grid_is_valid), T(flipped_triangle), T(nonmanifold_edge), T(coincident_sheets_no_t_junction), T(t_junction),
-          T(t_junction_in_3d_long_edge),
+          T(t_junction_in_3d_long_edge), T(height_field_junctions_in_xy),
           T(degenerate_and_duplicate), T(closed_tetrahedron), T(holes_count_loops), T(coincident_vertices_make_a_crack),
           T(bad_index_and_nan_position), T(random_grids_with_one_defect))

@@ -27,6 +27,15 @@ echo "ok naive criterion caught: $(tail -1 "$dir/naive.txt")"
 "$tessera" check terrain "$dir/t.png" --pixel-error 0 2>/dev/null; [ $? -eq 2 ] || fail "--pixel-error 0 accepted"
 echo "ok generated: $(tail -1 "$dir/out.txt")"
 
+# a steep needle (samples 1e-4 apart, 1200 high): conformity is judged in
+# xy, where a terrain's cracks open, not within 1e-6 of the 3D diagonal,
+# which is wider than the spacing and found junctions that were not there
+"$tessera" check terrain "$dir/t.png" --dx 1e-4 --cameras 4 --tile 4 > "$dir/steep.txt" \
+  || fail "steep terrain: $(grep -m1 FAIL "$dir/steep.txt")"
+awk '/^camera/ { for (i = 1; i < NF; i++) if ($i == "tiles" && $(i + 1) > 16) n++ } END { exit !(n > 0) }' \
+  "$dir/steep.txt" || fail "steep terrain: no camera selected more than 16 tiles"
+echo "ok steep: $(tail -1 "$dir/steep.txt")"
+
 # JSON output carries the keys the issue names
 "$tessera" check terrain "$dir/t.png" --dx 30 --cameras 3 --tile 8 --pixel-error 0.5 --json > "$dir/out.json" || fail "json check failed"
 for k in max_pixel_error watertight conforming balanced tiles triangles select_us; do
