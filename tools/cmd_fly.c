@@ -34,8 +34,9 @@ static void help(FILE *f)
                "  --video FILE.mp4      headless: assemble the frames with ffmpeg (30 fps, MP4; refused before\n"
                "                        rendering when ffmpeg is not installed)\n"
                "  --path FILE           keyframes, one per line: EX EY EZ [TX TY TZ] (world units); default: an\n"
-               "                        automatic loop over the terrain; cameras are kept above the ground\n"
-               "                        (a path's too: a note says how many were raised)\n"
+               "                        automatic loop over the terrain; one keyframe: a still camera (looking\n"
+               "                        at its target, else the terrain's centre); cameras are kept above the\n"
+               "                        ground (a path's too: a note says how many were raised)\n"
                "  --width W, --height H viewport in pixels (default 1280 x 720)\n"
                "  --pixel-error T       screen-space error allowed, pixels (default 2)\n"
                "  --tile N              tile size: 2, 4, ..., 128 quads (default 16)\n"
@@ -157,7 +158,11 @@ static bool make_dir(const char *dir)
             buf[i] = c;
         }
     struct stat sb;
-    return stat(dir, &sb) == 0 && S_ISDIR(sb.st_mode);
+    if (stat(dir, &sb) != 0)
+        return false;
+    if (!S_ISDIR(sb.st_mode))
+        errno = ENOTDIR;
+    return S_ISDIR(sb.st_mode);
 }
 
 static bool have_program(const char *name)
@@ -263,7 +268,11 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
         goto done;
     }
     if (!make_dir(a->out_dir)) {
-        cli_error("fly", "cannot create the output folder %s: %s", a->out_dir, strerror(errno));
+        if (errno == ENOTDIR || errno == EEXIST)
+            cli_error("fly", "--out %s: a file of that name is in the way (--out names a folder for the frames)",
+                      a->out_dir);
+        else
+            cli_error("fly", "cannot create the output folder %s: %s", a->out_dir, strerror(errno));
         rc = CLI_FAIL;
         goto done;
     }

@@ -351,9 +351,8 @@ tsr_status fly_path_read(const char *path, fly_path *p, tsr_error *err)
     }
     if (ferror(fp))
         st = tsr_error_set(err, TSR_ERR_IO, "%s: read error", path);
-    else if (p->count < 2)
-        st = tsr_error_set(err, p->count ? TSR_ERR_FORMAT : TSR_ERR_EMPTY, "%s: a path needs at least 2 keyframes, found %u",
-                           path, p->count);
+    else if (p->count == 0)
+        st = tsr_error_set(err, TSR_ERR_EMPTY, "%s: no keyframes (one per line: EX EY EZ [TX TY TZ])", path);
 done:
     fclose(fp);
     if (st != TSR_OK)
@@ -423,19 +422,31 @@ static void catmull_rom(const double (*pts)[3], uint32_t n, bool closed, double 
 bool fly_path_camera(const fly_ctx *f, const fly_path *p, double s, double clearance, tsr_camera *cam,
                      bool *lifted)
 {
-    if (p->count < 2)
+    if (p->count < 1)
         return false;
     s = s < 0 ? 0 : s > 1 ? 1 : s;
     double eye[3], tan[3], target[3];
-    catmull_rom((const double(*)[3])p->eye, p->count, p->closed, s, eye, tan);
+    if (p->count == 1) {
+        /* a still camera: toward its target, else the terrain's centre */
+        memcpy(eye, p->eye[0], sizeof eye);
+        double w = (tsr_heightfield_width(f->hf) - 1) * f->dx, h = (tsr_heightfield_height(f->hf) - 1) * f->dy;
+        double centre[3] = {0.5 * w, 0.5 * h, 0.5 * (f->zmin + f->zmax)};
+        memcpy(tan, centre, sizeof tan); /* not a tangent: the still camera's target */
+    } else {
+        catmull_rom((const double(*)[3])p->eye, p->count, p->closed, s, eye, tan);
+    }
     double g = ground_height(f->terrain, eye[0], eye[1]);
     bool low = !isnan(g) && eye[2] < g + clearance;
     if (low)
         eye[2] = g + clearance;
     if (lifted)
         *lifted = low;
-    if (p->target) {
+    if (p->target && p->count == 1) {
+        memcpy(target, p->target[0], sizeof target);
+    } else if (p->target) {
         catmull_rom((const double(*)[3])p->target, p->count, p->closed, s, target, NULL);
+    } else if (p->count == 1) {
+        memcpy(target, tan, sizeof target);
     } else {
         double l = hypot(tan[0], tan[1]);
         if (l == 0) {

@@ -68,7 +68,8 @@ typedef struct fly_path {
 
 /* Reads a path file: one keyframe per line, "EX EY EZ" or
  * "EX EY EZ TX TY TZ" (world units; all lines alike), '#' comments and
- * blank lines ignored, at least 2 keyframes. Errors name the line. */
+ * blank lines ignored, at least 1 keyframe (one alone: a still camera).
+ * Errors name the line. */
 tsr_status fly_path_read(const char *path, fly_path *p, tsr_error *err);
 
 /* The automatic path: a closed loop of keyframes over the terrain, each
@@ -78,7 +79,8 @@ tsr_status fly_path_auto(const fly_ctx *f, fly_path *p, tsr_error *err);
 void fly_path_free(fly_path *p);
 
 /* The camera at s in [0, 1] along the path (a Catmull-Rom spline through
- * the keyframes), kept at least `clearance` above the ground (picking);
+ * the keyframes; a single keyframe without a target looks at the terrain's
+ * centre, from where it stands or was raised to), kept at least `clearance` above the ground (picking);
  * *lifted (when not NULL) says whether it had to be raised. */
 bool fly_path_camera(const fly_ctx *f, const fly_path *p, double s, double clearance, tsr_camera *cam,
                      bool *lifted);

@@ -53,6 +53,29 @@ printf '# eye only\n100 100 900\n4000 600 800\n4000 4000 700\n' > "$dir/path.txt
 [ "$(ls "$dir/p" | wc -l)" -eq 3 ] || fail "--path frames"
 echo "ok --path"
 
+# one keyframe: a still camera, every frame the same picture; with an eye
+# alone it looks at the terrain's centre (the middle of the frame is
+# terrain, not sky), and a target beside the terrain shows the sky there
+printf '5000 -3000 3000\n' > "$dir/still.txt"
+"$tessera" fly "$dir/t.png" --dx 20 --headless --frames 2 --width 64 --height 48 --out "$dir/still" \
+  --path "$dir/still.txt" --quiet || fail "one keyframe"
+cmp -s "$dir/still/frame_00000.png" "$dir/still/frame_00001.png" || fail "one keyframe: the frames differ"
+printf '5000 -3000 3000 5000 -9000 6000\n' > "$dir/sky.txt"
+"$tessera" fly "$dir/t.png" --dx 20 --headless --frames 1 --width 64 --height 48 --out "$dir/sky" \
+  --path "$dir/sky.txt" --quiet || fail "one keyframe with a target"
+for v in still sky; do
+  oiiotool "$dir/$v/frame_00000.png" --cut 30x22+16+12 -o "$dir/$v.centre.png" && oiiotool --stats "$dir/$v.centre.png" |
+    grep 'Stats Avg' | head -1 > "$dir/$v.avg"
+done
+python3 - "$dir/still.avg" "$dir/sky.avg" <<'PY' || fail "one keyframe: the view's centre"
+import re, sys
+def avg(p):
+    return [float(x) for x in re.findall(r"[-0-9.]+", open(p).read().split(":", 1)[1])[:3]]
+still, sky = avg(sys.argv[1]), avg(sys.argv[2])
+assert still != sky, (still, sky)
+print("ok one keyframe: centre RGB %s, looking away %s" % (still, sky))
+PY
+
 # --show-normals: looking down on the terrain, the frame is the normals as
 # colours, (n + 1) / 2: blue (z) near 1 and red, green (x, y) near 1/2 on
 # average, which the lit frame of the same view is not
@@ -124,7 +147,14 @@ printf '1 2 3\n' > "$dir/one.txt"
 printf '1 2 x\n4 5 6\n' > "$dir/nan.txt"
 : > "$dir/empty.png"
 bad path_wrong_count "short.txt:2" "$dir/t.png" --path "$dir/short.txt"
-bad path_one_keyframe "at least 2" "$dir/t.png" --path "$dir/one.txt"
+printf '# nothing\n\n' > "$dir/nokey.txt"
+bad path_no_keyframe "nokey.txt: no keyframes" "$dir/t.png" --path "$dir/nokey.txt"
+: > "$dir/afile"
+err=$("$tessera" fly "$dir/t.png" --headless --frames 2 --width 32 --height 32 --out "$dir/afile" --quiet 2>&1) &&
+  fail "--out a file: exit 0"
+echo "$err" | grep -q -- "--out .*afile: a file of that name is in the way" || fail "--out a file: '$err'"
+[ -f "$dir/afile" ] && [ ! -s "$dir/afile" ] || fail "--out a file: the file changed"
+echo "ok --out a file: $err"
 bad path_not_number "nan.txt:1" "$dir/t.png" --path "$dir/nan.txt"
 bad path_missing "nosuch.txt" "$dir/t.png" --path "$dir/nosuch.txt"
 mkdir -p "$dir/pathdir"
