@@ -289,8 +289,9 @@ void tsr_hw_renderer_destroy(tsr_hw_renderer *r);
  * least recently drawn tiles that this frame does not use), then drawn.
  * Draw k is tile k, so a tile's neighbour numbers pass to its draw as they
  * are. Fails with TSR_ERR_ARGUMENT for a tile naming a neighbour beyond
- * `count` or itself, with TSR_ERR_NOMEM when the frame's tiles alone
- * exceed the budget, and with the fetch's or the backend's failure
+ * `count` or itself, with TSR_ERR_TOO_LARGE when the frame's tiles alone
+ * exceed the cache budget (the renderer stays usable: a coarser cut of
+ * the same view may fit), with TSR_ERR_NOMEM when host memory runs out, and with the fetch's or the backend's failure
  * otherwise. */
 tsr_status tsr_hw_renderer_frame(tsr_hw_renderer *r, const tsr_hw_frame *frame, const tsr_hw_tile *tiles,
                                  uint32_t count, tsr_hw_fetch_fn fetch, void *user, tsr_hw_render_stats *stats,

@@ -550,7 +550,7 @@ static tsr_status make_room(tsr_hw_renderer *r, frame_ctx *f, uint8_t format, ui
                 return st;
             continue;
         }
-        return tsr_error_set(f->err, TSR_ERR_NOMEM,
+        return tsr_error_set(f->err, TSR_ERR_TOO_LARGE,
                              "hw renderer: the frame's %" PRIu32 " tiles need at least %" PRIu64
                              " sample slots of %" PRIu32 " bytes (U16 tiles 1, F32 tiles 2), the cache has %" PRIu32
                              " slots (cache_bytes %" PRIu64 ")",
@@ -677,7 +677,7 @@ tsr_status tsr_hw_renderer_frame(tsr_hw_renderer *r, const tsr_hw_frame *frame, 
     tsr_status status = TSR_OK;
     if (r->frame_need > r->slot_count)
         status =
-            tsr_error_set(err, TSR_ERR_NOMEM,
+            tsr_error_set(err, TSR_ERR_TOO_LARGE,
                           "hw renderer: the frame's %" PRIu32 " tiles need at least %" PRIu64
                           " sample slots of %" PRIu32 " bytes, the cache has %" PRIu32 " (cache_bytes %" PRIu64 ")",
                           count, r->frame_need, r->slot_bytes, r->slot_count, (uint64_t)r->slot_count * r->slot_bytes);

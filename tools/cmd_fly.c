@@ -44,7 +44,8 @@ static void help(FILE *f)
                "  --wireframe           start with the wireframe overlay\n"
                "  --no-geomorph         start without geomorphing\n"
                "  --show-normals        draw the shading normals as colours (x red, y green, z blue), unlit\n"
-               "  --cache MB            resident tile budget (default 256)\n"
+               "  --cache MB            resident tile budget (default 256); a view whose tiles do not fit is\n"
+               "                        drawn at a coarser pixel error, and a note says so\n"
                "  --device NAME|INDEX   the Vulkan device (default: TESSERA_VK_DEVICE, else a discrete GPU,\n"
                "                        then integrated, then lavapipe)\n"
                "  --stats FILE.json     per-frame select, upload, record, draw and wait times, tiles, triangles\n"
@@ -55,6 +56,7 @@ static void help(FILE *f)
 
 typedef struct frame_rec {
     double select_ms, upload_ms, record_ms, gpu_ms, wait_ms, frame_ms;
+    double pixel_error; /* of the cut drawn: above the option's when the cache made it coarser */
     uint32_t tiles, uploaded;
     uint64_t triangles, gpu_triangles, bytes_uploaded, bytes_resident;
 } frame_rec;
@@ -87,6 +89,7 @@ static cJSON *stats_json(const fly_args *a, const fly_options *used, const char 
         cJSON_AddNumberToObject(f, "draw_ms", r[i].gpu_ms);
         cJSON_AddNumberToObject(f, "wait_ms", r[i].wait_ms);
         cJSON_AddNumberToObject(f, "frame_ms", r[i].frame_ms);
+        cJSON_AddNumberToObject(f, "pixel_error", r[i].pixel_error);
         cJSON_AddNumberToObject(f, "tiles", r[i].tiles);
         cJSON_AddNumberToObject(f, "tiles_uploaded", r[i].uploaded);
         cJSON_AddNumberToObject(f, "triangles", (double)r[i].triangles);
@@ -129,6 +132,7 @@ static int write_stats(const fly_args *a, const fly_options *used, const char *d
 static void record(frame_rec *rec, const fly_frame_stats *fs, double frame_ms)
 {
     rec->select_ms = fs->select_ms;
+    rec->pixel_error = fs->pixel_error;
     rec->upload_ms = fs->render.upload_ms;
     rec->record_ms = fs->render.record_ms;
     rec->gpu_ms = fs->render.device.gpu_ms;
@@ -140,6 +144,25 @@ static void record(frame_rec *rec, const fly_frame_stats *fs, double frame_ms)
     rec->gpu_triangles = fs->render.device.triangles;
     rec->bytes_uploaded = fs->render.bytes_uploaded;
     rec->bytes_resident = fs->render.bytes_resident;
+}
+
+/* A note on the frames whose cut did not fit the tile cache at the pixel
+ * error asked, and were drawn coarser. */
+static void note_coarsened(const fly_args *a, const fly_options *used, const frame_rec *r, uint32_t n)
+{
+    uint32_t count = 0, first = 0;
+    double worst = 0;
+    for (uint32_t i = 0; i < n; i++)
+        if (r[i].pixel_error > used->pixel_error) {
+            if (!count++)
+                first = i;
+            worst = fmax(worst, r[i].pixel_error);
+        }
+    if (count)
+        fprintf(stderr, "tessera fly: note: %u of %u frames (the first: frame %u) needed more tiles than the cache of "
+                "%.0f MB holds at %g px; they were drawn coarser, at up to %.3g px (a larger --cache keeps the pixel "
+                "error)\n", count, n, first, (double)used->cache_bytes / 1048576.0, used->pixel_error, worst);
+    (void)a;
 }
 
 static bool make_dir(const char *dir)
@@ -326,6 +349,8 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
                   (unsigned long long)be->stats.validation_messages);
         rc = CLI_FAIL;
     }
+    if (!a->quiet)
+        note_coarsened(a, &f.o, recs, a->frames);
     if (!a->quiet) {
         double ms = 0;
         for (uint32_t i = 0; i < a->frames; i++)
@@ -490,8 +515,9 @@ static int run_window(fly_args *a, const tsr_heightfield *hf)
             title_at = now;
             char title[256];
             snprintf(title, sizeof title,
-                     "tessera fly - %.1f ms - %u tiles - %.0fk triangles - tau %.2f px - %.0f MB resident%s%s%s",
-                     recs[nrec - 1].frame_ms, fs.render.tiles, fs.render.triangles / 1e3, f.o.pixel_error,
+                     "tessera fly - %.1f ms - %u tiles - %.0fk triangles - tau %.2f px%s - %.0f MB resident%s%s%s",
+                     recs[nrec - 1].frame_ms, fs.render.tiles, fs.render.triangles / 1e3, fs.pixel_error,
+                     fs.coarsened ? " (coarser: the cache is full)" : "",
                      fs.render.bytes_resident / 1048576.0, f.o.wireframe ? " - wireframe" : "",
                      f.o.geomorph ? "" : " - no geomorph", f.o.show_normals ? " - normals" : "");
             glfwSetWindowTitle(win, title);
@@ -506,6 +532,8 @@ static int run_window(fly_args *a, const tsr_heightfield *hf)
         rc = write_stats(a, &f.o, be->name, recs, nrec);
     if (!a->quiet)
         fprintf(stderr, "tessera fly: %u frames on %s\n", nrec, be->name);
+    if (!a->quiet)
+        note_coarsened(a, &f.o, recs, nrec);
     free(recs);
     fly_free(&f);
     be->destroy(be);

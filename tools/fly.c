@@ -43,6 +43,8 @@ tsr_status fly_init(fly_ctx *f, const tsr_heightfield *hf, tsr_hw_backend *backe
     tsr_terrain_node_range(f->terrain, (tsr_qnode){0, 0, 0}, &mn, &mx);
     f->zmin = mn <= mx ? mn * f->dz : 0;
     f->zmax = mn <= mx ? mx * f->dz : 1;
+    if (!f->o.cache_bytes)
+        f->o.cache_bytes = (uint64_t)256 << 20; /* the renderer's default, named for the notes */
     tsr_hw_renderer_options ro = {.tile_n = f->o.tile_n, .cache_bytes = f->o.cache_bytes};
     /* a U16 tile may move a sample by a thousandth of the height unit:
      * far below any pixel, exact for integer samples anyway */
@@ -192,9 +194,9 @@ static tsr_status link_neighbours(fly_ctx *f, uint32_t count, tsr_error *err)
     return TSR_OK;
 }
 
-tsr_status fly_frame(fly_ctx *f, const tsr_camera *cam, fly_frame_stats *st, tsr_error *err)
+/* One try of fly_frame at cam's pixel error. */
+static tsr_status draw_cut(fly_ctx *f, const tsr_camera *cam, fly_frame_stats *st, tsr_error *err)
 {
-    memset(st, 0, sizeof *st);
     double t0 = cli_now();
     tsr_status sel = tsr_quadtree_select(f->qt, tsr_refine_camera, (void *)cam);
     if (sel != TSR_OK)
@@ -242,10 +244,27 @@ tsr_status fly_frame(fly_ctx *f, const tsr_camera *cam, fly_frame_stats *st, tsr
             return ln;
     }
     st->leaves = nl;
-    st->select_ms = (cli_now() - t0) * 1e3;
+    st->select_ms += (cli_now() - t0) * 1e3;
     tsr_hw_frame frame;
     fly_frame_desc(f, cam, &frame);
     return tsr_hw_renderer_frame(f->renderer, &frame, f->tiles, count, fetch, f, &st->render, err);
+}
+
+tsr_status fly_frame(fly_ctx *f, const tsr_camera *cam, fly_frame_stats *st, tsr_error *err)
+{
+    memset(st, 0, sizeof *st);
+    tsr_camera c = *cam;
+    for (;;) {
+        st->pixel_error = c.pixel_error;
+        tsr_status s = draw_cut(f, &c, st, err);
+        /* the cut does not fit the tile cache: a coarser one, never a
+         * failed flight (after 40 tries, 1.5^40 = 1e7 times tau, the cache
+         * cannot even hold the coarsest cut) */
+        if (s != TSR_ERR_TOO_LARGE || st->coarsened >= 40)
+            return s;
+        c.pixel_error *= 1.5;
+        st->coarsened++;
+    }
 }
 
 /* ---- paths ------------------------------------------------------------------ */

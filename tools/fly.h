@@ -25,6 +25,8 @@ typedef struct fly_options {
 typedef struct fly_frame_stats {
     double select_ms;     /* quadtree selection, culling and morph weights */
     uint32_t leaves;      /* leaves of the cut, culled ones included */
+    double pixel_error;   /* the pixel error of the cut drawn: the camera's, or more when coarsened */
+    uint32_t coarsened;   /* times the cut was coarsened (pixel error x 1.5) to fit the tile cache */
     tsr_hw_render_stats render;
 } fly_frame_stats;
 
@@ -51,7 +53,9 @@ void fly_free(fly_ctx *f);
  * world units); false when degenerate. */
 bool fly_camera(const fly_ctx *f, const double eye[3], const double target[3], tsr_camera *cam);
 
-/* Selects the cut for the camera and draws it. */
+/* Selects the cut for the camera and draws it. When the cut's tiles do not
+ * fit the tile cache (o.cache_bytes), draws a coarser cut instead (the
+ * pixel error raised until they fit; st says by how much). */
 tsr_status fly_frame(fly_ctx *f, const tsr_camera *cam, fly_frame_stats *st, tsr_error *err);
 
 /* The frame description (matrices, sun, fog, flags) fly_frame uses. */

@@ -664,7 +664,7 @@ TEST(lru_matches_model_many_tiles)
     lru_model_run(600, 300, 200, 2000); /* a table of 1024 up to half full, long churn: clusters wrap its end */
 }
 
-TEST(frame_over_budget_fails_nomem)
+TEST(frame_over_budget_fails_too_large)
 {
     tsr_hw_backend *b = make_backend();
     tsr_hw_renderer *r = make_renderer(b, 4, 3 * 50, 0);
@@ -673,7 +673,7 @@ TEST(frame_over_budget_fails_nomem)
     fetcher fe = {0};
     tsr_hw_render_stats st;
     tsr_error err = {0};
-    CHECK(run_frame(r, &f, t, 4, &fe, &st, &err) == TSR_ERR_NOMEM && err.status == TSR_ERR_NOMEM);
+    CHECK(run_frame(r, &f, t, 4, &fe, &st, &err) == TSR_ERR_TOO_LARGE && err.status == TSR_ERR_TOO_LARGE);
     CHECK_MSG(strstr(err.message, "4 tiles") && strstr(err.message, "3"), "%s", err.message);
     CHECK(fe.calls == 0 && st.tiles == 0); /* known before fetching anything */
     /* the backend is not left inside a frame, and three tiles fit */
@@ -687,7 +687,7 @@ TEST(frame_over_budget_fails_nomem)
     /* F32 tiles take two slots: known only after fetching */
     tsr_hw_tile x[2] = {make_tile(FLOAT_KEY | 1, 0, 0), make_tile(FLOAT_KEY | 2, 0, 0)};
     memset(&err, 0, sizeof err);
-    CHECK(run_frame(r, &f, x, 2, &fe, &st, &err) == TSR_ERR_NOMEM);
+    CHECK(run_frame(r, &f, x, 2, &fe, &st, &err) == TSR_ERR_TOO_LARGE);
     CHECK_MSG(strstr(err.message, "2 tiles need at least 4"), "%s", err.message);
     /* a U16 tile and an F32 tile fit three slots (the odd slot pairs with nothing) */
     tsr_hw_tile mixed[2] = {t[1], x[1]};
@@ -748,7 +748,7 @@ TEST(mixed_formats_random_frames)
         tsr_error err = {0};
         tsr_status s = run_frame(r, &f, tiles, n, &fe, &st, &err);
         CHECK_MSG((s == TSR_OK) == (need <= SLOTS), "frame %d needs %u slots: %s", frame, need, err.message);
-        CHECK(s == TSR_OK || s == TSR_ERR_NOMEM);
+        CHECK(s == TSR_OK || s == TSR_ERR_TOO_LARGE);
         failures += s != TSR_OK;
         if (s == TSR_OK)
             check_draws(tiles, n, &f, 0);
@@ -911,7 +911,7 @@ TEST_MAIN(T(encode_integer_tiles_lossless), T(encode_span_beyond_u16), T(encode_
           T(encode_constant_all_nan_inf), T(view_proj_matches_camera), T(second_frame_uploads_nothing),
           T(neighbours_pass_to_draws),
           T(moving_cut_uploads_one_tile), T(lru_evicts_least_recently_drawn), T(lru_matches_model),
-          T(lru_matches_model_many_tiles), T(frame_over_budget_fails_nomem), T(f32_tile_defragments_pool),
+          T(lru_matches_model_many_tiles), T(frame_over_budget_fails_too_large), T(f32_tile_defragments_pool),
           T(mixed_formats_random_frames), T(eye_relative_origins_far_from_the_origin),
           T(upload_bytes_are_encoded_bytes), T(quantised_float_tiles), T(fetch_failure_fails_frame),
           T(bad_tiles_and_options_refused))

@@ -76,6 +76,38 @@ assert still != sky, (still, sky)
 print("ok one keyframe: centre RGB %s, looking away %s" % (still, sky))
 PY
 
+# a cut that does not fit the tile cache is drawn coarser, not a failed
+# flight: a 1025^2 terrain in tiles of 128 quads (33 kB each, 31 in 1 MB),
+# a low camera at 0.15 px needs more; the frame is drawn, its stats give
+# the pixel error it was drawn at, and a note says so. With the default
+# cache the same frame keeps 0.15 px.
+python3 - "$dir/w.f32" <<'PY'
+import array, math, sys
+n = 1025
+a = array.array('f', [300 * math.sin(i * 0.05) * math.cos(j * 0.037) + 100 * math.sin(i * 0.31 + j * 0.23)
+                      for j in range(n) for i in range(n)])
+with open(sys.argv[1], 'wb') as f:
+    a.tofile(f)
+PY
+printf '1000 1000 600 10000 10000 0\n' > "$dir/low.txt"
+for cache in 1 256; do
+  err=$("$tessera" fly "$dir/w.f32" --raw 1025 1025 f32 --dx 20 --headless --frames 1 --width 160 --height 120 \
+        --tile 128 --pixel-error 0.15 --path "$dir/low.txt" --cache $cache --out "$dir/cache$cache" \
+        --stats "$dir/cache$cache.json" 2>&1) || fail "--cache $cache: $err"
+  [ -f "$dir/cache$cache/frame_00000.png" ] || fail "--cache $cache: no frame"
+  note=$(echo "$err" | grep "needed more tiles than the cache of $cache MB")
+  px=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["frames"][0]["pixel_error"])' \
+       "$dir/cache$cache.json")
+  if [ $cache = 1 ]; then
+    [ -n "$note" ] || fail "--cache 1: no note: $err"
+    python3 -c "import sys; sys.exit(not float('$px') > 0.15)" || fail "--cache 1: drawn at $px px"
+  else
+    [ -z "$note" ] || fail "--cache 256: $note"
+    [ "$px" = 0.15 ] || fail "--cache 256: drawn at $px px"
+  fi
+  echo "ok --cache $cache: drawn at $px px"
+done
+
 # --show-normals: looking down on the terrain, the frame is the normals as
 # colours, (n + 1) / 2: blue (z) near 1 and red, green (x, y) near 1/2 on
 # average, which the lit frame of the same view is not
