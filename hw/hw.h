@@ -140,7 +140,8 @@ typedef struct tsr_hw_tile_draw {
 /* What one frame cost the device. */
 typedef struct tsr_hw_frame_stats {
     uint64_t triangles;     /* triangles assembled: the GPU's pipeline-statistics count, or the null backend's sum */
-    double gpu_ms;          /* device time of the frame from timestamps; 0 when unknown */
+    double gpu_ms;          /* device time of the frame from timestamps; 0 when unknown; in a window, whose
+                             * frames are in flight when end_frame returns, the latest finished frame's */
     double submit_wait_ms;  /* host time end_frame spent waiting for the device */
 } tsr_hw_frame_stats;
 

@@ -683,6 +683,25 @@ static bool make_swapchain(vk_backend *b)
 
 /* ---- frames --------------------------------------------------------------- */
 
+/* The pipeline-statistics triangle count and the device time of the
+ * finished frame that slot q recorded, into st (left as they are where
+ * the device has no such queries). */
+static void read_queries(vk_backend *b, uint32_t q, tsr_hw_frame_stats *st)
+{
+    if (b->has_stats) {
+        uint64_t prims = 0;
+        if (vkGetQueryPoolResults(b->dev, b->stats_pool, q, 1, sizeof prims, &prims, sizeof prims,
+                                  VK_QUERY_RESULT_64_BIT) == VK_SUCCESS)
+            st->triangles = prims;
+    }
+    if (b->has_timestamps) {
+        uint64_t ts[2];
+        if (vkGetQueryPoolResults(b->dev, b->ts_pool, 2 * q, 2, sizeof ts, ts, sizeof ts[0],
+                                  VK_QUERY_RESULT_64_BIT) == VK_SUCCESS)
+            st->gpu_ms = (double)(ts[1] - ts[0]) * b->ts_period_ns * 1e-6;
+    }
+}
+
 static bool vb_begin_frame(tsr_hw_backend *self, const tsr_hw_frame *f)
 {
     vk_backend *b = (vk_backend *)self;
@@ -690,8 +709,10 @@ static bool vb_begin_frame(tsr_hw_backend *self, const tsr_hw_frame *f)
         return false;
     vk_slot *s = &b->slots[b->cur];
     if (s->submitted) {
+        /* a frame of a window's: finished now, its device time known */
         vkWaitForFences(b->dev, 1, &s->fence, VK_TRUE, UINT64_MAX);
         s->submitted = false;
+        read_queries(b, b->cur, &b->last);
     }
     b->frame = *f;
     b->in_frame = true;
@@ -1012,19 +1033,12 @@ offscreen_only:;
     }
     st.submit_wait_ms = tsr_hw_now_ms() - t0;
     if (!s->submitted) {
-        if (b->has_stats) {
-            uint64_t prims = 0;
-            if (vkGetQueryPoolResults(b->dev, b->stats_pool, q, 1, sizeof prims, &prims, sizeof prims,
-                                      VK_QUERY_RESULT_64_BIT) == VK_SUCCESS)
-                st.triangles = prims;
-        }
-        if (b->has_timestamps) {
-            uint64_t ts[2];
-            if (vkGetQueryPoolResults(b->dev, b->ts_pool, 2 * q, 2, sizeof ts, ts, sizeof ts[0],
-                                      VK_QUERY_RESULT_64_BIT) == VK_SUCCESS)
-                st.gpu_ms = (double)(ts[1] - ts[0]) * b->ts_period_ns * 1e-6;
-        }
+        read_queries(b, q, &st);
         b->last = st;
+    } else {
+        /* still in flight (a window's frames overlap): the device time of
+         * the latest frame known to have finished */
+        st.gpu_ms = b->last.gpu_ms;
     }
     b->cur = (b->cur + 1) % b->nslots;
     if (out)
