@@ -490,7 +490,44 @@ float tsr_quadtree_vertex_morph(const tsr_qleaf *leaf, uint32_t n, uint32_t i, u
 
 /* ---- mesh ---------------------------------------------------------------- */
 
-tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh *m)
+/* Moves leaf's odd interior vertices (those this tile made: from
+ * first_new on) by its morph weight towards the mean of their two even
+ * neighbours along the parent's edge or union-jack diagonal (tile.c's
+ * diagonal of the parent's quad pqi, pqj: through its centre, (i-1, j-1)
+ * to (i+1, j+1) when pqi + pqj is even), as terrain.vert does. Points
+ * whose neighbours are clamped to the extent stay. */
+static void morph_tile(const tsr_surface *s, const tsr_qleaf *leaf, const uint32_t *local, uint32_t first_new,
+                       uint64_t x0, uint64_t y0, uint64_t step, tsr_mesh *m)
+{
+    uint32_t n = s->tile_n, row = n + 1;
+    float w = leaf->morph;
+    for (uint32_t j = 1; j < n; j++)
+        for (uint32_t i = 1; i < n; i++) {
+            if (!((i | j) & 1) || x0 + (i + 1) * step > s->extent_x || y0 + (j + 1) * step > s->extent_y)
+                continue;
+            uint32_t ai, aj, bi, bj;
+            if (!(j & 1)) {
+                ai = i - 1, aj = j, bi = i + 1, bj = j;
+            } else if (!(i & 1)) {
+                ai = i, aj = j - 1, bi = i, bj = j + 1;
+            } else {
+                uint32_t pqi = (leaf->node.x & 1) * (n / 2) + (i - 1) / 2;
+                uint32_t pqj = (leaf->node.y & 1) * (n / 2) + (j - 1) / 2;
+                if (!((pqi + pqj) & 1))
+                    ai = i - 1, aj = j - 1, bi = i + 1, bj = j + 1;
+                else
+                    ai = i + 1, aj = j - 1, bi = i - 1, bj = j + 1;
+            }
+            uint32_t v = local[j * row + i], va = local[aj * row + ai], vb = local[bj * row + bi];
+            if (v >= UINT32_MAX - 1 || va >= UINT32_MAX - 1 || vb >= UINT32_MAX - 1 || v < first_new)
+                continue;
+            float *z = &m->positions[3 * (size_t)v + 2];
+            float target = 0.5f * (m->positions[3 * (size_t)va + 2] + m->positions[3 * (size_t)vb + 2]);
+            *z = *z + (target - *z) * w;
+        }
+}
+
+static tsr_status mesh_cut(const tsr_quadtree *qt, bool skip_culled, bool morph, tsr_mesh *m)
 {
     const tsr_surface *s = &qt->s;
     const tsr_allocator *a = qa(qt);
@@ -520,6 +557,7 @@ tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh 
             continue;
         uint64_t w = (uint64_t)n << (s->levels - leaf->node.level), step = w / n;
         uint64_t x0 = leaf->node.x * w, y0 = leaf->node.y * w;
+        uint32_t first_new = m->vertex_count;
         for (uint32_t j = 0; j <= n && st == TSR_OK; j++)
             for (uint32_t i = 0; i <= n; i++) {
                 uint64_t gi = x0 + i * step, gj = y0 + j * step;
@@ -545,6 +583,8 @@ tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh 
                 }
                 local[j * row + i] = *slot;
             }
+        if (morph && leaf->morph > 0 && leaf->node.level > 0 && st == TSR_OK)
+            morph_tile(s, leaf, local, first_new, x0, y0, step, m);
         const uint32_t *tri = pat.tri[leaf->stitch & 15];
         for (uint32_t t = 0; t < pat.count[leaf->stitch & 15] && st == TSR_OK; t++) {
             uint32_t va = local[tri[3 * t]], vb = local[tri[3 * t + 1]], vc = local[tri[3 * t + 2]];
@@ -560,6 +600,16 @@ tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh 
     tsr_keymap_free(&map, a);
     tsr_tile_patterns_free(&pat);
     return st;
+}
+
+tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh *m)
+{
+    return mesh_cut(qt, skip_culled, false, m);
+}
+
+tsr_status tsr_quadtree_mesh_geomorphed(const tsr_quadtree *qt, bool skip_culled, tsr_mesh *m)
+{
+    return mesh_cut(qt, skip_culled, true, m);
 }
 
 bool tsr_quadtree_leaves_balanced(const tsr_quadtree *qt)

@@ -201,6 +201,17 @@ float tsr_quadtree_vertex_morph(const tsr_qleaf *leaf, uint32_t n, uint32_t i, u
  * left out. Culled leaves are included unless skip_culled. */
 tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh *m);
 
+/* The same mesh as the renderer draws it with geomorphing (after
+ * tsr_quadtree_apply_camera): each leaf's odd interior vertices moved by
+ * its morph weight towards where its parent's tile puts them (the mean of
+ * their two even neighbours along the parent's edge or union-jack
+ * diagonal). Tile edges do not move, so the mesh is as conforming. The
+ * heights lie between the leaf's and its parent's surfaces, so a sample's
+ * screen error is at most (1 - w) tau + w e_p with e_p the parent's error
+ * and w = 2 - e_p / tau: at most 1.25 tau. Normals (when m has them) are
+ * the unmorphed ones. */
+tsr_status tsr_quadtree_mesh_geomorphed(const tsr_quadtree *qt, bool skip_culled, tsr_mesh *m);
+
 #ifdef __cplusplus
 }
 #endif

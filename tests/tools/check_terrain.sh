@@ -27,6 +27,20 @@ echo "ok naive criterion caught: $(tail -1 "$dir/naive.txt")"
 "$tessera" check terrain "$dir/t.png" --pixel-error 0 2>/dev/null; [ $? -eq 2 ] || fail "--pixel-error 0 accepted"
 echo "ok generated: $(tail -1 "$dir/out.txt")"
 
+# the geomorphed mesh (as fly draws it mid-blend) holds 1.25 tau, and is
+# not the plain cut: some camera measures a different worst error
+"$tessera" check terrain "$dir/t.png" --dx 30 --dz 0.3 --cameras 12 --seed 3 --geomorph --json > "$dir/morph.json" \
+  || fail "geomorph check failed"
+"$tessera" check terrain "$dir/t.png" --dx 30 --dz 0.3 --cameras 12 --seed 3 --json > "$dir/plain.json" || fail "json"
+python3 - "$dir/morph.json" "$dir/plain.json" <<'PY' || fail "geomorph results"
+import json, sys
+m, p = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+assert m["geomorph"] is True and m["bound"] == 1.25 * m["pixel_error"] and m["failures"] == 0, m
+assert all(c["max_pixel_error"] <= m["bound"] * (1 + 1e-6) for c in m["cameras"])
+assert any(a["max_pixel_error"] != b["max_pixel_error"] for a, b in zip(m["cameras"], p["cameras"])), "no difference"
+print("ok geomorph: worst %.4f px, bound %g" % (m["worst"]["max_pixel_error"], m["bound"]))
+PY
+
 # a steep needle (samples 1e-4 apart, 1200 high): conformity is judged in
 # xy, where a terrain's cracks open, not within 1e-6 of the 3D diagonal,
 # which is wider than the spacing and found junctions that were not there
