@@ -179,7 +179,11 @@ tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint6
     if (!out)
         return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %llux%llu samples", path,
                              (unsigned long long)w, (unsigned long long)h);
-    const int strip = 256;
+    // strips of whole rows: 256, or for a tiled file (a Cloud-Optimised
+    // GeoTIFF) whole rows of tiles, read with the tile API (OpenImageIO's
+    // scanline reads of a tiled TIFF fail, some with SIGFPE)
+    const bool tiled = spec.tile_width > 0 && spec.tile_height > 0;
+    const int strip = tiled ? spec.tile_height * std::max(1, 256 / spec.tile_height) : 256;
     std::vector<unsigned char> buf;
     try {
         buf.resize((size_t)strip * (size_t)w * nch * rt.size());
@@ -189,11 +193,14 @@ tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint6
     }
     for (int y0 = 0; y0 < spec.height; y0 += strip) {
         int y1 = std::min(spec.height, y0 + strip);
-        if (!in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, 0, 0, spec.nchannels, rt, buf.data())) {
+        bool ok = tiled ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y0, spec.y + y1, spec.z,
+                                         spec.z + std::max(1, spec.depth), 0, spec.nchannels, rt, buf.data())
+                        : in->read_scanlines(0, 0, spec.y + y0, spec.y + y1, 0, 0, spec.nchannels, rt, buf.data());
+        if (!ok) {
             std::string e = one_line(in->geterror());
             tsr_free(alloc, out);
-            return tsr_error_set(err, TSR_ERR_TRUNCATED, "%s: truncated or corrupt pixel data at row %d (%s)", path,
-                                 y0, e.empty() ? "read failed" : e.c_str());
+            return tsr_error_set(err, TSR_ERR_TRUNCATED, "%s: truncated or corrupt pixel data in rows %d to %d (%s)",
+                                 path, y0, y1 - 1, e.empty() ? "read failed" : e.c_str());
         }
         size_t n = (size_t)(y1 - y0) * (size_t)w * nch;
         float *dst = out + (size_t)y0 * (size_t)w * nch;
