@@ -396,11 +396,13 @@ static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_
         for (size_t i = 0; i < n; i++) {
             const float *p = px + i * nch;
             double code = (double)p[0] * 65536.0 + (double)p[1] * 256.0 + (double)p[2];
-            hf->data[i] = (float)(code * 0.1 - 10000.0);
+            /* a transparent pixel (alpha 0: outside a tile's coverage) is no-data */
+            hf->data[i] = nch == 4 && p[3] == 0 ? NAN : (float)(code * 0.1 - 10000.0);
         }
     } else {
         /* Several channels are accepted only when they agree: grey stored
-         * as RGB. An alpha channel is ignored. Anything else is ambiguous. */
+         * as RGB. An alpha channel marks no-data where it is 0 and is
+         * otherwise ignored. Anything else is ambiguous. */
         size_t colour = nch == 2 || nch == 4 ? nch - 1 : nch;
         for (size_t i = 0; i < n; i++) {
             const float *p = px + i * nch;
@@ -414,6 +416,8 @@ static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_
                                          path, i % info.width, i / info.width);
                 }
             hf->data[i] = info.has_scale ? (float)(p[0] * info.scale + info.offset) : p[0];
+            if (colour < nch && p[colour] == 0)
+                hf->data[i] = NAN;
         }
     }
     tsr_free(alloc, px);

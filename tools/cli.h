@@ -42,7 +42,7 @@ typedef struct cli_heightfield_options {
 
 #define CLI_HEIGHTFIELD_HELP                                                                        \
     "  --decode terrain-rgb  decode an RGB(A) Terrain-RGB tile:\n"                                 \
-    "                        h = (R*65536 + G*256 + B) * 0.1 - 10000\n"                            \
+    "                        h = (R*65536 + G*256 + B) * 0.1 - 10000 (alpha 0: no-data)\n"        \
     "  --raw W H TYPE        headerless little-endian samples, TYPE u16, i16 or f32\n"              \
     "  --nodata V            samples equal to V are no-data (holes); default: the file's own\n"     \
     "                        (GeoTIFF GDAL_NODATA, a GIS format's header)\n"                       \

@@ -26,8 +26,10 @@ huge_header_png)
   expect_error 1 "huge\.png: image is 1000000x1000000" -- "$tessera" info "$dir/huge.png" ;;
 alpha_png)
   # alpha is no height: a Terrain-RGB PNG whose rows have alpha 0, 128 and
-  # 255 reads 100 m everywhere (OpenImageIO multiplied colour by alpha)
+  # 255 reads 100 m everywhere (OpenImageIO multiplied colour by alpha),
+  # but where alpha is 0 (outside a tile's coverage) it is no-data
   "$tessera" info "$dir/alpha.png" --decode terrain-rgb --json > "$dir/info.json" || fail "info failed"
+  grep -q '"nodata":[[:space:]]*4' "$dir/info.json" || fail "the alpha-0 row is not no-data: $(cat "$dir/info.json")"
   for k in min max; do
     v=$(grep -o "\"$k\":[[:space:]]*[-0-9.e+]*" "$dir/info.json" | head -1 | sed 's/.*:[[:space:]]*//')
     awk -v v="$v" 'BEGIN { exit !(v > 99.95 && v < 100.05) }' || fail "$k height $v, not 100: $(cat "$dir/info.json")"

@@ -38,9 +38,13 @@ check af.tif 1 float -12.5 3000 "tiff float" -12.5 3000
 check af.exr 1 float -5 100 "openexr float" -5 100
 check grey-as-rgb.png 3 uint8 0 1 "png uint8" 0 255
 # grey and alpha stored as given (alpha a mask, not a factor on the
-# heights): tessera reads the grey as stored
+# heights): tessera reads the grey as stored, and alpha 0 as no-data
 oiio_attrib=(--attrib oiio:UnassociatedAlpha 1)
-check grey-with-alpha.png 2 uint16 0 1 "png uint16" 0 65535
+check grey-with-alpha.png 2 uint16 0,0.5 1,1 "png uint16" 0 65535
+oiiotool --pattern fill:top=0.2,0:bottom=0.8,1 7x33 2 -d uint16 --attrib oiio:UnassociatedAlpha 1 -o "$dir/ga0.png"
+"$tessera" info "$dir/ga0.png" --json > "$dir/info.json" || fail "alpha 0 row"
+[ "$(field nodata)" = 7 ] || fail "grey with alpha 0 on the top row: nodata $(field nodata), wanted 7"
+echo "ok alpha 0 is no-data: $(field nodata) samples"
 oiio_attrib=()
 check a8.pgm 1 uint8 0 1 "pgm uint8" 0 255
 # (no 16-bit PGM here: OpenImageIO 2.4 writes corrupt 16-bit PNM samples,

@@ -39,7 +39,8 @@ static void chunk(FILE *f, const char *type, const unsigned char *data, uint32_t
 }
 
 /* A 4 x 4 Terrain-RGB PNG, RGBA 8-bit, every pixel height 100 m (R 1, G
- * 138, B 136), its rows' alpha 0, 128, 255, 255: alpha is no height. The
+ * 138, B 136), its rows' alpha 0, 128, 255, 255: alpha is no height (0
+ * is no-data). The
  * IDAT is a zlib stream of one stored block. */
 static void alpha_png(FILE *f)
 {
