@@ -371,6 +371,18 @@ void tsr_validation_describe(const tsr_validation *v, char *buf, size_t cap);
  * vertex inside another triangle's edge is a T-junction). */
 bool tsr_point_on_open_segment(const float p[3], const float a[3], const float b[3], double eps);
 
+/* Closed shells that face inward: the triangles of m joined through shared
+ * edges (halfedge twins) into components; a component with no boundary
+ * and no non-manifold edge whose signed volume (sum of p0 . (p1 x p2) / 6)
+ * is negative has its triangles marked in flip[t] = 1 (flip has
+ * triangle_count entries; others 0). *shells (when not NULL) counts them.
+ * Open sheets have no inside and are never marked. */
+tsr_status tsr_mesh_find_inward_shells(const tsr_mesh *m, uint8_t *flip, uint32_t *shells);
+
+/* Reverses the winding of the triangles marked in flip and negates the
+ * normals (when m has them) of the vertices they use, each once. */
+void tsr_mesh_flip_marked(tsr_mesh *m, const uint8_t *flip);
+
 /* Checks that every boundary edge of m lies on the border of the rectangle
  * [x0,x1]×[y0,y1] (within eps, in x and y) and that the boundary forms a
  * single loop: the test of "the only boundary is the domain's outer

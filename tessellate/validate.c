@@ -641,3 +641,95 @@ bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x
     tsr_halfedges_free(&he);
     return ok;
 }
+
+static uint32_t uf_find(uint32_t *parent, uint32_t x)
+{
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
+}
+
+tsr_status tsr_mesh_find_inward_shells(const tsr_mesh *m, uint8_t *flip, uint32_t *shells)
+{
+    const tsr_allocator *al = m->alloc.realloc ? &m->alloc : NULL;
+    uint32_t nt = m->triangle_count;
+    if (shells)
+        *shells = 0;
+    memset(flip, 0, nt);
+    for (uint32_t t = 0; t < 3 * nt; t++)
+        if (m->indices[t] >= m->vertex_count)
+            return TSR_ERR_ARGUMENT;
+    tsr_halfedges he;
+    tsr_status st = tsr_halfedges_build(&he, m, al);
+    if (st != TSR_OK)
+        return st;
+    uint32_t *parent = tsr_alloc(al, ((size_t)nt + 1) * sizeof *parent);
+    unsigned char *open = tsr_alloc(al, (size_t)nt + 1);
+    double *vol = tsr_alloc(al, ((size_t)nt + 1) * sizeof *vol);
+    if (!parent || !open || !vol) {
+        st = TSR_ERR_NOMEM;
+        goto done;
+    }
+    for (uint32_t t = 0; t < nt; t++) {
+        parent[t] = t;
+        open[t] = 0;
+        vol[t] = 0;
+    }
+    for (uint32_t h = 0; h < he.count; h++) {
+        uint32_t tw = he.twin[h];
+        if (tw == TSR_NO_TWIN || tw == TSR_NONMANIFOLD)
+            continue;
+        uint32_t a = uf_find(parent, h / 3), b = uf_find(parent, tw / 3);
+        if (a != b)
+            parent[a] = b;
+    }
+    for (uint32_t h = 0; h < he.count; h++)
+        if (he.twin[h] == TSR_NO_TWIN || he.twin[h] == TSR_NONMANIFOLD)
+            open[uf_find(parent, h / 3)] = 1;
+    for (uint32_t t = 0; t < nt; t++) {
+        const float *p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = m->positions + 3 * (size_t)m->indices[3 * (size_t)t + k];
+        double c[3] = {(double)p[1][1] * p[2][2] - (double)p[1][2] * p[2][1],
+                       (double)p[1][2] * p[2][0] - (double)p[1][0] * p[2][2],
+                       (double)p[1][0] * p[2][1] - (double)p[1][1] * p[2][0]};
+        vol[uf_find(parent, t)] += (p[0][0] * c[0] + p[0][1] * c[1] + p[0][2] * c[2]) / 6;
+    }
+    for (uint32_t t = 0; t < nt; t++) {
+        uint32_t r = uf_find(parent, t);
+        flip[t] = !open[r] && vol[r] < 0;
+        if (shells && r == t && flip[t])
+            (*shells)++;
+    }
+done:
+    tsr_free(al, parent);
+    tsr_free(al, open);
+    tsr_free(al, vol);
+    tsr_halfedges_free(&he);
+    return st;
+}
+
+void tsr_mesh_flip_marked(tsr_mesh *m, const uint8_t *flip)
+{
+    bool normals = (m->attributes & TSR_MESH_NORMALS) && m->normals;
+    const tsr_allocator *al = m->alloc.realloc ? &m->alloc : NULL;
+    unsigned char *done = normals ? tsr_alloc(al, (size_t)m->vertex_count + 1) : NULL;
+    if (done)
+        memset(done, 0, (size_t)m->vertex_count + 1);
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        if (!flip[t])
+            continue;
+        uint32_t *ix = m->indices + 3 * (size_t)t, tmp = ix[1];
+        ix[1] = ix[2];
+        ix[2] = tmp;
+        for (int k = 0; k < 3 && done; k++)
+            if (ix[k] < m->vertex_count && !done[ix[k]]) {
+                done[ix[k]] = 1;
+                for (int c = 0; c < 3; c++)
+                    m->normals[3 * (size_t)ix[k] + c] = -m->normals[3 * (size_t)ix[k] + c];
+            }
+    }
+    tsr_free(al, done);
+}

@@ -342,6 +342,22 @@ static int run(int argc, char **argv)
         cli_error("patch", "%s: %s", in, err.message);
         rc = CLI_FAIL;
     }
+    /* A closed shell facing inward (its patches all mirrored, or the
+     * orientation taken from a mirrored first patch) is turned outward, as
+     * a solid's normals should point; the split copy has r's triangles */
+    uint32_t inward = 0;
+    if (rc == CLI_OK) {
+        uint8_t *flip = malloc((size_t)r.mesh.triangle_count + 1);
+        if (flip && tsr_mesh_find_inward_shells(&r.mesh, flip, &inward) == TSR_OK && inward) {
+            tsr_mesh_flip_marked(&r.mesh, flip);
+            if (splitting && split.triangle_count == r.mesh.triangle_count)
+                tsr_mesh_flip_marked(&split, flip);
+            if (!quiet)
+                fprintf(stderr, "tessera patch: %s: note: %u closed shell%s faced inward (negative volume); turned "
+                        "outward\n", in, inward, inward == 1 ? "" : "s");
+        }
+        free(flip);
+    }
     if (rc == CLI_OK && tsr_mesh_write(splitting ? &split : &r.mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
         cli_error("patch", "%s", err.message);
         rc = CLI_FAIL;

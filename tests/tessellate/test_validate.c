@@ -207,6 +207,45 @@ TEST(height_field_junctions_in_xy)
     tsr_mesh_free(&m);
 }
 
+/* A tetrahedron at offset o, facing outward (or inward when in). */
+static void add_tetra(tsr_mesh *m, float o, bool in)
+{
+    float p[4][3] = {{o, 0, 0}, {o + 1, 0, 0}, {o, 1, 0}, {o, 0, 1}};
+    uint32_t base = m->vertex_count;
+    for (int i = 0; i < 4; i++)
+        tsr_mesh_add_vertex(m, p[i], NULL, NULL);
+    uint32_t f[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}; /* outward */
+    for (int t = 0; t < 4; t++)
+        tsr_mesh_add_triangle(m, base + f[t][0], base + f[t][in ? 2 : 1], base + f[t][in ? 1 : 2]);
+}
+
+TEST(inward_shells_found_and_turned)
+{
+    /* three bodies: outward, inward, and an open sheet (an inward
+     * tetrahedron less one face): only the closed inward one is marked */
+    tsr_mesh m;
+    tsr_mesh_init(&m, TSR_MESH_NORMALS, NULL);
+    add_tetra(&m, 0, false);
+    add_tetra(&m, 3, true);
+    add_tetra(&m, 6, true);
+    m.triangle_count--; /* the sheet */
+    for (uint32_t i = 0; i < m.vertex_count; i++)
+        m.normals[3 * i + 2] = 1;
+    uint8_t flip[11];
+    uint32_t shells = 0;
+    CHECK(tsr_mesh_find_inward_shells(&m, flip, &shells) == TSR_OK);
+    CHECK(shells == 1);
+    for (uint32_t t = 0; t < m.triangle_count; t++)
+        CHECK_MSG(flip[t] == (t >= 4 && t < 8), "triangle %u: %d", t, flip[t]);
+    tsr_mesh_flip_marked(&m, flip);
+    CHECK(tsr_mesh_find_inward_shells(&m, flip, &shells) == TSR_OK && shells == 0);
+    for (uint32_t i = 0; i < m.vertex_count; i++)
+        CHECK(m.normals[3 * i + 2] == (i >= 4 && i < 8 ? -1 : 1)); /* each vertex negated once */
+    tsr_validation v = validate(&m, false);
+    CHECK(v.misoriented_edges == 0 && v.boundary_loops == 1);
+    tsr_mesh_free(&m);
+}
+
 TEST(degenerate_and_duplicate)
 {
     tsr_mesh m;
@@ -338,6 +377,6 @@ TEST(random_grids_with_one_defect)
 }
 
 TEST_MAIN(T(grid_is_valid), T(flipped_triangle), T(nonmanifold_edge), T(coincident_sheets_no_t_junction), T(t_junction),
-          T(t_junction_in_3d_long_edge), T(height_field_junctions_in_xy),
+          T(t_junction_in_3d_long_edge), T(height_field_junctions_in_xy), T(inward_shells_found_and_turned),
           T(degenerate_and_duplicate), T(closed_tetrahedron), T(holes_count_loops), T(coincident_vertices_make_a_crack),
           T(bad_index_and_nan_position), T(random_grids_with_one_defect))

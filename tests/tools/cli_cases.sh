@@ -264,6 +264,53 @@ patch_no_area)
   "$tessera" patch "$dir/flat.bpt" -o "$dir/flat.ply" --quiet 2> "$cap/stderr" || fail "patch --quiet"
   [ ! -s "$cap/stderr" ] || fail "--quiet printed: $(cat "$cap/stderr")"
   echo "ok [$case]" ;;
+patch_inward_shell)
+  # a closed box of six bilinear patches, each facing the box's inside: the
+  # closed shell comes out facing outward (positive signed volume, normals
+  # away from the centre), with a note; a box facing outward is left as is
+  for way in in out; do
+    python3 - "$way" > "$dir/box_$way.bpt" <<'PY'
+import sys
+sign = -1 if sys.argv[1] == "in" else 1
+print(6)
+for axis in range(3):
+    for side in (0, 1):
+        a, b = [k for k in range(3) if k != axis]
+        def pt(u, v):
+            p = [0.0, 0.0, 0.0]
+            p[axis], p[a], p[b] = side, u, v
+            return p
+        # (Su x Sv) . outward: the sign of (a, b, axis) as a permutation
+        n = 1 if (a, b, axis) in ((0, 1, 2), (1, 2, 0), (2, 0, 1)) else -1
+        outward = 1 if side else -1
+        swap = n * outward != sign
+        print("1 1")
+        for v in (0, 1):
+            for u in (0, 1):
+                print(*(pt(v, u) if swap else pt(u, v)))
+PY
+    "$tessera" patch "$dir/box_$way.bpt" -o "$dir/box_$way.obj" --normals 2> "$cap/stderr" || fail "patch $way"
+    note=$(grep -c "1 closed shell faced inward (negative volume); turned outward" "$cap/stderr")
+    [ "$note" -eq "$([ $way = in ] && echo 1 || echo 0)" ] || fail "$way: note: $(cat "$cap/stderr")"
+    python3 - "$dir/box_$way.obj" <<'PY' || fail "box_$way: not outward"
+import sys
+v, vn, f = [], [], []
+for line in open(sys.argv[1]):
+    w = line.split()
+    if not w: continue
+    if w[0] == "v": v.append([float(x) for x in w[1:4]])
+    elif w[0] == "vn": vn.append([float(x) for x in w[1:4]])
+    elif w[0] == "f": f.append([int(x.split("/")[0]) - 1 for x in w[1:4]])
+vol = 0
+for a, b, c in f:
+    p, q, r = v[a], v[b], v[c]
+    vol += (p[0] * (q[1] * r[2] - q[2] * r[1]) + p[1] * (q[2] * r[0] - q[0] * r[2]) + p[2] * (q[0] * r[1] - q[1] * r[0])) / 6
+assert abs(vol - 1) < 1e-5, vol
+assert len(vn) == len(v)
+assert all(sum(n[k] * (p[k] - 0.5) for k in range(3)) > 0 for p, n in zip(v, vn))
+PY
+  done
+  echo "ok [$case]" ;;
 generate_spacing)
   # generate stores its spacing (30 m unless --spacing): info reads it from
   # the file, --dx overrides it, and a mesh's vertices lie that far apart
