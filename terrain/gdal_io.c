@@ -161,7 +161,9 @@ static void fill_georef(GDALDatasetH d, uint32_t w, uint32_t h, tsr_georef *g)
     memset(g, 0, sizeof *g);
     g->z_scale = 1;
     double gt[6];
-    if (GDALGetGeoTransform(d, gt) == CE_None && gt[2] == 0 && gt[4] == 0 && gt[1] != 0 && gt[5] != 0 &&
+    bool have_gt = GDALGetGeoTransform(d, gt) == CE_None;
+    g->rotated = have_gt && (gt[2] != 0 || gt[4] != 0);
+    if (have_gt && gt[2] == 0 && gt[4] == 0 && gt[1] != 0 && gt[5] != 0 &&
         isfinite(gt[0]) && isfinite(gt[1]) && isfinite(gt[3]) && isfinite(gt[5])) {
         g->has_transform = true;
         g->pixel[0] = gt[1];

@@ -88,6 +88,7 @@ typedef enum tsr_crs_kind {
 /* Where a GIS file says its samples lie, as GDAL reads it (GeoTIFF tags,
  * the headers of the other GIS formats). */
 typedef struct tsr_georef {
+    bool rotated;       /* the file's grid is rotated or sheared: not followed (no transform) */
     bool has_transform; /* a north-up grid: the centre of sample (c, r) is at */
     double origin[2];   /*   (origin[0] + c pixel[0], origin[1] + r pixel[1]) */
     double pixel[2];    /*   in CRS units; pixel[1] < 0 when row 0 is north */

@@ -271,13 +271,35 @@ void cli_georef_describe(const tsr_heightfield *hf, const cli_heightfield_option
     const tsr_georef *g = tsr_heightfield_georef(hf);
     double dx, dy;
     bool file = cli_spacing(hf, o, &dx, &dy);
-    const char *how = !file                 ? (o->dx > 0 || o->dy > 0 ? "as given" : "default")
+    bool given = o->dx > 0 || o->dy > 0;
+    const char *how = !file                 ? (given                          ? "as given"
+                                               : g && g->rotated              ? "default: the file's grid is rotated or "
+                                                                                "sheared, which is not followed"
+                                                                              : "default")
                       : g->spacing_unitless ? "from the file, in its unknown unit"
                       : g->spacing_approx   ? "ground metres at the file's middle; it varies across"
                                             : "ground metres, from the file";
     int n = snprintf(buf, cap, "%.9g x %.9g (%s)", dx, dy, how);
     if (g && g->crs_name[0] && n >= 0 && (size_t)n < cap)
         snprintf(buf + n, cap - (size_t)n, "; %s", g->crs_name);
+}
+
+void cli_georef_warnings(const char *cmd, const char *path, const tsr_heightfield *hf,
+                         const cli_heightfield_options *o)
+{
+    const tsr_georef *g = tsr_heightfield_georef(hf);
+    if (!g)
+        return;
+    if (g->rotated && o->dx <= 0 && o->dy <= 0)
+        fprintf(stderr, "tessera %s: %s: warning: the file's grid is rotated or sheared (its geotransform), which "
+                "is not followed: samples are placed 1 apart on an axis-aligned grid; give --dx and --dy\n",
+                cmd, path);
+    const char *u = g->z_unit;
+    bool feet = strstr(u, "ft") || strstr(u, "foot") || strstr(u, "feet") || strstr(u, "Foot") || strstr(u, "Feet");
+    double dx, dy;
+    if (feet && o->dz <= 0 && cli_spacing(hf, o, &dx, &dy) && !g->spacing_unitless)
+        fprintf(stderr, "tessera %s: %s: warning: the heights are in %s while x and y are in metres: the relief is "
+                "3.28 times too high unless --dz 0.3048 (US survey feet: 0.3048006) is given\n", cmd, path, u);
 }
 
 static void add_pair(cJSON *o, const char *key, double a, double b)

@@ -62,6 +62,11 @@ bool cli_spacing(const tsr_heightfield *hf, const cli_heightfield_options *o, do
 
 /* "DX x DY (where it came from); CRS name", for summaries. */
 void cli_georef_describe(const tsr_heightfield *hf, const cli_heightfield_options *o, char *buf, size_t cap);
+/* Warnings on stderr where the file's georeferencing is not what the mesh
+ * follows: a rotated or sheared grid (without --dx, --dy), heights in feet
+ * over ground metres (without --dz). */
+void cli_georef_warnings(const char *cmd, const char *path, const tsr_heightfield *hf,
+                         const cli_heightfield_options *o);
 
 /* Adds "spacing" [dx, dy], "spacing_from" (file, options or default) and,
  * for a georeferenced file, "georef" {crs, crs_kind, origin, pixel,

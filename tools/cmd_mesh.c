@@ -469,6 +469,8 @@ static int run(int argc, char **argv)
     tsr_heightfield *hf = cli_load_heightfield("mesh", in, &o);
     if (!hf)
         return CLI_FAIL;
+    if (!quiet)
+        cli_georef_warnings("mesh", in, hf, &o);
     uint32_t W = tsr_heightfield_width(hf), H = tsr_heightfield_height(hf);
     if (has_window) {
         if (win[0] >= W || win[1] >= H || win[2] > W - win[0] || win[3] > H - win[1]) {

@@ -264,6 +264,28 @@ patch_no_area)
   "$tessera" patch "$dir/flat.bpt" -o "$dir/flat.ply" --quiet 2> "$cap/stderr" || fail "patch --quiet"
   [ ! -s "$cap/stderr" ] || fail "--quiet printed: $(cat "$cap/stderr")"
   echo "ok [$case]" ;;
+gis_warnings)
+  # georeferencing the mesh does not follow is said, not silently dropped:
+  # a rotated grid (spacing 1 unless --dx/--dy), heights in feet over
+  # ground metres (unless --dz); --quiet and the options silence them
+  python3 "$(dirname "$0")/geotiff_fixture.py" rot "$dir/rot.tif" || fail "fixture"
+  python3 "$(dirname "$0")/geotiff_fixture.py" ft "$dir/ft.tif" || fail "fixture"
+  "$tessera" info "$dir/rot.tif" | grep -q "^spacing: 1 x 1 (default: the file's grid is rotated or sheared" ||
+    fail "info rot: $("$tessera" info "$dir/rot.tif")"
+  "$tessera" mesh "$dir/rot.tif" -o "$dir/r.obj" 2> "$cap/stderr" || fail "mesh rot"
+  grep -q "rot\.tif: warning: the file's grid is rotated or sheared" "$cap/stderr" || fail "rot: $(cat "$cap/stderr")"
+  "$tessera" mesh "$dir/rot.tif" -o "$dir/r.obj" --dx 20 2> "$cap/stderr" || fail "mesh rot --dx"
+  grep -q warning "$cap/stderr" && fail "rot --dx: $(cat "$cap/stderr")"
+  "$tessera" mesh "$dir/ft.tif" -o "$dir/f.obj" 2> "$cap/stderr" || fail "mesh ft"
+  grep -q "ft\.tif: warning: the heights are in US survey foot while x and y are in metres" "$cap/stderr" ||
+    fail "ft: $(cat "$cap/stderr")"
+  for extra in "--dz 0.3048006" --quiet; do
+    # shellcheck disable=SC2086
+    "$tessera" mesh "$dir/ft.tif" -o "$dir/f.obj" $extra 2> "$cap/stderr" || fail "mesh ft $extra"
+    grep -q warning "$cap/stderr" && fail "ft $extra: $(cat "$cap/stderr")"
+  done
+  rm -f "$dir"/*.tif "$dir"/*.obj
+  echo "ok [$case]" ;;
 patch_inward_shell)
   # a closed box of six bilinear patches, each facing the box's inside: the
   # closed shell comes out facing outward (positive signed volume, normals
