@@ -925,6 +925,22 @@ static int run_patches(int argc, char **argv)
             rc = CLI_USAGE;
         }
     }
+    /* the view-independent run on the model `tessera patch` tessellates
+     * for a bound (knot spans curved one way cut across their curve for
+     * this bound and tile: cli_patch_model_split); camera runs, as patch's,
+     * on the model as loaded */
+    tsr_pmodel *vi_model = NULL;
+    tsr_pmodel_info vi_info = info;
+    if (rc == CLI_OK && !p.is_subd) {
+        tsr_pmodel_set_options so = {weld, tol, tile};
+        tsr_error e = {0};
+        if (tsr_pmodel_from_set_opts(&p.set, &so, NULL, &vi_model, &e) != TSR_OK) {
+            cli_error("check", "%s: %s", in, e.message);
+            rc = CLI_FAIL;
+        } else {
+            tsr_pmodel_get_info(vi_model, &vi_info);
+        }
+    }
     tsr_ptess_options base = {0};
     base.tile_n = tile;
     base.max_level = max_level;
@@ -957,7 +973,8 @@ static int run_patches(int argc, char **argv)
         patch_run *r = &runs[k];
         if (k == 0)
             r->tol = tol;
-        rc = patch_run_do(p.model, &info, p.subd, &base, per_side, retries, 1e-6 * diag, assume_linked, r);
+        rc = patch_run_do(k == 0 && vi_model ? vi_model : p.model, k == 0 ? &vi_info : &info, p.subd, &base, per_side,
+                          retries, 1e-6 * diag, assume_linked, r);
         if (rc != CLI_OK)
             break;
         failures += !r->ok;
@@ -1056,6 +1073,7 @@ static int run_patches(int argc, char **argv)
     }
     free(runs);
     free(cam_args);
+    tsr_pmodel_destroy(vi_model);
     cli_patch_model_free(&p);
     return rc;
 }
