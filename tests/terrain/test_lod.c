@@ -329,7 +329,7 @@ TEST(geomorphed_cuts_hold_five_fourths_of_the_bound)
     /* The mesh the renderer draws with geomorphing: the same vertices and
      * triangles as the cut's, odd interior vertices moved part of the way
      * to the parent's surface. Conforming and watertight as the cut is,
-     * and within 1.25 tau on screen (measured over every sample, with
+     * and within 1.25 tau on screen (measured over every sample, 16 cameras, with
      * holes and with a size that clamps tiles at the extent). */
     for (int holes = 0; holes < 2; holes++) {
         tsr_heightfield *hf = terrain(301, 177, 31, 1200);
@@ -342,7 +342,7 @@ TEST(geomorphed_cuts_hold_five_fourths_of_the_bound)
         tsr_quadtree *qt = tsr_quadtree_create(s, NULL);
         double worst = 0, worst_plain = 0;
         int moved = 0;
-        for (int k = 0; k < 30; k++) {
+        for (int k = 0; k < 16; k++) {
             tsr_camera cam;
             random_camera(&cam, 300 * 30, 176 * 30, 0, 1200, k % 3 == 0);
             CHECK(tsr_quadtree_select(qt, tsr_refine_camera, &cam) == TSR_OK);
@@ -377,9 +377,9 @@ TEST(geomorphed_cuts_hold_five_fourths_of_the_bound)
             tsr_mesh_free(&plain);
             tsr_mesh_free(&mo);
         }
-        fprintf(stderr, "  %s: geomorphed worst / tau %.3f (unmorphed %.3f), %d of 30 cameras moved vertices\n",
+        fprintf(stderr, "  %s: geomorphed worst / tau %.3f (unmorphed %.3f), %d of 16 cameras moved vertices\n",
                 holes ? "holes" : "whole", worst, worst_plain, moved);
-        CHECK(moved > 10); /* not vacuous: the morph moves vertices */
+        CHECK(moved > 6); /* not vacuous: the morph moves vertices */
         tsr_quadtree_destroy(qt);
         tsr_terrain_destroy(t);
         tsr_heightfield_destroy(hf);
