@@ -292,8 +292,8 @@ void tsr_hw_renderer_destroy(tsr_hw_renderer *r);
  * are. Fails with TSR_ERR_ARGUMENT for a tile naming a neighbour beyond
  * `count` or itself, with TSR_ERR_TOO_LARGE when the frame's tiles alone
  * exceed the cache budget (the renderer stays usable: a coarser cut of
- * the same view may fit), with TSR_ERR_NOMEM when host memory runs out, and with the fetch's or the backend's failure
- * otherwise. */
+ * the same view may fit), with TSR_ERR_NOMEM when host memory runs out,
+ * and with the fetch's or the backend's failure otherwise. */
 tsr_status tsr_hw_renderer_frame(tsr_hw_renderer *r, const tsr_hw_frame *frame, const tsr_hw_tile *tiles,
                                  uint32_t count, tsr_hw_fetch_fn fetch, void *user, tsr_hw_render_stats *stats,
                                  tsr_error *err);

@@ -1385,13 +1385,6 @@ static int chord_faces(qt *q, uint32_t nr, uint32_t apex)
     return placed ? R_SIMPLE : R_SPLIT;
 }
 
-static uint32_t uf_find(uint32_t *par, uint32_t x)
-{
-    while (par[x] != x)
-        x = par[x] = par[par[x]];
-    return x;
-}
-
 /* The faces of the leaf just triangulated, from the labels its rules gave
  * (q->stlab, slab, elab): labels joined across constrained edges that do
  * not count. Leaves in q->lfs the face of each triangle, then of both sides
@@ -1414,10 +1407,10 @@ static bool cell_faces(qt *q, qrec *lf, const qcell *c)
     }
     for (uint32_t e = 0; e < ns; e++)
         if (!piece_counts(q, q->sedge[3 * e + 2]))
-            par[uf_find(par, q->elab[2 * e])] = uf_find(par, q->elab[2 * e + 1]);
+            par[tsr__uf_find(par, q->elab[2 * e])] = tsr__uf_find(par, q->elab[2 * e + 1]);
     uint32_t nf = 0;
     for (uint32_t l = 0; l < nl; l++) {
-        uint32_t r = uf_find(par, l);
+        uint32_t r = tsr__uf_find(par, l);
         if (lface[r] == NONE)
             lface[r] = nf++;
         lface[l] = lface[r];

@@ -253,6 +253,15 @@ bool tsr_keymap_reserve(tsr_keymap *m, size_t n, const tsr_allocator *a);
 /* (internal: doubles the room; false when out of memory) */
 bool tsr__keymap_grow(tsr_keymap *m, const tsr_allocator *a);
 
+/* Union-find: the root of x's set in parent[] (parent[r] == r at a root),
+ * halving the path on the way (qtri.c's faces, validate.c's shells). */
+static inline uint32_t tsr__uf_find(uint32_t *parent, uint32_t x)
+{
+    while (parent[x] != x)
+        x = parent[x] = parent[parent[x]];
+    return x;
+}
+
 /* (internal: the hash, a 64-bit finaliser) */
 static inline uint64_t tsr__keymap_mix(uint64_t k)
 {

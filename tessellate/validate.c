@@ -642,15 +642,6 @@ bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x
     return ok;
 }
 
-static uint32_t uf_find(uint32_t *parent, uint32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
 tsr_status tsr_mesh_find_inward_shells(const tsr_mesh *m, uint8_t *flip, uint32_t *shells)
 {
     const tsr_allocator *al = m->alloc.realloc ? &m->alloc : NULL;
@@ -681,13 +672,13 @@ tsr_status tsr_mesh_find_inward_shells(const tsr_mesh *m, uint8_t *flip, uint32_
         uint32_t tw = he.twin[h];
         if (tw == TSR_NO_TWIN || tw == TSR_NONMANIFOLD)
             continue;
-        uint32_t a = uf_find(parent, h / 3), b = uf_find(parent, tw / 3);
+        uint32_t a = tsr__uf_find(parent, h / 3), b = tsr__uf_find(parent, tw / 3);
         if (a != b)
             parent[a] = b;
     }
     for (uint32_t h = 0; h < he.count; h++)
         if (he.twin[h] == TSR_NO_TWIN || he.twin[h] == TSR_NONMANIFOLD)
-            open[uf_find(parent, h / 3)] = 1;
+            open[tsr__uf_find(parent, h / 3)] = 1;
     for (uint32_t t = 0; t < nt; t++) {
         const float *p[3];
         for (int k = 0; k < 3; k++)
@@ -695,10 +686,10 @@ tsr_status tsr_mesh_find_inward_shells(const tsr_mesh *m, uint8_t *flip, uint32_
         double c[3] = {(double)p[1][1] * p[2][2] - (double)p[1][2] * p[2][1],
                        (double)p[1][2] * p[2][0] - (double)p[1][0] * p[2][2],
                        (double)p[1][0] * p[2][1] - (double)p[1][1] * p[2][0]};
-        vol[uf_find(parent, t)] += (p[0][0] * c[0] + p[0][1] * c[1] + p[0][2] * c[2]) / 6;
+        vol[tsr__uf_find(parent, t)] += (p[0][0] * c[0] + p[0][1] * c[1] + p[0][2] * c[2]) / 6;
     }
     for (uint32_t t = 0; t < nt; t++) {
-        uint32_t r = uf_find(parent, t);
+        uint32_t r = tsr__uf_find(parent, t);
         flip[t] = !open[r] && vol[r] < 0;
         if (shells && r == t && flip[t])
             (*shells)++;

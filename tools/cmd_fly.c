@@ -148,7 +148,7 @@ static void record(frame_rec *rec, const fly_frame_stats *fs, double frame_ms)
 
 /* A note on the frames whose cut did not fit the tile cache at the pixel
  * error asked, and were drawn coarser. */
-static void note_coarsened(const fly_args *a, const fly_options *used, const frame_rec *r, uint32_t n)
+static void note_coarsened(const fly_options *used, const frame_rec *r, uint32_t n)
 {
     uint32_t count = 0, first = 0;
     double worst = 0;
@@ -162,7 +162,6 @@ static void note_coarsened(const fly_args *a, const fly_options *used, const fra
         fprintf(stderr, "tessera fly: note: %u of %u frames (the first: frame %u) needed more tiles than the cache of "
                 "%.0f MB holds at %g px; they were drawn coarser, at up to %.3g px (a larger --cache keeps the pixel "
                 "error)\n", count, n, first, (double)used->cache_bytes / 1048576.0, used->pixel_error, worst);
-    (void)a;
 }
 
 static bool make_dir(const char *dir)
@@ -350,7 +349,7 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
         rc = CLI_FAIL;
     }
     if (!a->quiet)
-        note_coarsened(a, &f.o, recs, a->frames);
+        note_coarsened(&f.o, recs, a->frames);
     if (!a->quiet) {
         double ms = 0;
         for (uint32_t i = 0; i < a->frames; i++)
@@ -533,7 +532,7 @@ static int run_window(fly_args *a, const tsr_heightfield *hf)
     if (!a->quiet)
         fprintf(stderr, "tessera fly: %u frames on %s\n", nrec, be->name);
     if (!a->quiet)
-        note_coarsened(a, &f.o, recs, nrec);
+        note_coarsened(&f.o, recs, nrec);
     free(recs);
     fly_free(&f);
     be->destroy(be);

@@ -445,12 +445,13 @@ bool fly_path_camera(const fly_ctx *f, const fly_path *p, double s, double clear
         return false;
     s = s < 0 ? 0 : s > 1 ? 1 : s;
     double eye[3], tan[3], target[3];
-    if (p->count == 1) {
+    bool still = p->count == 1;
+    if (still) {
         /* a still camera: toward its target, else the terrain's centre */
         memcpy(eye, p->eye[0], sizeof eye);
         double w = (tsr_heightfield_width(f->hf) - 1) * f->dx, h = (tsr_heightfield_height(f->hf) - 1) * f->dy;
         double centre[3] = {0.5 * w, 0.5 * h, 0.5 * (f->zmin + f->zmax)};
-        memcpy(tan, centre, sizeof tan); /* not a tangent: the still camera's target */
+        memcpy(target, p->target ? p->target[0] : centre, sizeof target);
     } else {
         catmull_rom((const double(*)[3])p->eye, p->count, p->closed, s, eye, tan);
     }
@@ -460,13 +461,9 @@ bool fly_path_camera(const fly_ctx *f, const fly_path *p, double s, double clear
         eye[2] = g + clearance;
     if (lifted)
         *lifted = low;
-    if (p->target && p->count == 1) {
-        memcpy(target, p->target[0], sizeof target);
-    } else if (p->target) {
+    if (!still && p->target) {
         catmull_rom((const double(*)[3])p->target, p->count, p->closed, s, target, NULL);
-    } else if (p->count == 1) {
-        memcpy(target, tan, sizeof target);
-    } else {
+    } else if (!still) {
         double l = hypot(tan[0], tan[1]);
         if (l == 0) {
             tan[0] = 1;
