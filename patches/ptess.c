@@ -220,6 +220,10 @@ static uint32_t edge_ctrl_index(const tsr_patch *b, int e, uint32_t k)
 
 static uint32_t edge_ctrl_count(const tsr_patch *b, int e) { return (uint32_t)(e & 1 ? b->degree_v : b->degree_u) + 1; }
 
+/* max and min for finite values, inlined (fmax and fmin are calls) */
+static inline double dmax(double a, double b) { return a > b ? a : b; }
+static inline double dmin(double a, double b) { return a < b ? a : b; }
+
 static double dist3(const double *a, const double *b)
 {
     double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
@@ -404,16 +408,20 @@ typedef struct pedge {
     uint32_t patch;
     int edge;
     double key; /* edge_key of its ends */
-    double end[2][3];
+    double end[2][3], mid[3]; /* points at t = 0, 1, 1/2 */
 } pedge;
 
-/* Two whole edges whose ends meet: ends bit 0 forwards, bit 1 reversed;
- * state 0 not yet compared, 1 one curve forwards, 2 one curve reversed
- * (t on a is 1 - t on b), -1 not one curve. */
+/* Two edges lying along one curve. Whole edges whose ends meet: ends bit
+ * 0 forwards, bit 1 reversed; partial overlaps (ends 0): fractions ta[0]
+ * < ta[1] of a's parameter are tb[0], tb[1] of b's, in proportion between
+ * (once state is 1 or 2, whole pairs too). state 0 not yet compared, 1
+ * one curve forwards, 2 one curve reversed (t on a is 1 - t on b), -1 not
+ * one curve. */
 typedef struct epair {
     uint32_t a, b; /* into the pedge list */
     uint8_t ends;
     int8_t state;
+    double ta[2], tb[2];
 } epair;
 
 static void edge_at(const tsr_patch *p, const double dom[4], int e, double t, double pos[3])
@@ -442,22 +450,38 @@ static double brk_frac(const brk *br, const double dom[4], int axis, uint32_t k)
     return k == 0 ? 0 : k + 1 == br->n ? 1 : (br->b[k] - lo) / (hi - lo);
 }
 
-/* Whether edges x and y (their ends already agree, reversed when rev)
- * are one curve with proportional parameters: within tol at every
- * breakpoint of either side and at 7 points inside every span between
- * them. scratch holds both sides' breakpoints. */
+/* Fraction t of edge a's parameter as a fraction of b's, through the
+ * pair's proportion (to_b), or back (!to_b). */
+static double pair_map(const epair *pr, double t, bool to_b)
+{
+    const double *f = to_b ? pr->ta : pr->tb, *g = to_b ? pr->tb : pr->ta;
+    return g[0] + (t - f[0]) * (g[1] - g[0]) / (f[1] - f[0]);
+}
+
+/* Whether edges x and y are one curve over the pair's overlap with
+ * proportional parameters (pr->ta, pr->tb set): within tol at every
+ * breakpoint of either side inside it, at its ends, and at 7 points
+ * inside every span between them. scratch holds both sides' breakpoints
+ * and 2 more. */
 static bool edges_coincide(const tsr_patch_set *set, const double *doms, const brk *brks, const pedge *x,
-                           const pedge *y, bool rev, double tol, double *scratch)
+                           const pedge *y, const epair *pr, double tol, double *scratch)
 {
     const tsr_patch *pa = &set->patches[x->patch], *pb = &set->patches[y->patch];
     const double *da = doms + 4 * x->patch, *db = doms + 4 * y->patch;
     const brk *ba = &brks[2 * x->patch + (x->edge & 1)], *bb = &brks[2 * y->patch + (y->edge & 1)];
+    double lo = pr->ta[0], hi = pr->ta[1];
     uint32_t n = 0;
-    for (uint32_t k = 0; k < ba->n; k++)
-        scratch[n++] = brk_frac(ba, da, x->edge & 1, k);
+    scratch[n++] = lo;
+    scratch[n++] = hi;
+    for (uint32_t k = 0; k < ba->n; k++) {
+        double t = brk_frac(ba, da, x->edge & 1, k);
+        if (t > lo && t < hi)
+            scratch[n++] = t;
+    }
     for (uint32_t k = 0; k < bb->n; k++) {
-        double t = brk_frac(bb, db, y->edge & 1, k);
-        scratch[n++] = rev ? 1 - t : t;
+        double t = pair_map(pr, brk_frac(bb, db, y->edge & 1, k), false);
+        if (t > lo && t < hi)
+            scratch[n++] = t;
     }
     qsort(scratch, n, sizeof *scratch, cmp_double);
     for (uint32_t k = 0; k + 1 < n; k++) {
@@ -466,12 +490,15 @@ static bool edges_coincide(const tsr_patch_set *set, const double *doms, const b
         for (int m = 0; m < 8; m++) {
             double t = scratch[k] + (scratch[k + 1] - scratch[k]) * m / 8.0, P[3], Q[3];
             edge_at(pa, da, x->edge, t, P);
-            edge_at(pb, db, y->edge, rev ? 1 - t : t, Q);
+            edge_at(pb, db, y->edge, pair_map(pr, t, true), Q);
             if (!(dist3(P, Q) <= tol))
                 return false;
         }
     }
-    return true;
+    double P[3], Q[3];
+    edge_at(pa, da, x->edge, hi, P);
+    edge_at(pb, db, y->edge, pr->tb[1], Q);
+    return dist3(P, Q) <= tol;
 }
 
 /* Inserts fraction t of the domain into br unless a breakpoint lies within
@@ -516,14 +543,288 @@ static bool same_breaks(const double *doms, const brk *brks, const pedge *x, con
     return true;
 }
 
-/* Gives every pair of coinciding whole patch edges each other's
- * breakpoints, until none gains one or `budget` were added. Pairs whose
- * ends meet are compared as curves only once their breakpoints differ
- * (most never do: the teapot, a grid of Bézier patches). */
-static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, brk *brks, double tol, uint32_t budget,
-                               const tsr_allocator *a, uint32_t *added)
+/* Appends a pair; false when out of memory. */
+static bool pair_push(epair **pairs, uint32_t *n, uint32_t *cap, epair p, const tsr_allocator *a)
 {
-    *added = 0;
+    if (*n == *cap) {
+        epair *q = tsr_realloc(a, *pairs, (size_t)*cap * 2 * sizeof *q);
+        if (!q)
+            return false;
+        *pairs = q;
+        *cap *= 2;
+    }
+    (*pairs)[(*n)++] = p;
+    return true;
+}
+
+/* Partial overlaps: an edge's end lying on another edge's curve inside it
+ * (one long edge against two shorter ones, a T-configuration; edges
+ * staggered along one curve). */
+#define EDGE_SAMPLES 4
+typedef struct ecorr {
+    uint32_t a, b; /* pedge indices, a < b */
+    double ta, tb; /* one point: fraction ta of a is fraction tb of b */
+} ecorr;
+
+typedef struct eend {
+    uint64_t cell;
+    uint32_t edge;
+    int k;
+} eend;
+
+static int cmp_eend(const void *x, const void *y)
+{
+    uint64_t a = ((const eend *)x)->cell, b = ((const eend *)y)->cell;
+    return a < b ? -1 : a > b;
+}
+
+static int cmp_ecorr(const void *x, const void *y)
+{
+    const ecorr *a = x, *b = y;
+    if (a->a != b->a)
+        return a->a < b->a ? -1 : 1;
+    if (a->b != b->b)
+        return a->b < b->b ? -1 : 1;
+    return a->ta < b->ta ? -1 : a->ta > b->ta;
+}
+
+/* The fraction of edge x nearest P, from its samples S (EDGE_SAMPLES + 1
+ * points) refined by golden-section search on the true curve; *d its
+ * distance. */
+static double edge_project(const tsr_patch_set *set, const double *doms, const pedge *x, const double *S,
+                           const double P[3], double *d)
+{
+    int best = 0;
+    double bd = INFINITY;
+    for (int k = 0; k < EDGE_SAMPLES; k++) {
+        const double *A = S + 3 * k, *B = A + 3;
+        double ab[3] = {B[0] - A[0], B[1] - A[1], B[2] - A[2]}, ap[3] = {P[0] - A[0], P[1] - A[1], P[2] - A[2]};
+        double l2 = ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2], f = 0;
+        if (l2 > 0)
+            f = dmin(1, dmax(0, (ab[0] * ap[0] + ab[1] * ap[1] + ab[2] * ap[2]) / l2));
+        double Q[3] = {A[0] + f * ab[0], A[1] + f * ab[1], A[2] + f * ab[2]}, dq = dist3(P, Q);
+        if (dq < bd) {
+            bd = dq;
+            best = k;
+        }
+    }
+    const tsr_patch *p = &set->patches[x->patch];
+    const double *dom = doms + 4 * x->patch, g = 0.6180339887498949;
+    double lo = dmax(0, (best - 1.0) / EDGE_SAMPLES), hi = dmin(1, (best + 2.0) / EDGE_SAMPLES), Q[3];
+    double c = hi - g * (hi - lo), e = lo + g * (hi - lo), fc, fe;
+    edge_at(p, dom, x->edge, c, Q);
+    fc = dist3(P, Q);
+    edge_at(p, dom, x->edge, e, Q);
+    fe = dist3(P, Q);
+    for (int it = 0; it < 64; it++) {
+        if (fc <= fe) {
+            hi = e;
+            e = c;
+            fe = fc;
+            c = hi - g * (hi - lo);
+            edge_at(p, dom, x->edge, c, Q);
+            fc = dist3(P, Q);
+        } else {
+            lo = c;
+            c = e;
+            fc = fe;
+            e = lo + g * (hi - lo);
+            edge_at(p, dom, x->edge, e, Q);
+            fe = dist3(P, Q);
+        }
+    }
+    double t = 0.5 * (lo + hi);
+    edge_at(p, dom, x->edge, t, Q);
+    *d = dist3(P, Q);
+    return t;
+}
+
+/* The cell of a point in a grid of spacing h from org (21 bits an axis). */
+static uint64_t end_cell(const double P[3], const double org[3], double h)
+{
+    uint64_t key = 0;
+    for (int c = 0; c < 3; c++) {
+        double f = floor((P[c] - org[c]) / h);
+        uint64_t i = f < 0 ? 0 : f > 2097151 ? 2097151 : (uint64_t)f;
+        key = key << 21 | i;
+    }
+    return key;
+}
+
+/* Appends a correspondence; false when out of memory. */
+static bool corr_push(ecorr **co, uint32_t *n, uint32_t *cap, ecorr c, const tsr_allocator *a)
+{
+    if (*n == *cap) {
+        ecorr *c2 = tsr_realloc(a, *co, (size_t)*cap * 2 * sizeof *c2);
+        if (!c2)
+            return false;
+        *co = c2;
+        *cap *= 2;
+    }
+    (*co)[(*n)++] = c;
+    return true;
+}
+
+/* Finds the partial overlaps among the edges ed (not poles) and appends
+ * them to pairs: pairs of edges where an end of one lies on the other
+ * inside it (within tol), meeting at exactly two points (such ends, and
+ * ends that coincide). Whether they are one curve between those points is
+ * decided later (edges_coincide). Each edge's end is looked for in a grid
+ * of cells of an edge's mean size, over the edge's box (the box
+ * of EDGE_SAMPLES + 1 samples, padded by the longest step between them
+ * and tol: the curve is taken to stray no farther from its samples). */
+static tsr_status find_partial_pairs(const tsr_patch_set *set, const double *doms, const pedge *ed, uint32_t ne,
+                                     double tol, const tsr_allocator *a, epair **pairs, uint32_t *npairs,
+                                     uint32_t *cappairs)
+{
+    const uint32_t ns = EDGE_SAMPLES + 1;
+    double *S = tsr_alloc(a, (size_t)ne * ns * 3 * sizeof *S), *box = tsr_alloc(a, (size_t)ne * 6 * sizeof *box);
+    eend *ends = tsr_alloc(a, (size_t)ne * 2 * sizeof *ends);
+    uint32_t nc = 0, capc = 16;
+    ecorr *co = tsr_alloc(a, capc * sizeof *co);
+    tsr_status st = S && box && ends && co ? TSR_OK : TSR_ERR_NOMEM;
+    double org[3] = {INFINITY, INFINITY, INFINITY}, size = 0;
+    for (uint32_t i = 0; i < ne && st == TSR_OK; i++) {
+        double *s = S + (size_t)i * ns * 3, *b = box + 6 * i, seg = 0, ext = 0;
+        for (uint32_t k = 0; k < ns; k++) {
+            const double *known = k == 0 ? ed[i].end[0] : k == ns - 1 ? ed[i].end[1] : 2 * k == ns - 1 ? ed[i].mid : NULL;
+            if (known)
+                memcpy(s + 3 * k, known, 3 * sizeof *s);
+            else
+                edge_at(&set->patches[ed[i].patch], doms + 4 * ed[i].patch, ed[i].edge, (double)k / EDGE_SAMPLES,
+                        s + 3 * k);
+            if (k)
+                seg = dmax(seg, dist3(s + 3 * k, s + 3 * k - 3));
+        }
+        for (int c = 0; c < 3; c++) {
+            b[c] = INFINITY;
+            b[3 + c] = -INFINITY;
+            for (uint32_t k = 0; k < ns; k++) {
+                b[c] = dmin(b[c], s[3 * k + c]);
+                b[3 + c] = dmax(b[3 + c], s[3 * k + c]);
+            }
+            b[c] -= seg + tol;
+            b[3 + c] += seg + tol;
+            org[c] = dmin(org[c], b[c]);
+            ext = dmax(ext, b[3 + c] - b[c]);
+        }
+        size += ext;
+    }
+    double h = size / (ne ? ne : 1);
+    if (!(h > 0) || !isfinite(h))
+        h = 1;
+    for (uint32_t i = 0; i < ne && st == TSR_OK; i++)
+        for (int k = 0; k < 2; k++)
+            ends[2 * i + (uint32_t)k] = (eend){end_cell(ed[i].end[k], org, h), i, k};
+    if (st == TSR_OK)
+        qsort(ends, (size_t)ne * 2, sizeof *ends, cmp_eend);
+    for (uint32_t i = 0; i < ne && st == TSR_OK; i++) {
+        const double *b = box + 6 * i;
+        uint64_t c0 = end_cell(b, org, h), c1 = end_cell(b + 3, org, h);
+        uint64_t lo[3], hi[3], cells = 1;
+        for (int c = 0; c < 3; c++) {
+            lo[c] = c0 >> (21 * (2 - c)) & 2097151;
+            hi[c] = c1 >> (21 * (2 - c)) & 2097151;
+            cells *= hi[c] - lo[c] + 1;
+        }
+        bool scan = cells > 4096; /* a long edge across a fine grid: every end */
+        for (uint64_t x = lo[0]; x <= hi[0] && st == TSR_OK; x++)
+            for (uint64_t y = lo[1]; y <= hi[1] && st == TSR_OK; y++)
+                for (uint64_t z = lo[2]; z <= hi[2] && st == TSR_OK; z++) {
+                    uint64_t key = x << 42 | y << 21 | z;
+                    uint32_t l = 0, r = 2 * ne;
+                    if (!scan)
+                        while (l < r) {
+                            uint32_t mid = l + (r - l) / 2;
+                            if (ends[mid].cell < key)
+                                l = mid + 1;
+                            else
+                                r = mid;
+                        }
+                    for (uint32_t q = l; q < 2 * ne && (scan || ends[q].cell == key) && st == TSR_OK; q++) {
+                        uint32_t j = ends[q].edge;
+                        int k = ends[q].k;
+                        const double *P = ed[j].end[k];
+                        double d;
+                        if (j == i || P[0] < b[0] || P[0] > b[3] || P[1] < b[1] || P[1] > b[4] || P[2] < b[2] ||
+                            P[2] > b[5] || dist3(P, ed[i].end[0]) <= tol || dist3(P, ed[i].end[1]) <= tol)
+                            continue;
+                        double t = edge_project(set, doms, &ed[i], S + (size_t)i * ns * 3, P, &d);
+                        if (d <= tol && !corr_push(&co, &nc, &capc, i < j ? (ecorr){i, j, t, k} : (ecorr){j, i, k, t},
+                                                   a))
+                            st = TSR_ERR_NOMEM;
+                    }
+                    if (scan)
+                        x = hi[0], y = hi[1], z = hi[2];
+                }
+    }
+    if (st == TSR_OK)
+        qsort(co, nc, sizeof *co, cmp_ecorr);
+    for (uint32_t g = 0; g < nc && st == TSR_OK;) {
+        uint32_t hgt = g;
+        while (hgt < nc && co[hgt].a == co[g].a && co[hgt].b == co[g].b)
+            hgt++;
+        /* the pair's distinct points: ends inside the other edge, and ends
+         * that coincide */
+        double pt[4][2];
+        uint32_t n = 0;
+        const pedge *x = &ed[co[g].a], *y = &ed[co[g].b];
+        for (int p = 0; p < 2; p++)
+            for (int q = 0; q < 2; q++)
+                if (n < 4 && dist3(x->end[p], y->end[q]) <= tol) {
+                    pt[n][0] = p;
+                    pt[n][1] = q;
+                    n++;
+                }
+        for (uint32_t k = g; k < hgt && n < 4; k++) {
+            bool dup = false;
+            for (uint32_t q = 0; q < n && !dup; q++)
+                dup = fabs(pt[q][0] - co[k].ta) <= 1e-7 && fabs(pt[q][1] - co[k].tb) <= 1e-7;
+            if (!dup) {
+                pt[n][0] = co[k].ta;
+                pt[n][1] = co[k].tb;
+                n++;
+            }
+        }
+        if (n == 2 && pt[1][0] < pt[0][0]) {
+            double t0 = pt[0][0], t1 = pt[0][1];
+            pt[0][0] = pt[1][0];
+            pt[0][1] = pt[1][1];
+            pt[1][0] = t0;
+            pt[1][1] = t1;
+        }
+        if (n == 2 && pt[1][0] - pt[0][0] > 1e-7 && fabs(pt[1][1] - pt[0][1]) > 1e-7 &&
+            !pair_push(pairs, npairs, cappairs,
+                       (epair){co[g].a, co[g].b, 0, 0, {pt[0][0], pt[1][0]}, {pt[0][1], pt[1][1]}}, a))
+            st = TSR_ERR_NOMEM;
+        g = hgt;
+    }
+    tsr_free(a, S);
+    tsr_free(a, box);
+    tsr_free(a, ends);
+    tsr_free(a, co);
+    return st;
+}
+
+/* The patches' edges (not poles) and the pairs of them that may share
+ * their curve, whole or in part: what share_breaks works on, found once
+ * for the several layouts of breakpoints tried. */
+typedef struct edge_pairs {
+    pedge *ed;
+    epair *pairs;
+    uint32_t ne, npairs;
+} edge_pairs;
+
+static void edge_pairs_free(edge_pairs *ep, const tsr_allocator *a)
+{
+    tsr_free(a, ep->ed);
+    tsr_free(a, ep->pairs);
+    memset(ep, 0, sizeof *ep);
+}
+
+static tsr_status find_edge_pairs(const tsr_patch_set *set, const double *doms, double tol, const tsr_allocator *a,
+                                  edge_pairs *out)
+{
     uint32_t np = set->num_patches, ne = 0, npairs = 0, cappairs = 16;
     pedge *ed = tsr_alloc(a, (size_t)np * 4 * sizeof *ed);
     epair *pairs = tsr_alloc(a, cappairs * sizeof *pairs);
@@ -531,13 +832,12 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, brk
     for (uint32_t i = 0; i < np && st == TSR_OK; i++)
         for (int e = 0; e < 4; e++) {
             pedge *x = &ed[ne];
-            double mid[3];
             x->patch = i;
             x->edge = e;
             edge_at(&set->patches[i], doms + 4 * i, e, 0, x->end[0]);
             edge_at(&set->patches[i], doms + 4 * i, e, 1, x->end[1]);
-            edge_at(&set->patches[i], doms + 4 * i, e, 0.5, mid);
-            if (dist3(x->end[0], x->end[1]) <= tol && dist3(x->end[0], mid) <= tol)
+            edge_at(&set->patches[i], doms + 4 * i, e, 0.5, x->mid);
+            if (dist3(x->end[0], x->end[1]) <= tol && dist3(x->end[0], x->mid) <= tol)
                 continue; /* collapsed to a point (a pole) */
             x->key = edge_key(x->end[0], x->end[1]);
             ne++;
@@ -549,19 +849,37 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, brk
             const pedge *x = &ed[i], *y = &ed[j];
             bool fwd = dist3(x->end[0], y->end[0]) <= tol && dist3(x->end[1], y->end[1]) <= tol;
             bool bwd = dist3(x->end[0], y->end[1]) <= tol && dist3(x->end[1], y->end[0]) <= tol;
-            if (!fwd && !bwd)
-                continue;
-            if (npairs == cappairs) {
-                epair *q = tsr_realloc(a, pairs, (size_t)cappairs * 2 * sizeof *q);
-                if (!q) {
-                    st = TSR_ERR_NOMEM;
-                    break;
-                }
-                pairs = q;
-                cappairs *= 2;
-            }
-            pairs[npairs++] = (epair){i, j, (uint8_t)(fwd | bwd << 1), 0};
+            if ((fwd || bwd) && !pair_push(&pairs, &npairs, &cappairs,
+                                           (epair){i, j, (uint8_t)(fwd | bwd << 1), 0, {0, 1}, {0, 1}}, a))
+                st = TSR_ERR_NOMEM;
         }
+    if (st == TSR_OK)
+        st = find_partial_pairs(set, doms, ed, ne, tol, a, &pairs, &npairs, &cappairs);
+    if (st != TSR_OK) {
+        tsr_free(a, ed);
+        tsr_free(a, pairs);
+        return st;
+    }
+    *out = (edge_pairs){ed, pairs, ne, npairs};
+    return TSR_OK;
+}
+
+/* Gives every pair of ep whose edges coincide, whole or in part, each
+ * other's breakpoints (an edge sharing part of its curve with another
+ * also takes the ends of that part), until none gains one or `budget`
+ * were added. Whole pairs are compared as curves only once their
+ * breakpoints differ (most never do: the teapot, a grid of Bézier
+ * patches). */
+static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, const edge_pairs *ep, brk *brks,
+                               double tol, uint32_t budget, const tsr_allocator *a, uint32_t *added)
+{
+    *added = 0;
+    const pedge *ed = ep->ed;
+    uint32_t npairs = ep->npairs;
+    epair *pairs = tsr_alloc(a, (npairs ? npairs : 1) * sizeof *pairs);
+    tsr_status st = pairs ? TSR_OK : TSR_ERR_NOMEM;
+    if (pairs && npairs)
+        memcpy(pairs, ep->pairs, npairs * sizeof *pairs);
     /* hand breakpoints across until nothing changes (each side's list is
      * copied first: both sides may be one list, a patch's seam) */
     bool changed = true;
@@ -574,7 +892,7 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, brk
             const pedge *x = &ed[pr->a], *y = &ed[pr->b];
             if (pr->state < 0)
                 continue;
-            uint32_t need = brks[2 * x->patch + (x->edge & 1)].n + brks[2 * y->patch + (y->edge & 1)].n;
+            uint32_t need = brks[2 * x->patch + (x->edge & 1)].n + brks[2 * y->patch + (y->edge & 1)].n + 2;
             if (need > capcopy) {
                 double *c = tsr_realloc(a, copy, (size_t)2 * need * sizeof *c);
                 if (!c) {
@@ -584,18 +902,35 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, brk
                 copy = c;
                 capcopy = 2 * need;
             }
-            if (pr->state == 0) {
+            if (pr->state == 0 && pr->ends) {
                 if ((!(pr->ends & 1) || same_breaks(doms, brks, x, y, false)) &&
                     (!(pr->ends & 2) || same_breaks(doms, brks, x, y, true)))
                     continue; /* nothing to hand across, yet */
                 pr->state = -1;
-                for (int r = 0; r < 2 && pr->state < 0; r++)
-                    if ((pr->ends >> r & 1) && edges_coincide(set, doms, brks, x, y, r == 1, tol, copy))
+                for (int r = 0; r < 2 && pr->state < 0; r++) {
+                    pr->tb[0] = r;
+                    pr->tb[1] = 1 - r;
+                    if ((pr->ends >> r & 1) && edges_coincide(set, doms, brks, x, y, pr, tol, copy))
                         pr->state = (int8_t)(r + 1);
+                }
                 if (pr->state < 0)
                     continue;
+            } else if (pr->state == 0) {
+                pr->state = edges_coincide(set, doms, brks, x, y, pr, tol, copy) ? 1 : -1;
+                if (pr->state < 0)
+                    continue;
+                /* each side is cut where the shared part ends */
+                for (int q = 0; q < 2 && st == TSR_OK; q++) {
+                    int r1 = brk_insert(&brks[2 * x->patch + (x->edge & 1)], doms + 4 * x->patch, x->edge & 1,
+                                        pr->ta[q], a);
+                    int r2 = brk_insert(&brks[2 * y->patch + (y->edge & 1)], doms + 4 * y->patch, y->edge & 1,
+                                        pr->tb[q], a);
+                    if (r1 < 0 || r2 < 0)
+                        st = TSR_ERR_NOMEM;
+                    *added += (uint32_t)(r1 > 0) + (uint32_t)(r2 > 0);
+                    changed |= r1 > 0 || r2 > 0;
+                }
             }
-            bool rev = pr->state == 2;
             for (int side = 0; side < 2 && st == TSR_OK; side++) {
                 const pedge *from = side ? y : x, *to = side ? x : y;
                 const brk *bf = &brks[2 * from->patch + (from->edge & 1)];
@@ -604,7 +939,7 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, brk
                 for (uint32_t q = 0; q < n; q++)
                     copy[q] = brk_frac(bf, doms + 4 * from->patch, from->edge & 1, q);
                 for (uint32_t q = 1; q + 1 < n && *added < budget; q++) {
-                    int r = brk_insert(bt, doms + 4 * to->patch, to->edge & 1, rev ? 1 - copy[q] : copy[q], a);
+                    int r = brk_insert(bt, doms + 4 * to->patch, to->edge & 1, pair_map(pr, copy[q], side == 0), a);
                     if (r < 0) {
                         st = TSR_ERR_NOMEM;
                         break;
@@ -616,14 +951,10 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, brk
         }
     }
     tsr_free(a, copy);
-    tsr_free(a, ed);
     tsr_free(a, pairs);
     return st;
 }
 
-/* max and min for finite values, inlined (fmax and fmin are calls) */
-static inline double dmax(double a, double b) { return a > b ? a : b; }
-static inline double dmin(double a, double b) { return a < b ? a : b; }
 
 static void bezier_second(int du, int dv, const double *P, const double *W, double M[3]);
 
@@ -763,8 +1094,9 @@ static void free_breaks(brk *brks, uint32_t np, const tsr_allocator *a)
 /* The breakpoints of every patch (2 per patch, u then v): its knots, cuts
  * for split_error (when > 0; *split counts them), and those shared
  * through whole edges (*shared). */
-static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, double tol, double split_error,
-                              double N, const tsr_allocator *a, brk **out, uint32_t *split, uint32_t *shared)
+static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, const edge_pairs *ep, double tol,
+                              double split_error, double N, const tsr_allocator *a, brk **out, uint32_t *split,
+                              uint32_t *shared)
 {
     uint32_t np = set->num_patches, nsplit = 0;
     brk *brks = tsr_alloc(a, (size_t)np * 2 * sizeof *brks);
@@ -794,7 +1126,7 @@ static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, doub
     }
     uint64_t budget = 4 * nbreaks + 1024;
     if (st == TSR_OK)
-        st = share_breaks(set, doms, brks, tol, budget > (1u << 24) ? 1u << 24 : (uint32_t)budget, a, shared);
+        st = share_breaks(set, doms, ep, brks, tol, budget > (1u << 24) ? 1u << 24 : (uint32_t)budget, a, shared);
     if (st != TSR_OK) {
         free_breaks(brks, np, a);
         return st;
@@ -885,11 +1217,14 @@ tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_s
         double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                            (hi[2] - lo[2]) * (hi[2] - lo[2]));
         double tol = link_tol > 0 ? link_tol : TSR_PMODEL_LINK_TOL * diag;
-        st = make_breaks(set, doms, tol, 0, split_tile, a, &brks, NULL, &m->conform_breaks);
+        edge_pairs ep = {0};
+        st = find_edge_pairs(set, doms, tol, a, &ep);
+        if (st == TSR_OK)
+            st = make_breaks(set, doms, &ep, tol, 0, split_tile, a, &brks, NULL, &m->conform_breaks);
         if (st == TSR_OK && split_error > 0) {
             brk *cut = NULL;
             uint32_t split = 0, shared = 0;
-            st = make_breaks(set, doms, tol, split_error, split_tile, a, &cut, &split, &shared);
+            st = make_breaks(set, doms, &ep, tol, split_error, split_tile, a, &cut, &split, &shared);
             /* trimmed patches are triangulated in (u, v) from their pieces'
              * lattice points; cuts make those far from evenly spread */
             bool trims_cut = false;
@@ -906,6 +1241,7 @@ tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_s
                 free_breaks(cut, np, a);
             }
         }
+        edge_pairs_free(&ep, a);
     }
     /* count pieces and values */
     uint64_t npieces = 0, nvalues = 0;

@@ -26,16 +26,25 @@
  *    TSR_PMODEL_LINK_TOL of the model's box diagonal, and their weights
  *    up to a common factor, the row of lower degree raised to the other's
  *    degree first (the .bpt teapot: body, lid, handle, spout rings; a
- *    plane's straight edge of degree 1 against a bicubic fillet's);
- *    partial overlaps are not linked. So that pieces meet piece to
- *    piece, the pieces of a patch are cut not only at its own knots but
- *    at its neighbours': two patch edges (whole sides of the patches'
- *    domains) that coincide as curves, with their parameters in
- *    proportion (within the same distance at the ends and at 7 points
- *    inside every span between the breakpoints of either side, forwards
- *    or reversed), give each other their breakpoints, repeated until no
- *    patch gains one (CAD files join faces whose knot vectors differ:
- *    one side with knots inserted, or of a higher degree);
+ *    plane's straight edge of degree 1 against a bicubic fillet's). So
+ *    that pieces meet piece to piece, the pieces of a patch are cut not
+ *    only at its own knots but at its neighbours': two patch edges (whole
+ *    sides of the patches' domains) that coincide as curves, with their
+ *    parameters in proportion (within the same distance at the ends and at
+ *    7 points inside every span between the breakpoints of either side,
+ *    forwards or reversed), give each other their breakpoints, repeated
+ *    until no patch gains one (CAD files join faces whose knot vectors
+ *    differ: one side with knots inserted, or of a higher degree). Edges
+ *    that share only part of their curve do the same over that part, and
+ *    each is cut where the part ends: one long edge against two or more
+ *    shorter ones (a T-configuration: a sheet against a row of patches
+ *    cut finer), or edges staggered along one curve. Such a part is found
+ *    where an end of one edge lies on the other, inside it, within the
+ *    distance (golden-section search from 5 samples of the edge), and
+ *    the two edges meet at exactly two such points or shared ends; its
+ *    parameters must be in proportion as above. Parts whose parameters
+ *    are not in proportion (two rational parameterisations of one arc)
+ *    stay unlinked and leave gaps (tsr_mesh_find_gaps finds them);
  *    tsr_pmodel_info.conform_breaks counts the breakpoints so added;
  *  - subd patches as tsr_subd_patch_neighbours says (a quad edge meeting
  *    an N-gon links each half to one sub-patch).

@@ -388,6 +388,20 @@ bool tsr_point_on_open_segment(const float p[3], const float a[3], const float b
  * Open sheets have no inside and are never marked. */
 tsr_status tsr_mesh_find_inward_shells(const tsr_mesh *m, uint8_t *flip, uint32_t *shells);
 
+/* Gaps: open edges facing each other. A boundary half-edge (one with no
+ * twin) is in a gap when both its ends lie within eps of another boundary
+ * half-edge that runs the other way (their directions' dot product below
+ * -1/2) and shares no vertex with it: two surfaces meeting along a curve
+ * with different vertices leave such a crack up to eps wide (a long chord
+ * of one side against the short chords of the other). Consecutive edges
+ * of one rim run the same way and are never counted. hit (3 *
+ * triangle_count entries, may be NULL) receives true at half-edge 3 t + k
+ * (from corner k to k + 1 of triangle t) for those in a gap, false at the
+ * others; *count (may be NULL) their number. Degenerate edges are left
+ * out. O(boundary edges log) for a surface, by a sweep along x.
+ * TSR_ERR_ARGUMENT for a NULL mesh or eps < 0 or NaN, TSR_ERR_NOMEM. */
+tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t *count);
+
 /* Reverses the winding of the triangles marked in flip and negates the
  * normals (when m has them) of the vertices they use, each once. */
 void tsr_mesh_flip_marked(tsr_mesh *m, const uint8_t *flip);

@@ -642,6 +642,114 @@ bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x
     return ok;
 }
 
+typedef struct gap_edge {
+    uint32_t h, a, b; /* half-edge, its start and end vertices */
+    float lo[3], hi[3];
+} gap_edge;
+
+static int cmp_gap_edge(const void *x, const void *y)
+{
+    float a = ((const gap_edge *)x)->lo[0], b = ((const gap_edge *)y)->lo[0];
+    return a < b ? -1 : a > b;
+}
+
+/* The squared distance from p to the segment ab. */
+static double gap_seg_dist2(const float *p, const float *a, const float *b)
+{
+    double ab[3], ap[3], l2 = 0, t = 0;
+    for (int k = 0; k < 3; k++) {
+        ab[k] = (double)b[k] - a[k];
+        ap[k] = (double)p[k] - a[k];
+        l2 += ab[k] * ab[k];
+        t += ab[k] * ap[k];
+    }
+    t = l2 > 0 ? t / l2 : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += (ap[k] - t * ab[k]) * (ap[k] - t * ab[k]);
+    return d2;
+}
+
+/* Whether open edge e lies along f (both its ends within eps of f), the
+ * two running opposite ways. */
+static bool gap_along(const tsr_mesh *m, const gap_edge *e, const gap_edge *f, double eps2)
+{
+    const float *a0 = m->positions + 3 * (size_t)e->a, *a1 = m->positions + 3 * (size_t)e->b;
+    const float *b0 = m->positions + 3 * (size_t)f->a, *b1 = m->positions + 3 * (size_t)f->b;
+    double dot = 0, la = 0, lb = 0;
+    for (int k = 0; k < 3; k++) {
+        double u = (double)a1[k] - a0[k], v = (double)b1[k] - b0[k];
+        dot += u * v;
+        la += u * u;
+        lb += v * v;
+    }
+    return dot < -0.5 * sqrt(la * lb) && gap_seg_dist2(a0, b0, b1) <= eps2 && gap_seg_dist2(a1, b0, b1) <= eps2;
+}
+
+tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t *count)
+{
+    if (count)
+        *count = 0;
+    if (!m || !(eps >= 0))
+        return TSR_ERR_ARGUMENT;
+    if (hit)
+        memset(hit, 0, 3 * (size_t)m->triangle_count * sizeof *hit);
+    tsr_halfedges he;
+    if (tsr_halfedges_build(&he, m, NULL) != TSR_OK)
+        return TSR_ERR_NOMEM;
+    uint32_t nb = 0;
+    for (uint32_t h = 0; h < he.count; h++)
+        nb += he.twin[h] == TSR_NO_TWIN;
+    gap_edge *e = malloc((nb ? nb : 1) * sizeof *e);
+    bool *in = calloc(nb ? nb : 1, sizeof *in);
+    if (!e || !in) {
+        free(e);
+        free(in);
+        tsr_halfedges_free(&he);
+        return TSR_ERR_NOMEM;
+    }
+    nb = 0;
+    for (uint32_t h = 0; h < he.count; h++) {
+        uint32_t a = m->indices[h], b = m->indices[3 * (h / 3) + (h % 3 + 1) % 3];
+        if (he.twin[h] != TSR_NO_TWIN || a == b || a >= m->vertex_count || b >= m->vertex_count)
+            continue;
+        gap_edge *g = &e[nb++];
+        *g = (gap_edge){h, a, b, {0}, {0}};
+        for (int k = 0; k < 3; k++) {
+            float pa = m->positions[3 * (size_t)a + k], pb = m->positions[3 * (size_t)b + k];
+            g->lo[k] = (float)((pa < pb ? pa : pb) - eps);
+            g->hi[k] = (float)((pa < pb ? pb : pa) + eps);
+        }
+    }
+    tsr_halfedges_free(&he);
+    qsort(e, nb, sizeof *e, cmp_gap_edge);
+    double eps2 = eps * eps;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < nb; i++)
+        for (uint32_t j = i + 1; j < nb && e[j].lo[0] <= e[i].hi[0]; j++) {
+            if (e[j].lo[1] > e[i].hi[1] || e[j].hi[1] < e[i].lo[1] || e[j].lo[2] > e[i].hi[2] ||
+                e[j].hi[2] < e[i].lo[2] || e[i].a == e[j].a || e[i].a == e[j].b || e[i].b == e[j].a ||
+                e[i].b == e[j].b)
+                continue;
+            if (!in[i] && gap_along(m, &e[i], &e[j], eps2))
+                in[i] = true;
+            if (!in[j] && gap_along(m, &e[j], &e[i], eps2))
+                in[j] = true;
+        }
+    for (uint32_t i = 0; i < nb; i++)
+        if (in[i]) {
+            n++;
+            if (hit)
+                hit[e[i].h] = true;
+        }
+    free(e);
+    free(in);
+    if (count)
+        *count = n;
+    return TSR_OK;
+}
+
 tsr_status tsr_mesh_find_inward_shells(const tsr_mesh *m, uint8_t *flip, uint32_t *shells)
 {
     const tsr_allocator *al = m->alloc.realloc ? &m->alloc : NULL;

@@ -324,8 +324,12 @@ static void help_patches(FILE *f)
         "of any sheet, inside an open edge) is no failure: it is reported as unlinked-edge-t-junctions\n"
         "(JSON: unlinked_edge_t_junctions), apart from the T-junctions that fail (JSON: t_junctions), those on\n"
         "any other open edge, such as a linked patch edge left open. A patch set's links are not known to the\n"
-        "check: there every T-junction fails. Exits 1 when a run exceeds its tolerance, leaves a sample of an\n"
-        "untrimmed patch uncovered, or fails a check.\n\n"
+        "check: there every T-junction fails. The view-independent run is also searched for gaps (JSON: gaps):\n"
+        "open edges whose ends both lie within the tolerance of another open edge running the other way, where\n"
+        "surfaces meet along a curve with different vertices (one long edge against two shorter ones) and leave\n"
+        "a crack up to the tolerance wide; those along an unlinked cage edge or on a trimmed patch (trim curves\n"
+        "are not joined) are reported as unjoined-gaps (JSON: unjoined_gaps), not failed. Exits 1 when a run\n"
+        "exceeds its tolerance, leaves a sample of an untrimmed patch uncovered, or fails a check.\n\n"
         "For a cage it first says how far apart linked patches evaluate the points they share (9 points per\n"
         "link, both sides; JSON: model.link_gap): rounding on a consistent surface. Where OpenSubdiv evaluates\n"
         "two faces differently (catmark_chaikin1: 1.7e-3), the welded mesh follows one side, and a run can\n"
@@ -612,6 +616,8 @@ typedef struct patch_run {
     boundary_report bnd;
     uint32_t t_junctions;            /* counted: failures */
     uint32_t t_junctions_discounted; /* along unlinked patch edges (bnd.unlinked_junctions): no failure */
+    uint32_t gaps;       /* open edges facing another within the tolerance (tsr_mesh_find_gaps): failures */
+    uint32_t gaps_open;  /* the same along unlinked patch edges or on trimmed patches: no failure */
     bool watertight, conforming, ok;
     char failed[600];  /* why the tessellation itself failed, or "" */
     char invalid[300]; /* tsr_validation_describe of the mesh */
@@ -712,11 +718,37 @@ static int patch_run_do(const tsr_pmodel *m, const tsr_pmodel_info *info, const 
         cli_error("check", "out of memory");
         return CLI_FAIL;
     }
+    /* Gaps: in the view-independent run, open edges facing another within
+     * the tolerance (a crack where surfaces meet with different vertices,
+     * wider than crack_eps). Along an unlinked patch edge or on a trimmed
+     * patch (whose trim curves ptess.h does not join) they are reported,
+     * not failed. */
+    pr->gaps = pr->gaps_open = 0;
+    if (!pr->has_camera) {
+        bool *gap = malloc((3 * (size_t)res.mesh.triangle_count + 1) * sizeof *gap);
+        if (!gap || tsr_mesh_find_gaps(&res.mesh, pr->tol, gap, NULL) != TSR_OK) {
+            free(gap);
+            free(unlinked);
+            tsr_ptess_result_free(&res);
+            cli_error("check", "out of memory");
+            return CLI_FAIL;
+        }
+        for (uint32_t h = 0; h < 3 * res.mesh.triangle_count; h++) {
+            if (!gap[h])
+                continue;
+            tsr_psource_info si;
+            bool open = (unlinked && unlinked[h]) ||
+                        (tsr_pmodel_source_info(m, res.tri_source[h / 3], &si) && si.trimmed);
+            pr->gaps += !open;
+            pr->gaps_open += open;
+        }
+        free(gap);
+    }
     free(unlinked);
     tsr_ptess_result_free(&res);
     pr->watertight = val.bad_indices == 0 && val.nonfinite_positions == 0 && val.degenerate_triangles == 0 &&
                      val.duplicate_triangles == 0 && val.nonmanifold_edges == 0 && val.misoriented_edges == 0 &&
-                     val.first_bad_triangle == UINT32_MAX && pr->bnd.cracks == 0;
+                     val.first_bad_triangle == UINT32_MAX && pr->bnd.cracks == 0 && pr->gaps == 0;
     /* The rule: a T-junction (a vertex inside an open edge) is a failure
      * unless that open edge lies on a patch edge without neighbour, where
      * ptess.h joins nothing by contract (the edge is open because the
@@ -751,7 +783,9 @@ static void patch_run_reasons(const patch_run *pr, char *buf, size_t cap)
             (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " uncovered %llu", (unsigned long long)pr->meas.uncovered);
     if (pr->bnd.cracks)
         n += (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " cracks %u", pr->bnd.cracks);
-    if (!pr->watertight && !pr->bnd.cracks)
+    if (pr->gaps)
+        n += (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " gaps %u", pr->gaps);
+    if (!pr->watertight && !pr->bnd.cracks && !pr->gaps)
         n += (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " not-watertight (%s)", pr->invalid);
     if (!pr->conforming)
         n += (size_t)snprintf(buf + n, n < cap ? cap - n : 0, " t-junctions %u", pr->t_junctions);
@@ -787,6 +821,10 @@ static cJSON *patch_run_json(const patch_run *pr)
     cJSON_AddNumberToObject(c, "trimmed_out", (double)pr->meas.trimmed_out);
     cJSON_AddNumberToObject(c, "cracks", pr->bnd.cracks);
     cJSON_AddNumberToObject(c, "t_junctions", pr->t_junctions);
+    if (!pr->has_camera) {
+        cJSON_AddNumberToObject(c, "gaps", pr->gaps);
+        cJSON_AddNumberToObject(c, "unjoined_gaps", pr->gaps_open);
+    }
     cJSON_AddNumberToObject(c, "nonmanifold_seam_edges", pr->bnd.seams);
     cJSON_AddNumberToObject(c, "unlinked_edge_t_junctions", pr->t_junctions_discounted);
     cJSON_AddNumberToObject(c, "boundary_edges", pr->bnd.boundary);
@@ -992,6 +1030,8 @@ static int run_patches(int argc, char **argv)
         if (r->t_junctions_discounted)
             snprintf(retried + strlen(retried), sizeof retried - strlen(retried), "  unlinked-edge-t-junctions %u",
                      r->t_junctions_discounted);
+        if (r->gaps_open)
+            snprintf(retried + strlen(retried), sizeof retried - strlen(retried), "  unjoined-gaps %u", r->gaps_open);
         if (k == 0)
             printf(
                 "view-independent  max_error %.6g (tolerance %.6g, bound %.6g)  rms %.3g  triangles %u  vertices %u  "

@@ -60,7 +60,8 @@ static void help(FILE *f)
 
 static int write_stats(const char *path, const char *in, const cli_patch_model *pm, const tsr_ptess_result *r,
                        const tsr_ptess_measure_result *meas, bool verified, const tsr_ptess_options *opt,
-                       uint32_t tightened, double secs, const tsr_validation *val, const tsr_mesh *written)
+                       uint32_t tightened, double secs, const tsr_validation *val, uint32_t gaps,
+                       const tsr_mesh *written)
 {
     tsr_pmodel_info info;
     tsr_pmodel_get_info(pm->model, &info);
@@ -91,6 +92,8 @@ static int write_stats(const char *path, const char *in, const cli_patch_model *
     if (val) {
         cJSON_AddNumberToObject(j, "boundary_edges", val->boundary_edges);
         cJSON_AddNumberToObject(j, "t_junctions", val->t_junctions);
+        if (!pm->is_subd && !opt->camera)
+            cJSON_AddNumberToObject(j, "gaps", gaps);
         cJSON_AddNumberToObject(j, "degenerate_triangles", val->degenerate_triangles);
     }
     cJSON_AddStringToObject(j, "error_units", opt->camera ? "pixels" : "model");
@@ -331,6 +334,20 @@ static int run(int argc, char **argv)
     /* a cage's non-manifold edges are left open by contract (ptess.h), and
      * another sheet's vertices may lie on them: no T-junction counts there */
     uint32_t tj = validated && !pm.is_subd ? val.t_junctions : 0, zero = validated ? val.degenerate_triangles : 0;
+    /* gaps: open edges along another within the tolerance, running the
+     * other way (a crack narrower than the tolerance where surfaces meet
+     * with different vertices); on untrimmed patches of a set only (a
+     * cage's open edges are open by contract, trim curves are not joined) */
+    uint32_t gaps = 0;
+    if (validated && !pm.is_subd && !opt.camera) {
+        bool *gap = malloc((3 * (size_t)r.mesh.triangle_count + 1) * sizeof *gap);
+        if (gap && tsr_mesh_find_gaps(&r.mesh, opt.max_error, gap, NULL) == TSR_OK)
+            for (uint32_t h = 0; h < 3 * r.mesh.triangle_count; h++) {
+                tsr_psource_info si;
+                gaps += gap[h] && tsr_pmodel_source_info(pm.model, r.tri_source[h / 3], &si) && !si.trimmed;
+            }
+        free(gap);
+    }
     /* normals: a vertex where surfaces meet at an angle is written once
      * per side (the welded mesh above is what was validated and measured) */
     tsr_mesh split;
@@ -364,7 +381,7 @@ static int run(int argc, char **argv)
     }
     double secs = cli_now() - t0;
     if (rc == CLI_OK && stats)
-        rc = write_stats(stats, in, &pm, &r, &meas, verify, &opt, tightened, secs, validated ? &val : NULL,
+        rc = write_stats(stats, in, &pm, &r, &meas, verify, &opt, tightened, secs, validated ? &val : NULL, gaps,
                          splitting ? &split : NULL);
     if (rc == CLI_OK && !quiet) {
         tsr_pmodel_info info;
@@ -382,13 +399,13 @@ static int run(int argc, char **argv)
         else
             fprintf(stderr, "tessera patch: %s: %u patches, %u triangles, %u vertices%s, not measured, %.2f s\n", in,
                     info.sources, r.mesh.triangle_count, r.mesh.vertex_count, crease_note, secs);
-        if (tj || zero)
+        if (tj || zero || gaps)
             fprintf(stderr,
-                    "tessera patch: %s: warning: %u T-junctions and %u zero-area triangles, where surfaces meet "
-                    "without matching edges (farther apart than --weld, parameterised differently, sharing "
-                    "part of an edge, a trim curve across it, a degenerate trim)%s; tessera check patches locates "
-                    "them\n",
-                    in, tj, zero, flat ? ", or on the patches with no area above" : "");
+                    "tessera patch: %s: warning: %u T-junctions, %u open edges along another within the tolerance "
+                    "(gaps) and %u zero-area triangles, where surfaces meet without matching edges (farther apart "
+                    "than --weld, parameterised differently, sharing part of an edge, a trim curve across it, a "
+                    "degenerate trim)%s; tessera check patches locates them\n",
+                    in, tj, gaps, zero, flat ? ", or on the patches with no area above" : "");
     }
     tsr_mesh_free(&split);
     tsr_ptess_result_free(&r);

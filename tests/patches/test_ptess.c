@@ -1162,7 +1162,7 @@ TEST(bspline_pieces_conform)
 /* Two patches sharing half of an edge are not linked: the contract keeps
  * partial overlaps apart. Two sharing a whole edge, written backwards,
  * are. */
-TEST(partial_overlap_not_linked)
+TEST(partial_overlap_linked)
 {
     sbuf b = {0};
     sb_printf(&b, "v 0 0 0\nv 2 0 0\nv 0 1 0\nv 2 1 0.5\n"
@@ -1183,19 +1183,147 @@ TEST(partial_overlap_not_linked)
         /* patch 2's north row (points 4, 3) is patch 0's north row (3, 4)
          * reversed, and the two agree in orientation: linked, nothing
          * mirrored. Patch 1's west edge is the lower half of patch 0's
-         * east edge: not linked. */
-        CHECK_MSG(info.sources == 3 && info.links == 2, "sources %u links %u", info.sources, info.links);
+         * east edge: patch 0 is cut at v = 1/2, and its lower piece's east
+         * edge is linked to it. */
+        CHECK_MSG(info.sources == 3 && info.pieces == 4 && info.links == 6 && info.conform_breaks == 1,
+                  "sources %u pieces %u links %u breaks %u", info.sources, info.pieces, info.links,
+                  info.conform_breaks);
         CHECK_MSG(info.mirrored == 0, "%u mirrored", info.mirrored);
         tsr_ptess_options o = {0};
         o.max_error = 1e-3;
         tsr_ptess_result r;
         if (run_ptess(m, &o, &r)) {
             tsr_validation v = validate(&r.mesh);
-            /* patches 0 and 2 welded into one disc, patch 1 another */
-            CHECK_MSG(v.boundary_loops == 2 && v.misoriented_edges == 0 && v.nonmanifold_edges == 0,
-                      "loops %u misoriented %u", v.boundary_loops, v.misoriented_edges);
+            check_conforming("partial overlap", &v);
+            /* the three patches welded into one disc */
+            CHECK_MSG(v.boundary_loops == 1 && v.euler == 1, "loops %u euler %lld", v.boundary_loops,
+                      (long long)v.euler);
         }
         tsr_ptess_result_free(&r);
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
+/* T-configurations: a bicubic sheet z = g(x) (g a cubic, x = 2u, y = v)
+ * over [0, 2] x [0, 1]; above it three patches whose south edges are its
+ * north edge cut at u = 0.3 and 0.7 (the middle one running backwards,
+ * so mirrored), below it two whose north edges are its south edge's
+ * curve over u in [-0.5, 0.4] and [0.4, 1.5] (staggered: each reaches
+ * past an end of the sheet's edge). Every patch is a piece of the one
+ * surface z = g(x), so the union is a height field over an L-free
+ * polygon: the mesh must be one disc (one boundary loop, Euler
+ * characteristic 1) whose open edges all lie on that polygon's outline,
+ * and its vertical error (its parametric error: x and y are affine in u
+ * and v) within the tolerance. */
+static const double tc_z[4] = {0, 0.4, -0.3, 0.2};
+
+/* The blossom of tc_z at (a, b, c): the control values of the curve
+ * over [a, b] are f(a,a,a), f(a,a,b), f(a,b,b), f(b,b,b). */
+static double tc_blossom(double a, double b, double c)
+{
+    double t[3] = {a, b, c}, w[4];
+    memcpy(w, tc_z, sizeof w);
+    for (int l = 0; l < 3; l++)
+        for (int k = 0; k < 3 - l; k++)
+            w[k] = (1 - t[l]) * w[k] + t[l] * w[k + 1];
+    return w[0];
+}
+
+static double tc_g(double x) { return tc_blossom(x / 2, x / 2, x / 2); }
+
+/* A bicubic patch over u in [u0, u1] (x = 2u; u1 < u0 runs backwards) and
+ * y in [y0, y1]. */
+static void tc_patch(sbuf *b, int *nv, double u0, double u1, double y0, double y1)
+{
+    double c[4] = {tc_blossom(u0, u0, u0), tc_blossom(u0, u0, u1), tc_blossom(u0, u1, u1), tc_blossom(u1, u1, u1)};
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++)
+            sb_printf(b, "v %.17g %.17g %.17g\n", 2 * (u0 + (u1 - u0) * i / 3), y0 + (y1 - y0) * j / 3, c[i]);
+    sb_printf(b, "surf 0 1 0 1");
+    for (int k = 1; k <= 16; k++)
+        sb_printf(b, " %d", *nv + k);
+    sb_printf(b, "\nend\n");
+    *nv += 16;
+}
+
+/* Whether (x, y) lies on the outline of the union (within eps). */
+static bool tc_on_outline(double x, double y, double eps)
+{
+    bool ylo = fabs(y + 1) <= eps, yhi = fabs(y - 2) <= eps, y0 = fabs(y) <= eps;
+    return ylo || yhi || fabs(x + 1) <= eps || (fabs(x - 3) <= eps && y <= eps) ||
+           (y0 && (x >= 2 - eps || x <= eps)) || ((fabs(x) <= eps || fabs(x - 2) <= eps) && y >= -eps);
+}
+
+TEST(t_configurations_linked)
+{
+    sbuf b = {0};
+    int nv = 0;
+    sb_printf(&b, "cstype bezier\ndeg 3 3\n");
+    tc_patch(&b, &nv, 0, 1, 0, 1);
+    tc_patch(&b, &nv, 0, 0.3, 1, 2);
+    tc_patch(&b, &nv, 0.7, 0.3, 1, 2);
+    tc_patch(&b, &nv, 0.7, 1, 1, 2);
+    tc_patch(&b, &nv, -0.5, 0.4, -1, 0);
+    tc_patch(&b, &nv, 0.4, 1.5, -1, 0);
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (!parse_set(&b, "tconfig.obj", &set)) {
+        free(b.s);
+        return;
+    }
+    if (make_model(&set, &m)) {
+        tsr_pmodel_info info;
+        tsr_pmodel_get_info(m, &info);
+        /* the backward patch is mirrored, in two pieces: the cut at u = 0.4
+         * from below reaches it through the sheet */
+        CHECK_MSG(info.mirrored == 2 && info.sources == 6, "%u mirrored", info.mirrored);
+        for (int k = 0; k < 2; k++) {
+            double E = k ? 1e-5 : 1e-3;
+            tsr_ptess_options o = {0};
+            o.max_error = E;
+            tsr_ptess_result r;
+            if (!run_ptess(m, &o, &r))
+                continue;
+            check_shape(m, &r, false);
+            tsr_validation v = validate(&r.mesh);
+            check_conforming("t-configurations", &v);
+            CHECK_MSG(v.boundary_loops == 1 && v.euler == 1, "E %g: loops %u euler %lld", E, v.boundary_loops,
+                      (long long)v.euler);
+            tsr_halfedges he;
+            uint32_t off = 0, first = UINT32_MAX;
+            if (tsr_halfedges_build(&he, &r.mesh, NULL) == TSR_OK) {
+                for (uint32_t h = 0; h < he.count; h++) {
+                    if (he.twin[h] != TSR_NO_TWIN)
+                        continue;
+                    const float *p = r.mesh.positions + 3 * (size_t)r.mesh.indices[h];
+                    const float *q = r.mesh.positions + 3 * (size_t)r.mesh.indices[3 * (h / 3) + (h % 3 + 1) % 3];
+                    bool on = tc_on_outline(0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 1e-5);
+                    off += !on;
+                    if (!on && first == UINT32_MAX)
+                        first = h;
+                }
+                tsr_halfedges_free(&he);
+            }
+            CHECK_MSG(off == 0, "E %g: %u open edges inside the union, first half-edge %u", E, off, first);
+            /* vertical error at the vertices and at 6 points inside every triangle */
+            double worst = 0;
+            static const double bary[6][3] = {{1. / 3, 1. / 3, 1. / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
+                                              {0.5, 0, 0.5},            {0.8, 0.1, 0.1}, {0.1, 0.1, 0.8}};
+            for (uint32_t t = 0; t < r.mesh.triangle_count; t++)
+                for (int s = 0; s < 6; s++) {
+                    double x = 0, z = 0;
+                    for (int c = 0; c < 3; c++) {
+                        const float *p = r.mesh.positions + 3 * (size_t)r.mesh.indices[3 * t + (uint32_t)c];
+                        x += bary[s][c] * p[0];
+                        z += bary[s][c] * p[2];
+                    }
+                    worst = fmax(worst, fabs(z - tc_g(x)));
+                }
+            CHECK_MSG(worst <= E + fslack(3), "E %g: vertical error %g", E, worst);
+            tsr_ptess_result_free(&r);
+        }
     }
     tsr_pmodel_destroy(m);
     tsr_patch_set_free(&set);
@@ -4141,7 +4269,7 @@ TEST(measure_threads_same_figures)
 
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
-          T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_not_linked),
+          T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_linked), T(t_configurations_linked),
           T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(trim_loops_meet_the_lattice), T(trim_loop_shapes), T(measure_passes_slivers_by), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
           T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
          T(rational_cylinder_cut_near_its_strip),

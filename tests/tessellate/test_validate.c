@@ -338,6 +338,67 @@ TEST(coincident_vertices_make_a_crack)
     tsr_mesh_free(&m);
 }
 
+/* Gaps: a strip [0,4] x [0,1] of 4 quads, and above it a strip whose
+ * bottom row has 9 vertices, the odd ones raised by 0.01 off the line
+ * y = 1 (a curve sampled finer on one side than the other). */
+static void gap_strips(tsr_mesh *m, float rise)
+{
+    tsr_mesh_init(m, 0, NULL);
+    for (int j = 0; j <= 1; j++)
+        for (int i = 0; i <= 4; i++)
+            tsr_mesh_add_vertex(m, (float[3]){(float)i, (float)j, 0}, NULL, NULL);
+    for (int i = 0; i < 4; i++) {
+        tsr_mesh_add_triangle(m, (uint32_t)i, (uint32_t)i + 1, (uint32_t)i + 6);
+        tsr_mesh_add_triangle(m, (uint32_t)i, (uint32_t)i + 6, (uint32_t)i + 5);
+    }
+    uint32_t b = m->vertex_count;
+    for (int j = 0; j <= 1; j++)
+        for (int i = 0; i <= 8; i++)
+            tsr_mesh_add_vertex(m, (float[3]){0.5f * (float)i, 1 + (float)j + (j == 0 && i % 2 ? rise : 0), 0}, NULL,
+                                NULL);
+    for (uint32_t i = 0; i < 8; i++) {
+        tsr_mesh_add_triangle(m, b + i, b + i + 1, b + i + 10);
+        tsr_mesh_add_triangle(m, b + i, b + i + 10, b + i + 9);
+    }
+}
+
+TEST(gaps_between_open_edges)
+{
+    tsr_mesh m;
+    gap_strips(&m, 0.01f);
+    bool *hit = calloc(3 * (size_t)m.triangle_count, sizeof *hit);
+    uint32_t n = 99;
+    /* the upper strip's 8 short bottom edges lie along the lower strip's
+     * long top edges within 0.02, running the other way; the long ones do
+     * not lie along any one short edge */
+    CHECK(tsr_mesh_find_gaps(&m, 0.02, hit, &n) == TSR_OK);
+    CHECK_MSG(n == 8, "%u gap edges", n);
+    uint32_t upper = 0;
+    for (uint32_t h = 0; h < 3 * m.triangle_count; h++)
+        upper += hit[h] && h / 3 >= 8 && m.positions[3 * (size_t)m.indices[h] + 1] < 1.5f;
+    CHECK_MSG(upper == 8, "%u of them on the upper strip's bottom", upper);
+    /* narrower than the rise: none */
+    CHECK(tsr_mesh_find_gaps(&m, 0.005, NULL, &n) == TSR_OK);
+    CHECK_MSG(n == 0, "%u gap edges at 0.005", n);
+    tsr_mesh_free(&m);
+    /* the same vertices on the line: still a gap (of width 0), not welded */
+    gap_strips(&m, 0);
+    CHECK(tsr_mesh_find_gaps(&m, 1e-6, NULL, &n) == TSR_OK && n == 8);
+    tsr_mesh_free(&m);
+    /* a grid's rim: consecutive edges run the same way, the far sides are
+     * farther than eps: no gap, even with eps above the edge length */
+    grid(&m, 8);
+    CHECK(tsr_mesh_find_gaps(&m, 1.5, NULL, &n) == TSR_OK);
+    CHECK_MSG(n == 0, "%u gap edges on a grid's rim", n);
+    /* a strip narrower than eps is one gap by the definition */
+    CHECK(tsr_mesh_find_gaps(&m, 8.5, NULL, &n) == TSR_OK);
+    CHECK_MSG(n == 32, "%u gap edges at 8.5", n);
+    CHECK(tsr_mesh_find_gaps(&m, -1, NULL, &n) == TSR_ERR_ARGUMENT && tsr_mesh_find_gaps(NULL, 1, NULL, &n) ==
+          TSR_ERR_ARGUMENT);
+    tsr_mesh_free(&m);
+    free(hit);
+}
+
 TEST(bad_index_and_nan_position)
 {
     tsr_mesh m;
@@ -378,5 +439,5 @@ TEST(random_grids_with_one_defect)
 
 TEST_MAIN(T(grid_is_valid), T(flipped_triangle), T(nonmanifold_edge), T(coincident_sheets_no_t_junction), T(t_junction),
           T(t_junction_in_3d_long_edge), T(height_field_junctions_in_xy), T(inward_shells_found_and_turned),
-          T(degenerate_and_duplicate), T(closed_tetrahedron), T(holes_count_loops), T(coincident_vertices_make_a_crack),
+          T(degenerate_and_duplicate), T(closed_tetrahedron), T(holes_count_loops), T(coincident_vertices_make_a_crack), T(gaps_between_open_edges),
           T(bad_index_and_nan_position), T(random_grids_with_one_defect))

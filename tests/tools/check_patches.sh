@@ -152,6 +152,59 @@ grep -q "^view-independent .* FAIL.* t-junctions $discounted\( \|$\)" "$dir/link
 ! grep -q "unlinked-edge-t-junctions" "$dir/linked.txt" || fail "linked: T-junctions discounted: $(grep ^view "$dir/linked.txt")"
 echo "ok the same T-junctions on linked edges fail:$(grep -o ' FAIL.*' "$dir/linked.txt" | head -1)"
 
+# A T-configuration: a bicubic sheet whose north edge, a cubic curve, is
+# the south edge of two patches above, cut at u = 1/2 (de Casteljau). The
+# sheet is cut there too and linked to both: the check passes with no gap
+# and patch's mesh is one disc. The same with the first patch above raised
+# by 1e-4 (more than the link distance, less than the tolerance) leaves a
+# crack narrower than the tolerance: the check finds it as gaps and fails.
+tcfg() { # RAISE > FILE
+  python3 - "$1" <<'PY'
+import sys
+raise_ = float(sys.argv[1])
+cz = [0.0, 0.4, -0.3, 0.2]
+def split(c):
+    a = c[:]; L = [a[0]]; R = [a[3]]
+    for k in range(1, 4):
+        a = [0.5 * (a[i] + a[i + 1]) for i in range(len(a) - 1)]
+        L.append(a[0]); R.insert(0, a[-1])
+    return L, R
+L, R = split(cz)
+pats = [(0, 2, 0, cz, 0), (0, 1, 1, L, raise_), (1, 2, 1, R, 0)]
+print(len(pats))
+for x0, x1, y0, zs, dz in pats:
+    print("3 3")
+    for j in range(4):
+        for i in range(4):
+            print("%.17g %.17g %.17g" % (x0 + (x1 - x0) * i / 3, y0 + j / 3, zs[i] + (dz if j == 0 else 0)))
+PY
+}
+tcfg 0 > "$dir/tconfig.bpt" && tcfg 1e-4 > "$dir/tcrack.bpt" || fail "python3 could not write the T-configurations"
+expect_ok "T-configuration" "$dir/tconfig.bpt" --cameras 2
+"$tessera" check patches "$dir/tconfig.bpt" --cameras 0 --json > "$dir/tconfig.json" || fail "tconfig: json check"
+[ "$(json_count gaps "$dir/tconfig.json")" = 0 ] || fail "tconfig: gaps $(json_count gaps "$dir/tconfig.json")"
+"$tessera" patch "$dir/tconfig.bpt" -o "$dir/tconfig.obj" --quiet || fail "patch tconfig.bpt"
+python3 - "$dir/tconfig.obj" <<'PY' || fail "T-configuration: the mesh is not one disc"
+import sys
+tris = [tuple(int(w.split('/')[0]) for w in l.split()[1:4]) for l in open(sys.argv[1]) if l.startswith('f ')]
+edges = {}
+for t in tris:
+    for k in range(3):
+        e = (t[k], t[(k + 1) % 3])
+        edges[e] = edges.get(e, 0) + 1
+open_ = [e for e in edges if (e[1], e[0]) not in edges]
+verts = {v for t in tris for v in t}
+# V - E + F with E = (interior half-edges) / 2 + open edges
+E = (len(edges) - len(open_)) // 2 + len(open_)
+chi = len(verts) - E + len(tris)
+sys.exit(0 if chi == 1 and all(c == 1 for c in edges.values()) else 1)
+PY
+echo "ok T-configuration linked: one disc, no gap"
+"$tessera" check patches "$dir/tcrack.bpt" --cameras 0 > "$dir/tcrack.txt" 2>&1
+[ $? -eq 1 ] || fail "a crack narrower than the tolerance passed: $(grep ^view "$dir/tcrack.txt")"
+grep -q "^view-independent .* FAIL.* gaps [1-9]" "$dir/tcrack.txt" || fail "tcrack: no gaps: $(grep ^view "$dir/tcrack.txt")"
+echo "ok a crack narrower than the tolerance fails:$(grep -o ' FAIL.*' "$dir/tcrack.txt" | head -1)"
+
 # bad input fails cleanly, naming the file
 expect_bad "missing file" "$dir/missing.bpt"
 : > "$dir/empty.obj"
