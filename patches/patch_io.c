@@ -718,6 +718,25 @@ static tsr_status finish_surf(lexer *L, obj_state *o)
         if (e->range[2 * a] < lo[a] || e->range[2 * a + 1] > hi[a])
             return fail(L, e->line, TSR_ERR_VALUE, "surf's %s range [%g, %g] leaves the parameter range [%g, %g]",
                         a ? "t" : "s", e->range[2 * a], e->range[2 * a + 1], lo[a], hi[a]);
+    /* a knot repeated more than the degree inside the range breaks the
+     * surface apart there: its pieces need not meet, and no mesh of it
+     * can be both joined and within the error */
+    for (int a = 0; a < 2; a++) {
+        const double *k = K + (a ? kv : ku);
+        int deg = a ? e->dv : e->du;
+        size_t nk = (size_t)(a ? nv : nu) + (size_t)deg + 1;
+        for (size_t i = 0; i < nk;) {
+            size_t j = i;
+            while (j < nk && k[j] == k[i])
+                j++;
+            if (j - i > (size_t)deg && k[i] > e->range[2 * a] && k[i] < e->range[2 * a + 1])
+                return fail(L, e->line, TSR_ERR_VALUE,
+                            "surf: knot %g of parm %s appears %zu times, more than the degree %d: the surface is "
+                            "discontinuous there (split it into two surfaces)",
+                            k[i], a ? "v" : "u", j - i, deg);
+            i = j;
+        }
+    }
     tsr_patch view = view_patch(b, &r);
     tsr_error pe = {0};
     if (tsr_patch_check(&view, &pe) != TSR_OK)
@@ -1045,6 +1064,13 @@ tsr_patch_format tsr_patch_format_from_path(const char *path)
     return TSR_PATCH_FORMAT_UNKNOWN;
 }
 
+/* Past a UTF-8 byte order mark (editors on Windows write one). */
+static const char *skip_bom(const void *data, size_t size)
+{
+    const unsigned char *d = data;
+    return (const char *)(size >= 3 && d[0] == 0xEF && d[1] == 0xBB && d[2] == 0xBF ? d + 3 : d);
+}
+
 tsr_status tsr_patch_set_parse(const void *data, size_t size, const char *name, tsr_patch_format f,
                                const tsr_allocator *alloc, tsr_patch_set *out, tsr_error *err)
 {
@@ -1059,7 +1085,7 @@ tsr_status tsr_patch_set_parse(const void *data, size_t size, const char *name, 
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: no data", name);
     if (size == 0)
         return tsr_error_set(err, TSR_ERR_EMPTY, "%s: empty file (0 bytes)", name);
-    lexer L = {name, data, (const char *)data + size, 1, 1, err};
+    lexer L = {name, skip_bom(data, size), (const char *)data + size, 1, 1, err};
     builder b;
     memset(&b, 0, sizeof b);
     b.a = alloc;
@@ -1379,7 +1405,7 @@ tsr_status tsr_cage_parse(const void *data, size_t size, const char *name, const
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: no data", name);
     if (size == 0)
         return tsr_error_set(err, TSR_ERR_EMPTY, "%s: empty file (0 bytes)", name);
-    lexer L = {name, data, (const char *)data + size, 1, 1, err};
+    lexer L = {name, skip_bom(data, size), (const char *)data + size, 1, 1, err};
     cage_build c;
     memset(&c, 0, sizeof c);
     c.a = alloc;

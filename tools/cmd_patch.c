@@ -45,13 +45,16 @@ static void help(FILE *f)
             "                        normal, so renderers draw the crease (not in .stl: facet normals)\n"
             "  --crease-angle DEG    sides whose normals differ by more than DEG degrees are split so\n"
             "                        (default 1; 180: never, one vertex with the sides' mean normal)\n"
-            "  --no-verify           skip the measurement (and the re-tessellation it may ask for)\n"
+            "  --no-verify           skip the measurement (and the re-tessellation it may ask for);\n"
+            "                        warns when the Bezier patches' bound is above the tolerance\n"
             "  --stats FILE.json     patches, pieces, triangles, vertices, measured max_error and\n"
-            "                        rms_error, bound, seconds, the options used, the mesh's\n"
-            "                        boundary_edges, t_junctions and degenerate_triangles, and\n"
-            "                        linked_edges (piece edges sampled alike with a neighbour's)\n"
-            "                        and shared_breakpoints (knots a patch took from a neighbour\n"
-            "                        sharing an edge, so their pieces meet piece to piece); with\n"
+            "                        rms_error, bound (model units, also with a camera), seconds,\n"
+            "                        the options used, the mesh's boundary_edges, t_junctions,\n"
+            "                        degenerate_triangles and gaps (open edges along another within\n"
+            "                        the tolerance: a crack), linked_edges (piece edges sampled\n"
+            "                        alike with a neighbour's) and shared_breakpoints (knots a patch\n"
+            "                        took from a neighbour sharing all or part of an edge, so their\n"
+            "                        pieces meet piece to piece); with\n"
             "                        --normals also vertices_written and crease_vertices (the copies\n"
             "                        written at creases)\n"
             "  --quiet               print nothing on success\n"
@@ -101,7 +104,8 @@ static int write_stats(const char *path, const char *in, const cli_patch_model *
         cJSON_AddNumberToObject(j, "pixel_error", opt->camera->pixel_error);
     else
         cJSON_AddNumberToObject(j, "requested_max_error", opt->max_error);
-    cJSON_AddNumberToObject(j, "bound", r->bound);
+    cJSON_AddNumberToObject(j, "bound", r->bound); /* model units, also with a camera */
+    cJSON_AddStringToObject(j, "bound_units", "model");
     cJSON_AddNumberToObject(j, "tile", opt->tile_n);
     cJSON_AddNumberToObject(j, "seconds", secs);
     cJSON_AddNumberToObject(j, "tessellate_seconds", r->seconds);
@@ -313,11 +317,16 @@ static int run(int argc, char **argv)
         rc = CLI_FAIL;
     }
     double tol = opt.camera ? v.pixel_error : opt.max_error;
-    if (rc == CLI_OK && verify && (meas.max_error > tol || meas.uncovered)) {
-        cli_error("patch", "%s: measured error %.6g is above %.6g%s even after re-tessellating %u patches finer "
+    if (rc == CLI_OK && verify && meas.max_error > tol) {
+        cli_error("patch", "%s: measured error %.6g is above %.6g even after re-tessellating %u patches finer "
                   "(down to --max-level %u)",
-                  in, meas.max_error, tol, meas.uncovered ? " (or the mesh has gaps)" : "", tightened,
-                  opt.max_level ? opt.max_level : 10);
+                  in, meas.max_error, tol, tightened, opt.max_level ? opt.max_level : 10);
+        rc = CLI_FAIL;
+    } else if (rc == CLI_OK && verify && meas.uncovered) {
+        cli_error("patch", "%s: %llu of %llu measured samples of untrimmed patches fall on no triangle of the mesh "
+                  "(a gap, or triangles with no area: coordinates as large as %g leave float32 no room for small "
+                  "features), even after re-tessellating %u patches finer",
+                  in, (unsigned long long)meas.uncovered, (unsigned long long)meas.samples, maxabs, tightened);
         rc = CLI_FAIL;
     }
     if (rc == CLI_OK && r.mesh.triangle_count == 0) {
@@ -399,6 +408,12 @@ static int run(int argc, char **argv)
         else
             fprintf(stderr, "tessera patch: %s: %u patches, %u triangles, %u vertices%s, not measured, %.2f s\n", in,
                     info.sources, r.mesh.triangle_count, r.mesh.vertex_count, crease_note, secs);
+        if (!verify && !opt.camera && !(r.bound <= tol))
+            fprintf(stderr,
+                    "tessera patch: %s: warning: the a-priori bound %.4g of the Bezier patches is above the "
+                    "tolerance %.4g (--max-level %u stops their refinement): run without --no-verify to measure "
+                    "and re-tessellate, or raise --max-level\n",
+                    in, r.bound, tol, opt.max_level ? opt.max_level : 10);
         if (tj || zero || gaps)
             fprintf(stderr,
                     "tessera patch: %s: warning: %u T-junctions, %u open edges along another within the tolerance "

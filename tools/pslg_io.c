@@ -94,6 +94,14 @@ typedef struct text {
     uint32_t next_line; /* line where p is */
 } text;
 
+/* The length of a UTF-8 byte order mark at the start (editors on Windows
+ * write one), or 0. */
+static size_t bom_length(const char *buf, size_t len)
+{
+    const unsigned char *d = (const unsigned char *)buf;
+    return len >= 3 && d[0] == 0xEF && d[1] == 0xBB && d[2] == 0xBF ? 3 : 0;
+}
+
 static bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
 /* Reads the next line holding tokens ('#' comments and blank lines are
@@ -299,7 +307,7 @@ static tsr_status read_node_section(text *t, cli_pslg *g, uint32_t *base, bool a
 static tsr_status read_node_text(const char *path, const char *buf, size_t len, cli_pslg *g, uint32_t *base,
                                  tsr_error *err)
 {
-    text t = {path, buf, buf + len, 1, 1};
+    text t = {path, buf + bom_length(buf, len), buf + len, 1, 1};
     bool none;
     tsr_status s = read_node_section(&t, g, base, false, &none, err);
     if (s != TSR_OK)
@@ -320,7 +328,7 @@ static void node_path_of(const char *poly, char *buf, size_t cap)
 
 static tsr_status read_poly_text(const char *path, const char *buf, size_t len, cli_pslg *g, tsr_error *err)
 {
-    text t = {path, buf, buf + len, 1, 1};
+    text t = {path, buf + bom_length(buf, len), buf + len, 1, 1};
     uint32_t base = UINT32_MAX;
     bool none;
     tsr_status s = read_node_section(&t, g, &base, true, &none, err);
@@ -408,7 +416,7 @@ static tsr_status read_poly_text(const char *path, const char *buf, size_t len, 
 
 static tsr_status read_txt_text(const char *path, const char *buf, size_t len, cli_pslg *g, tsr_error *err)
 {
-    text t = {path, buf, buf + len, 1, 1};
+    text t = {path, buf + bom_length(buf, len), buf + len, 1, 1};
     token tok[MAX_TOKENS];
     int n = next_record(&t, tok);
     if (n < 0)
@@ -477,8 +485,9 @@ static bool same_point(const cJSON *a, const cJSON *b)
 static tsr_status read_json_text(const char *path, const char *buf, size_t len, cli_pslg *g, tsr_error *err)
 {
     const char *end = NULL;
-    cJSON *root = cJSON_ParseWithLengthOpts(buf, len, &end, false);
-    size_t off = end && end >= buf && end <= buf + len ? (size_t)(end - buf) : 0;
+    size_t bom = bom_length(buf, len);
+    cJSON *root = cJSON_ParseWithLengthOpts(buf + bom, len - bom, &end, false);
+    size_t off = end && end >= buf && end <= buf + len ? (size_t)(end - buf) : bom;
     if (root) /* only white space may follow the value */
         while (off < len && (buf[off] == ' ' || buf[off] == '\t' || buf[off] == '\r' || buf[off] == '\n'))
             off++;

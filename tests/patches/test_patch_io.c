@@ -153,6 +153,26 @@ TEST(bpt_small_and_memory_parse)
     CHECK(pos[0] == 2 && pos[1] == 1 && pos[2] == 0.5);
     tsr_patch_set_free(&s);
     tsr_patch_set_free(&s); /* zeroed: a second free is harmless */
+    /* a UTF-8 byte order mark before the first line is skipped, in every
+     * reader, and lines are still counted from 1 */
+    char bom[256];
+    snprintf(bom, sizeof bom, "\xEF\xBB\xBF%s", text);
+    CHECK_MSG(tsr_patch_set_parse(bom, strlen(bom), "bom.bpt", TSR_PATCH_FORMAT_BPT, NULL, &s, &e) == TSR_OK, "%s",
+              e.message);
+    CHECK(s.num_patches == 2);
+    tsr_patch_set_free(&s);
+    const char *obj = "\xEF\xBB\xBF" "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 1\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nend\n";
+    CHECK_MSG(tsr_patch_set_parse(obj, strlen(obj), "bom.obj", TSR_PATCH_FORMAT_OBJ, NULL, &s, &e) == TSR_OK, "%s",
+              e.message);
+    CHECK(s.num_patches == 1);
+    tsr_patch_set_free(&s);
+    const char *cage = "\xEF\xBB\xBF" "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    tsr_cage c;
+    CHECK_MSG(tsr_cage_parse(cage, strlen(cage), "bom_cage.obj", NULL, &c, &e) == TSR_OK, "%s", e.message);
+    tsr_cage_free(&c);
+    const char *bad = "\xEF\xBB\xBF" "1\n1 1\n0 0 x\n1 0 0\n0 1 0\n1 1 1\n";
+    CHECK(tsr_patch_set_parse(bad, strlen(bad), "bom_bad.bpt", TSR_PATCH_FORMAT_BPT, NULL, &s, &e) != TSR_OK);
+    CHECK_MSG(!strncmp(e.message, "bom_bad.bpt:3: ", 15), "%s", e.message);
     CHECK(tsr_patch_format_from_path("a/b.BPT") == TSR_PATCH_FORMAT_BPT);
     CHECK(tsr_patch_format_from_path("x.obj") == TSR_PATCH_FORMAT_OBJ);
     CHECK(tsr_patch_format_from_path("x.obj.txt") == TSR_PATCH_FORMAT_UNKNOWN);
@@ -584,6 +604,10 @@ static const bad_case bad_cases[] = {
     {"obj_binary_keyword", OBJ, "v 0 0 0\n\x01\x02 3\n", TSR_ERR_FORMAT, 2},
     {"obj_coordinate_beyond_limit", OBJ, "v 0 0 2e30\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 1 1 1\nend\n",
      TSR_ERR_VALUE, 4},
+    {"obj_discontinuous_knot", OBJ,
+     "v 0 0 0\nv 1 0 0\nv 2 0 1\nv 3 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 1\nv 3 1 0\ncstype bspline\ndeg 1 1\n"
+     "surf 0 3 0 1 1 2 3 4 5 6 7 8\nparm u 0 0 1 1 3 3\nparm v 0 0 1 1\nend\n",
+     TSR_ERR_VALUE, 11},
     {"obj_trailing_continuation", OBJ, "v 0 0 0\n\\", TSR_ERR_EMPTY, 0},
 
     {"cage_no_faces", CAGE, "v 0 0 0\n", TSR_ERR_EMPTY, 0},

@@ -264,6 +264,27 @@ patch_no_area)
   "$tessera" patch "$dir/flat.bpt" -o "$dir/flat.ply" --quiet 2> "$cap/stderr" || fail "patch --quiet"
   [ ! -s "$cap/stderr" ] || fail "--quiet printed: $(cat "$cap/stderr")"
   echo "ok [$case]" ;;
+patch_input_messages)
+  # what CAD files get wrong is named, not blamed on the tolerance: a knot
+  # repeated beyond the degree (the surface breaks apart), a coordinate so
+  # large that float32 loses the rest (samples on no triangle), a capped
+  # refinement under --no-verify (a warning); a byte order mark is read
+  printf 'v 0 0 0\nv 1 0 0\nv 2 0 1\nv 3 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 1\nv 3 1 0\ncstype bspline\ndeg 1 1\nsurf 0 3 0 1 1 2 3 4 5 6 7 8\nparm u 0 0 1 1 3 3\nparm v 0 0 1 1\nend\n' > "$dir/knot.obj"
+  expect_error 1 "knot\.obj:11: surf: knot 1 of parm u appears 2 times, more than the degree 1: the surface is discontinuous there" -- \
+    "$tessera" patch "$dir/knot.obj" -o "$out"
+  sed -e 's/^v 2 0 1$/v 2 0 1e30/' -e 's/parm u 0 0 1 1 3 3/parm u 0 0 1 2 3 3/' "$dir/knot.obj" > "$dir/huge.obj"
+  expect_error 1 "huge\.obj: [0-9]+ of [0-9]+ measured samples of untrimmed patches fall on no triangle" -- \
+    "$tessera" patch "$dir/huge.obj" -o "$out" --quiet
+  { echo 1; echo 3 3; for j in 0 1 2 3; do for i in 0 1 2 3; do echo "$i $j $(( (i * j) % 3 ))"; done; done; } > "$dir/wavy.bpt"
+  "$tessera" patch "$dir/wavy.bpt" -o "$dir/w.obj" --max-error 1e-6 --max-level 1 --no-verify 2> "$cap/stderr" || fail "no-verify"
+  grep -q "wavy\.bpt: warning: the a-priori bound [0-9.e+-]* of the Bezier patches is above the tolerance 1e-06 (--max-level 1" \
+    "$cap/stderr" || fail "no --no-verify warning: $(cat "$cap/stderr")"
+  "$tessera" patch "$dir/wavy.bpt" -o "$dir/w.obj" --max-error 1e-2 --no-verify 2> "$cap/stderr" || fail "no-verify 1e-2"
+  grep -q warning "$cap/stderr" && fail "a bound within the tolerance warned: $(cat "$cap/stderr")"
+  { printf '\357\273\277'; cat "$dir/wavy.bpt"; } > "$dir/bom.bpt"
+  "$tessera" patch "$dir/bom.bpt" -o "$dir/w.obj" --quiet || fail "a byte order mark was refused"
+  rm -f "$dir"/*.obj "$dir"/*.bpt
+  echo "ok [$case]" ;;
 gis_warnings)
   # georeferencing the mesh does not follow is said, not silently dropped:
   # a rotated grid (spacing 1 unless --dx/--dy), heights in feet over

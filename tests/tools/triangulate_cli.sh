@@ -118,6 +118,13 @@ EOF
   [ "$(json_num "$dir/back.json" triangles)" = "$nt" ] || fail "re-triangulated: $(json_num "$dir/back.json" triangles) triangles, first $nt"
   grep -q '"ok":[[:space:]]*true' "$dir/back.json" || fail "check of the re-triangulation failed"
   echo "ok .node/.ele/.poly: $nv vertices, $nt triangles, $ne constrained edges; read back alike"
+  # the same .poly after a UTF-8 byte order mark (as Windows editors save it)
+  { printf '\357\273\277'; cat "$dir/in.poly"; } > "$dir/bom.poly"
+  "$tessera" triangulate "$dir/bom.poly" --check --json > "$dir/bom.json" || fail "bom.poly: $(cat "$dir/bom.json")"
+  [ "$(json_num "$dir/bom.json" triangles)" = "$nt" ] || fail "bom.poly: $(json_num "$dir/bom.json" triangles) triangles"
+  { printf '\357\273\277'; printf '[[[0,0],[10,0],[10,10],[0,10]]]'; } > "$dir/bom.json"
+  "$tessera" triangulate "$dir/bom.json" --check --quiet > "$dir/bomj.txt" || fail "bom.json: $(cat "$dir/bomj.txt")"
+  echo "ok a byte order mark is skipped (.poly, .json)"
   # the .node alone: the hull of the same points
   "$tessera" triangulate "$dir/out.node" --check --quiet > "$dir/hull.txt" || fail "out.node: $(tail -1 "$dir/hull.txt")"
   echo "ok out.node read back (hull): $(tail -1 "$dir/hull.txt")"
