@@ -1381,6 +1381,149 @@ static tsr_status cage_statement(lexer *L, cage_build *c, tsr_cage *out)
     return TSR_OK;
 }
 
+typedef struct cage_edge {
+    uint32_t lo, hi, face;
+    bool forward; /* the face runs it lo -> hi */
+} cage_edge;
+
+static int cmp_cage_edge(const void *x, const void *y)
+{
+    const cage_edge *a = x, *b = y;
+    if (a->lo != b->lo)
+        return a->lo < b->lo ? -1 : 1;
+    if (a->hi != b->hi)
+        return a->hi < b->hi ? -1 : 1;
+    return a->face < b->face ? -1 : a->face > b->face;
+}
+
+tsr_status tsr_cage_orient(tsr_cage *c, uint32_t *reversed, uint32_t *unorientable)
+{
+    if (reversed)
+        *reversed = 0;
+    if (unorientable)
+        *unorientable = 0;
+    if (!c || c->num_faces == 0)
+        return TSR_OK;
+    uint32_t nf = c->num_faces, nc = c->num_face_verts;
+    const tsr_allocator *a = c->alloc.realloc ? &c->alloc : NULL;
+    cage_edge *e = tsr_alloc(a, (size_t)nc * sizeof *e);
+    uint32_t *first = tsr_alloc(a, ((size_t)nf + 1) * sizeof *first);
+    /* adjacency through manifold edges: (neighbour, same) pairs per face */
+    uint32_t *adj_n = tsr_alloc(a, (size_t)nc * 2 * sizeof *adj_n), *deg = tsr_alloc(a, ((size_t)nf + 1) * sizeof *deg);
+    uint32_t *part = tsr_alloc(a, (size_t)nf * sizeof *part), *queue = tsr_alloc(a, (size_t)nf * sizeof *queue);
+    uint8_t *flip = tsr_alloc(a, (size_t)nf), *bad_part = tsr_alloc(a, (size_t)nf);
+    tsr_status st = e && first && adj_n && deg && part && queue && flip && bad_part ? TSR_OK : TSR_ERR_NOMEM;
+    uint32_t ne = 0;
+    if (st == TSR_OK) {
+        uint32_t k = 0;
+        for (uint32_t f = 0; f < nf; f++) {
+            first[f] = k;
+            uint32_t n = c->face_sizes[f];
+            for (uint32_t i = 0; i < n; i++) {
+                uint32_t u = c->face_verts[k + i], v = c->face_verts[k + (i + 1) % n];
+                if (u != v)
+                    e[ne++] = (cage_edge){u < v ? u : v, u < v ? v : u, f, u < v};
+            }
+            k += n;
+        }
+        first[nf] = k;
+        qsort(e, ne, sizeof *e, cmp_cage_edge);
+        memset(deg, 0, ((size_t)nf + 1) * sizeof *deg);
+        /* count, then fill: each manifold edge (two uses, two faces) links
+         * its faces; same direction means one of them must turn */
+        for (int pass = 0; pass < 2; pass++) {
+            if (pass == 1) {
+                uint32_t sum = 0;
+                for (uint32_t f = 0; f <= nf; f++) {
+                    uint32_t d = deg[f];
+                    deg[f] = sum;
+                    sum += d;
+                }
+            }
+            for (uint32_t i = 0; i < ne;) {
+                uint32_t j = i;
+                while (j < ne && e[j].lo == e[i].lo && e[j].hi == e[i].hi)
+                    j++;
+                if (j - i == 2 && e[i].face != e[i + 1].face) {
+                    uint32_t f = e[i].face, g = e[i + 1].face, same = e[i].forward == e[i + 1].forward;
+                    if (pass == 0) {
+                        deg[f]++;
+                        deg[g]++;
+                    } else {
+                        adj_n[2 * deg[f]] = g;
+                        adj_n[2 * deg[f]++ + 1] = same;
+                        adj_n[2 * deg[g]] = f;
+                        adj_n[2 * deg[g]++ + 1] = same;
+                    }
+                }
+                i = j;
+            }
+        }
+        /* deg[f] is now the end of f's list; its start is deg[f - 1] */
+        for (uint32_t f = 0; f < nf; f++)
+            part[f] = UINT32_MAX;
+        memset(bad_part, 0, nf);
+        uint32_t nparts = 0;
+        for (uint32_t s = 0; s < nf; s++) {
+            if (part[s] != UINT32_MAX)
+                continue;
+            uint32_t head = 0, tail = 0, flips = 0, size = 0;
+            part[s] = nparts;
+            flip[s] = 0;
+            queue[tail++] = s;
+            while (head < tail) {
+                uint32_t f = queue[head++];
+                size++;
+                flips += flip[f];
+                for (uint32_t q = f ? deg[f - 1] : 0; q < deg[f]; q++) {
+                    uint32_t g = adj_n[2 * q];
+                    uint8_t want = (uint8_t)(flip[f] ^ adj_n[2 * q + 1]);
+                    if (part[g] == UINT32_MAX) {
+                        part[g] = nparts;
+                        flip[g] = want;
+                        queue[tail++] = g;
+                    } else if (flip[g] != want) {
+                        bad_part[nparts] = 1;
+                    }
+                }
+            }
+            /* the majority keeps its orientation */
+            if (2 * flips > size)
+                for (uint32_t q = 0; q < tail; q++)
+                    flip[queue[q]] ^= 1;
+            nparts++;
+        }
+        for (uint32_t p = 0; p < nparts && unorientable; p++)
+            *unorientable += bad_part[p];
+        for (uint32_t f = 0; f < nf; f++) {
+            if (!flip[f] || bad_part[part[f]])
+                continue;
+            uint32_t k = first[f], n = c->face_sizes[f];
+            for (uint32_t i = 1, j = n - 1; i < j; i++, j--) {
+                uint32_t t = c->face_verts[k + i];
+                c->face_verts[k + i] = c->face_verts[k + j];
+                c->face_verts[k + j] = t;
+                if (c->face_uvs) {
+                    t = c->face_uvs[k + i];
+                    c->face_uvs[k + i] = c->face_uvs[k + j];
+                    c->face_uvs[k + j] = t;
+                }
+            }
+            if (reversed)
+                (*reversed)++;
+        }
+    }
+    tsr_free(a, e);
+    tsr_free(a, first);
+    tsr_free(a, adj_n);
+    tsr_free(a, deg);
+    tsr_free(a, part);
+    tsr_free(a, queue);
+    tsr_free(a, flip);
+    tsr_free(a, bad_part);
+    return st;
+}
+
 void tsr_cage_free(tsr_cage *c)
 {
     if (!c)

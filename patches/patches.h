@@ -488,6 +488,19 @@ tsr_status tsr_cage_load(const char *path, const tsr_allocator *alloc, tsr_cage 
 tsr_status tsr_cage_parse(const void *data, size_t size, const char *name, const tsr_allocator *alloc, tsr_cage *out,
                           tsr_error *err);
 
+/* Orients the faces of a cage consistently: across every edge used by
+ * exactly two faces, the two must run it in opposite directions (so
+ * OpenSubdiv sees a manifold edge, not a seam it leaves open). Faces are
+ * grouped into parts through such edges; in a part that can be oriented,
+ * the faces against the majority are reversed (vertex order v0, v_n-1,
+ * ..., v1, texture corners alike; creases, corners and holes unchanged).
+ * A part that cannot be (a Möbius band: some edge disagrees whatever the
+ * choice) is left as it is. Edges of one vertex repeated (1 2 3 3) and
+ * edges used by three or more faces take no part. *reversed (may be NULL)
+ * counts the faces reversed, *unorientable the parts left. TSR_ERR_NOMEM
+ * (the cage unchanged). O(face corners log). */
+tsr_status tsr_cage_orient(tsr_cage *c, uint32_t *reversed, uint32_t *unorientable);
+
 /* Frees every array and zeroes the cage; NULL or a zeroed cage is
  * allowed. */
 void tsr_cage_free(tsr_cage *c);

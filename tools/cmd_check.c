@@ -928,6 +928,7 @@ static int run_patches(int argc, char **argv)
     if (rc == CLI_OK) {
         cli_patch_flat_warnings("check", in, &p, 5);
         cli_patch_trim_warnings("check", in, &p, 5);
+        cli_patch_model_notes("check", in, &p);
     }
     if (rc != CLI_OK) {
         free(cam_args);

@@ -234,8 +234,10 @@ static int run(int argc, char **argv)
                 "subdivision cage)\n",
                 in, pm.set.num_polygons, pm.set.first_polygon_line);
     uint32_t flat = cli_patch_flat_warnings("patch", in, &pm, quiet ? 0 : 5);
-    if (!quiet)
+    if (!quiet) {
         cli_patch_trim_warnings("patch", in, &pm, 5);
+        cli_patch_model_notes("patch", in, &pm);
+    }
     if (!quiet && pm.is_subd && pm.cage.num_skipped_tags)
         fprintf(stderr,
                 "tessera patch: %s: note: %u tags OpenSubdiv does not use (hierarchical edits, unknown names) "

@@ -44,6 +44,13 @@ bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *sc
             cli_patch_model_free(out);
             return false;
         }
+        /* faces listed against their neighbours' order would make their
+         * shared edges seams OpenSubdiv leaves open: turned to agree */
+        if (tsr_cage_orient(&out->cage, &out->cage_reversed, &out->cage_unorientable) != TSR_OK) {
+            cli_error(cmd, "%s: out of memory", path);
+            cli_patch_model_free(out);
+            return false;
+        }
         const char *base = strrchr(path, '/');
         base = base ? base + 1 : path;
         bool bilinear = scheme ? !strcmp(scheme, "bilinear") : !strncmp(base, "bilinear", 8);
@@ -247,4 +254,20 @@ uint32_t cli_patch_trim_warnings(const char *cmd, const char *path, const cli_pa
     if (warned > max)
         fprintf(stderr, "tessera %s: %s: warning: %u more trim loops as above\n", cmd, path, warned - max);
     return warned;
+}
+
+void cli_patch_model_notes(const char *cmd, const char *path, const cli_patch_model *pm)
+{
+    if (pm->cage_reversed)
+        fprintf(stderr,
+                "tessera %s: %s: note: %u cage face%s listed %s vertices against %s neighbours' order; reversed, so "
+                "the edges %s are joined, not left open\n",
+                cmd, path, pm->cage_reversed, pm->cage_reversed == 1 ? "" : "s",
+                pm->cage_reversed == 1 ? "its" : "their", pm->cage_reversed == 1 ? "its" : "their",
+                pm->cage_reversed == 1 ? "it shares" : "they share");
+    if (pm->cage_unorientable)
+        fprintf(stderr,
+                "tessera %s: %s: warning: %u part%s of the cage cannot be oriented (a Moebius band): the edges where "
+                "faces disagree are left open\n",
+                cmd, path, pm->cage_unorientable, pm->cage_unorientable == 1 ? "" : "s");
 }

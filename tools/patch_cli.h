@@ -16,6 +16,8 @@ typedef struct cli_patch_model {
     bool is_subd;
     const char *kind;    /* "bpt", "obj-surfaces", "cage-catmark" or "cage-bilinear" */
     double diag;         /* model box diagonal */
+    uint32_t cage_reversed;     /* cage faces reversed to agree with their neighbours (tsr_cage_orient) */
+    uint32_t cage_unorientable; /* parts of the cage no orientation agrees across (left as they are) */
 } cli_patch_model;
 
 /* Loads path: .bpt, or .obj with free-form surfaces (cstype/surf), else
@@ -53,6 +55,10 @@ uint32_t cli_patch_flat_warnings(const char *cmd, const char *path, const cli_pa
  * with tiles of `tile` (tsr_pmodel_set_options.split_error: knot spans
  * curved one way and straight the other cut across the curve). false
  * after printing an error (the old model kept). */
+/* Prints on stderr what loading changed or could not: cage faces
+ * reversed (a note), parts that cannot be oriented (a warning). */
+void cli_patch_model_notes(const char *cmd, const char *path, const cli_patch_model *pm);
+
 bool cli_patch_model_split(const char *cmd, const char *path, cli_patch_model *pm, double weld, double max_error,
                            uint32_t tile);
 

@@ -641,6 +641,72 @@ static const bad_case bad_cases[] = {
     {"cage_binary_bytes", CAGE, "\xff\xfe\x00\x01 v\n", TSR_ERR_FORMAT, 1},
 };
 
+/* Whether every edge used by two faces is run both ways (the oracle of
+ * tsr_cage_orient, by brute force over pairs of face corners). */
+static uint32_t cage_disagreements(const tsr_cage *c)
+{
+    uint32_t bad = 0, k = 0;
+    for (uint32_t f = 0; f < c->num_faces; f++) {
+        uint32_t n = c->face_sizes[f];
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t a = c->face_verts[k + i], b = c->face_verts[k + (i + 1) % n], l = 0;
+            for (uint32_t g = 0; g < c->num_faces; g++) {
+                uint32_t m = c->face_sizes[g];
+                for (uint32_t j = 0; j < m; j++)
+                    if (g > f && c->face_verts[l + j] == a && c->face_verts[l + (j + 1) % m] == b)
+                        bad++;
+                l += m;
+            }
+        }
+        k += n;
+    }
+    return bad;
+}
+
+TEST(cage_orient)
+{
+    /* a cube whose faces 1 and 2 (0-based) list their corners backwards;
+     * face 1 carries texture corners, which turn with it */
+    const char *cube = "v -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\nv -1 1 -1\nv 1 1 -1\nv -1 -1 -1\nv 1 -1 -1\n"
+                       "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                       "f 1/1 2/2 4/3 3/4\nf 5/1 6/2 4/3 3/4\nf 7/1 8/2 6/3 5/4\nf 7/1 8/2 2/3 1/4\n"
+                       "f 2/1 8/2 6/3 4/4\nf 7/1 1/2 3/3 5/4\nt hole 1/0/0 3\n";
+    tsr_cage c;
+    tsr_error e = {0};
+    tsr_status st = tsr_cage_parse(cube, strlen(cube), "cube.obj", NULL, &c, &e);
+    CHECK_MSG(st == TSR_OK, "%s", e.message);
+    if (st != TSR_OK)
+        return;
+    /* faces 1 (5 6 4 3 for 3 4 6 5) and 2 (7 8 6 5 for 5 6 8 7) are listed backwards: reversed, the other
+     * four, the majority, keep their order */
+    uint32_t before = cage_disagreements(&c), rev = 99, bad = 99;
+    CHECK_MSG(before > 0, "the fixture is consistent: %u", before);
+    CHECK(tsr_cage_orient(&c, &rev, &bad) == TSR_OK);
+    CHECK_MSG(rev == 2 && bad == 0, "reversed %u unorientable %u", rev, bad);
+    CHECK_MSG(cage_disagreements(&c) == 0, "%u edges still run one way twice", cage_disagreements(&c));
+    /* face 1 (corners 4..7) is now 5 3 4 6 with its texture corners 1 4 3 2 */
+    CHECK(c.face_verts[4] == 4 && c.face_verts[5] == 2 && c.face_verts[6] == 3 && c.face_verts[7] == 5);
+    CHECK(c.face_uvs && c.face_uvs[4] == 0 && c.face_uvs[5] == 3 && c.face_uvs[6] == 2 && c.face_uvs[7] == 1);
+    CHECK(c.num_holes == 1 && c.hole_faces[0] == 3);
+    /* again: nothing to do */
+    CHECK(tsr_cage_orient(&c, &rev, &bad) == TSR_OK && rev == 0 && bad == 0);
+    tsr_cage_free(&c);
+    /* a Möbius band of four quads: no orientation agrees; left as it is */
+    const char *band = "v 0 0 0\nv 0 0 1\nv 1 0 0\nv 1 0 1\nv 1 1 0\nv 1 1 1\nv 0 1 0\nv 0 1 1\n"
+                       "f 1 3 4 2\nf 3 5 6 4\nf 5 7 8 6\nf 7 2 1 8\n";
+    st = tsr_cage_parse(band, strlen(band), "band.obj", NULL, &c, &e);
+    CHECK_MSG(st == TSR_OK, "%s", e.message);
+    if (st != TSR_OK)
+        return;
+    uint32_t verts[16];
+    memcpy(verts, c.face_verts, sizeof verts);
+    CHECK(tsr_cage_orient(&c, &rev, &bad) == TSR_OK);
+    CHECK_MSG(rev == 0 && bad == 1, "band: reversed %u unorientable %u", rev, bad);
+    CHECK(!memcmp(verts, c.face_verts, sizeof verts));
+    tsr_cage_free(&c);
+    CHECK(tsr_cage_orient(NULL, &rev, &bad) == TSR_OK && rev == 0);
+}
+
 TEST(bad_files_name_the_line)
 {
     for (size_t i = 0; i < sizeof bad_cases / sizeof bad_cases[0]; i++) {
@@ -701,6 +767,6 @@ TEST(missing_and_odd_paths)
     tsr_cage_free(NULL);
 }
 
-TEST_MAIN(T(data_teapot_loads), T(data_teapot_degenerate_normals), T(bpt_small_and_memory_parse),
+TEST_MAIN(T(data_teapot_loads), T(data_teapot_degenerate_normals), T(bpt_small_and_memory_parse), T(cage_orient),
           T(obj_freeform_trimmed), T(obj_bezier_surfaces), T(data_osd_cages_load), T(cage_small_forms),
           T(bad_files_name_the_line), T(missing_and_odd_paths))
