@@ -1396,10 +1396,32 @@ static int cmp_cage_edge(const void *x, const void *y)
     return a->face < b->face ? -1 : a->face > b->face;
 }
 
-tsr_status tsr_cage_orient(tsr_cage *c, uint32_t *reversed, uint32_t *unorientable)
+/* The direction from edge (a, b) into face f: its centroid's offset from
+ * the edge's line, across the edge. */
+static void face_side(const tsr_cage *c, const uint32_t *first, uint32_t f, uint32_t a, uint32_t b, double out[3])
+{
+    const double *A = c->points + 3 * (size_t)a, *B = c->points + 3 * (size_t)b;
+    double cen[3] = {0, 0, 0}, d[3], dd = 0, t = 0;
+    uint32_t n = c->face_sizes[f];
+    for (uint32_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            cen[k] += c->points[3 * (size_t)c->face_verts[first[f] + i] + k] / n;
+    for (int k = 0; k < 3; k++) {
+        d[k] = B[k] - A[k];
+        dd += d[k] * d[k];
+        t += d[k] * (cen[k] - A[k]);
+    }
+    t = dd > 0 ? t / dd : 0;
+    for (int k = 0; k < 3; k++)
+        out[k] = cen[k] - A[k] - t * d[k];
+}
+
+tsr_status tsr_cage_orient(tsr_cage *c, bool apply, uint32_t *reversed, uint32_t *first_rev, uint32_t *unorientable)
 {
     if (reversed)
         *reversed = 0;
+    if (first_rev)
+        *first_rev = UINT32_MAX;
     if (unorientable)
         *unorientable = 0;
     if (!c || c->num_faces == 0)
@@ -1444,8 +1466,23 @@ tsr_status tsr_cage_orient(tsr_cage *c, uint32_t *reversed, uint32_t *unorientab
                 uint32_t j = i;
                 while (j < ne && e[j].lo == e[i].lo && e[j].hi == e[i].hi)
                     j++;
-                if (j - i == 2 && e[i].face != e[i + 1].face) {
-                    uint32_t f = e[i].face, g = e[i + 1].face, same = e[i].forward == e[i + 1].forward;
+                uint32_t f = e[i].face, g = j - i == 2 ? e[i + 1].face : f, same = 0;
+                if (f != g && e[i].forward == e[i + 1].forward) {
+                    /* run the same way: a face listed backwards, unless
+                     * the two fold onto each other (less than 60 degrees
+                     * apart about the edge, overlapping): that edge is
+                     * read as OpenSubdiv reads it, a seam */
+                    double sd[2][3], dot = 0, l0 = 0, l1 = 0;
+                    for (int q = 0; q < 2; q++)
+                        face_side(c, first, q ? g : f, e[i].lo, e[i].hi, sd[q]);
+                    for (int k = 0; k < 3; k++) {
+                        dot += sd[0][k] * sd[1][k];
+                        l0 += sd[0][k] * sd[0][k];
+                        l1 += sd[1][k] * sd[1][k];
+                    }
+                    same = dot > 0.5 * sqrt(l0 * l1) ? 2 : 1;
+                }
+                if (f != g && same != 2) {
                     if (pass == 0) {
                         deg[f]++;
                         deg[g]++;
@@ -1498,8 +1535,12 @@ tsr_status tsr_cage_orient(tsr_cage *c, uint32_t *reversed, uint32_t *unorientab
         for (uint32_t f = 0; f < nf; f++) {
             if (!flip[f] || bad_part[part[f]])
                 continue;
+            if (reversed)
+                (*reversed)++;
+            if (first_rev && *first_rev == UINT32_MAX)
+                *first_rev = f;
             uint32_t k = first[f], n = c->face_sizes[f];
-            for (uint32_t i = 1, j = n - 1; i < j; i++, j--) {
+            for (uint32_t i = 1, j = n - 1; apply && i < j; i++, j--) {
                 uint32_t t = c->face_verts[k + i];
                 c->face_verts[k + i] = c->face_verts[k + j];
                 c->face_verts[k + j] = t;
@@ -1509,8 +1550,6 @@ tsr_status tsr_cage_orient(tsr_cage *c, uint32_t *reversed, uint32_t *unorientab
                     c->face_uvs[k + j] = t;
                 }
             }
-            if (reversed)
-                (*reversed)++;
         }
     }
     tsr_free(a, e);

@@ -490,16 +490,23 @@ tsr_status tsr_cage_parse(const void *data, size_t size, const char *name, const
 
 /* Orients the faces of a cage consistently: across every edge used by
  * exactly two faces, the two must run it in opposite directions (so
- * OpenSubdiv sees a manifold edge, not a seam it leaves open). Faces are
- * grouped into parts through such edges; in a part that can be oriented,
- * the faces against the majority are reversed (vertex order v0, v_n-1,
- * ..., v1, texture corners alike; creases, corners and holes unchanged).
- * A part that cannot be (a Möbius band: some edge disagrees whatever the
- * choice) is left as it is. Edges of one vertex repeated (1 2 3 3) and
- * edges used by three or more faces take no part. *reversed (may be NULL)
- * counts the faces reversed, *unorientable the parts left. TSR_ERR_NOMEM
- * (the cage unchanged). O(face corners log). */
-tsr_status tsr_cage_orient(tsr_cage *c, uint32_t *reversed, uint32_t *unorientable);
+ * OpenSubdiv sees a manifold edge, not a seam it leaves open), unless
+ * the two fold onto each other (their centroids less than 60 degrees
+ * apart about the edge: overlapping faces), which leaves the edge a seam.
+ * Faces are grouped into parts through the other edges; in a part that
+ * can be oriented, the faces against the majority are to be reversed
+ * (vertex order v0, v_n-1, ..., v1, texture corners alike; creases,
+ * corners and holes unchanged), and are when apply is true. A part that
+ * cannot be (a Möbius band: some edge disagrees whatever the choice) is
+ * left as it is. Edges of one vertex repeated (1 2 3 3) and edges used by
+ * three or more faces take no part. *reversed (may be NULL) counts the
+ * faces reversed (or to reverse), *first (may be NULL) the first of them
+ * (0-based; UINT32_MAX when none), *unorientable the parts left.
+ * OpenSubdiv's own non-manifold test shapes list faces against their
+ * neighbours on purpose (catmark_nonman_edges): reversing changes the
+ * surface they define. TSR_ERR_NOMEM (the cage unchanged). O(face
+ * corners log). */
+tsr_status tsr_cage_orient(tsr_cage *c, bool apply, uint32_t *reversed, uint32_t *first, uint32_t *unorientable);
 
 /* Frees every array and zeroes the cage; NULL or a zeroed cage is
  * allowed. */

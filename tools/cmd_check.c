@@ -359,6 +359,7 @@ static void help_patches(FILE *f)
         "                        prescribes; Bezier pieces are never retried, their bound is a proof\n"
         "  --scheme S            catmark or bilinear: the subdivision scheme of a polygon OBJ\n"
         CLI_WELD_HELP
+        CLI_ORIENT_HELP
         "  --assume-linked       take every patch edge as linked: nothing counts as a seam and every\n"
         "                        T-junction fails (what a crack between joined patches would give)\n"
         "  --json                print the results as JSON\n"
@@ -848,6 +849,7 @@ static int run_patches(int argc, char **argv)
     double max_error = 0;
     const char *scheme = NULL;
     double weld = 0;
+    bool orient = false;
     bool json = false, assume_linked = false;
     char **cam_args = calloc((size_t)argc + 1, sizeof *cam_args);
     int ncam_args = 0, rc = CLI_OK;
@@ -868,6 +870,8 @@ static int run_patches(int argc, char **argv)
             json = true;
         else if (!strcmp(a, "--assume-linked"))
             assume_linked = true;
+        else if (!strcmp(a, "--orient-faces"))
+            orient = true;
         else if (!strcmp(a, "--camera") && has_value)
             cam_args[ncam_args++] = argv[++i];
         else if (!strcmp(a, "--weld") && has_value) {
@@ -923,7 +927,7 @@ static int run_patches(int argc, char **argv)
     }
     cli_patch_model p;
     memset(&p, 0, sizeof p);
-    if (rc == CLI_OK && !cli_patch_model_load_weld("check", in, scheme, weld, &p))
+    if (rc == CLI_OK && !cli_patch_model_load_weld("check", in, scheme, weld, orient, &p))
         rc = CLI_FAIL;
     if (rc == CLI_OK) {
         cli_patch_flat_warnings("check", in, &p, 5);

@@ -39,6 +39,7 @@ static void help(FILE *f)
             "  --scheme S            catmark or bilinear, for a polygon cage (default: bilinear when the\n"
             "                        file name starts with \"bilinear\", else catmark)\n"
             CLI_WELD_HELP
+            CLI_ORIENT_HELP
             "  --normals             per-vertex normals of the true surface; where surfaces meet at an\n"
             "                        angle (sharp creases and corners of a cage, faces of a box of\n"
             "                        patches) the vertex is written once per side, each with its side's\n"
@@ -125,6 +126,7 @@ static int run(int argc, char **argv)
 {
     const char *in = NULL, *out = NULL, *stats = NULL, *cam_arg = NULL, *scheme = NULL;
     double weld = 0;
+    bool orient = false;
     double max_error = 0;
     view_options v = {60, 1920, 1080, 0, 0};
     uint32_t tile = 4, max_level = 10;
@@ -156,6 +158,8 @@ static int run(int argc, char **argv)
             }
         } else if (!strcmp(a, "--normals"))
             normals = true;
+        else if (!strcmp(a, "--orient-faces"))
+            orient = true;
         else if (!strcmp(a, "--crease-angle") && has_value) {
             if (!cli_parse_double(argv[++i], &crease) || !(crease >= 0 && crease <= 180)) {
                 cli_error("patch", "--crease-angle %s: must be an angle in 0..180 degrees", argv[i]);
@@ -225,7 +229,7 @@ static int run(int argc, char **argv)
         return CLI_FAIL;
     double t0 = cli_now();
     cli_patch_model pm;
-    if (!cli_patch_model_load_weld("patch", in, scheme, weld, &pm))
+    if (!cli_patch_model_load_weld("patch", in, scheme, weld, orient, &pm))
         return CLI_FAIL;
     if (!quiet && !pm.is_subd && pm.set.num_polygons)
         fprintf(stderr,

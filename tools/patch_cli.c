@@ -15,10 +15,10 @@ static void report_load_error(const char *cmd, const char *in, tsr_status st, co
 
 bool cli_patch_model_load(const char *cmd, const char *path, const char *scheme, cli_patch_model *out)
 {
-    return cli_patch_model_load_weld(cmd, path, scheme, 0, out);
+    return cli_patch_model_load_weld(cmd, path, scheme, 0, false, out);
 }
 
-bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *scheme, double weld,
+bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *scheme, double weld, bool orient,
                                cli_patch_model *out)
 {
     memset(out, 0, sizeof *out);
@@ -44,9 +44,11 @@ bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *sc
             cli_patch_model_free(out);
             return false;
         }
-        /* faces listed against their neighbours' order would make their
-         * shared edges seams OpenSubdiv leaves open: turned to agree */
-        if (tsr_cage_orient(&out->cage, &out->cage_reversed, &out->cage_unorientable) != TSR_OK) {
+        /* faces listed against their neighbours' order make their shared
+         * edges seams OpenSubdiv leaves open: reversed when asked */
+        out->cage_oriented = orient;
+        if (tsr_cage_orient(&out->cage, orient, &out->cage_reversed, &out->cage_first_reversed,
+                            &out->cage_unorientable) != TSR_OK) {
             cli_error(cmd, "%s: out of memory", path);
             cli_patch_model_free(out);
             return false;
@@ -258,13 +260,19 @@ uint32_t cli_patch_trim_warnings(const char *cmd, const char *path, const cli_pa
 
 void cli_patch_model_notes(const char *cmd, const char *path, const cli_patch_model *pm)
 {
-    if (pm->cage_reversed)
+    uint32_t n = pm->cage_reversed;
+    if (n && pm->cage_oriented)
         fprintf(stderr,
-                "tessera %s: %s: note: %u cage face%s listed %s vertices against %s neighbours' order; reversed, so "
-                "the edges %s are joined, not left open\n",
-                cmd, path, pm->cage_reversed, pm->cage_reversed == 1 ? "" : "s",
-                pm->cage_reversed == 1 ? "its" : "their", pm->cage_reversed == 1 ? "its" : "their",
-                pm->cage_reversed == 1 ? "it shares" : "they share");
+                "tessera %s: %s: note: %u cage face%s listed against %s neighbours' order; reversed (--orient-faces), "
+                "so the edges %s are joined\n",
+                cmd, path, n, n == 1 ? "" : "s", n == 1 ? "its" : "their", n == 1 ? "it shares" : "they share");
+    else if (n)
+        fprintf(stderr,
+                "tessera %s: %s: warning: %u cage face%s (the first: face %u) listed against %s neighbours' order: "
+                "OpenSubdiv leaves the edges %s open, and the mesh has cracks there; --orient-faces reverses "
+                "%s\n",
+                cmd, path, n, n == 1 ? "" : "s", pm->cage_first_reversed + 1, n == 1 ? "its" : "their",
+                n == 1 ? "it shares" : "they share", n == 1 ? "it" : "them");
     if (pm->cage_unorientable)
         fprintf(stderr,
                 "tessera %s: %s: warning: %u part%s of the cage cannot be oriented (a Moebius band): the edges where "

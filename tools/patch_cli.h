@@ -16,7 +16,9 @@ typedef struct cli_patch_model {
     bool is_subd;
     const char *kind;    /* "bpt", "obj-surfaces", "cage-catmark" or "cage-bilinear" */
     double diag;         /* model box diagonal */
-    uint32_t cage_reversed;     /* cage faces reversed to agree with their neighbours (tsr_cage_orient) */
+    uint32_t cage_reversed;     /* cage faces against their neighbours (tsr_cage_orient): reversed when asked */
+    uint32_t cage_first_reversed; /* the first of them, 0-based */
+    bool cage_oriented;         /* they were reversed (--orient-faces) */
     uint32_t cage_unorientable; /* parts of the cage no orientation agrees across (left as they are) */
 } cli_patch_model;
 
@@ -28,9 +30,17 @@ typedef struct cli_patch_model {
  * returns false on failure (nothing to free then). */
 bool cli_patch_model_load(const char *cmd, const char *path, const char *scheme, cli_patch_model *out);
 /* The same with the distance within which patch edges are linked and
- * welded (tsr_pmodel_from_set_tol; model units, 0: the default). */
-bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *scheme, double weld,
+ * welded (tsr_pmodel_from_set_tol; model units, 0: the default), and for
+ * a cage, orient: reverse the faces listed against their neighbours
+ * (tsr_cage_orient; otherwise only counted, for cli_patch_model_notes). */
+bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *scheme, double weld, bool orient,
                                cli_patch_model *out);
+
+/* The --orient-faces option's help, shared by patch and check. */
+#define CLI_ORIENT_HELP                                                                                \
+    "  --orient-faces        reverse cage faces listed against their neighbours' order (OpenSubdiv\n"   \
+    "                        leaves the edges they share open: a crack); without it they are\n"        \
+    "                        only warned of\n"
 
 /* The --weld option's help, shared by patch and check. */
 #define CLI_WELD_HELP                                                                                  \
@@ -55,8 +65,9 @@ uint32_t cli_patch_flat_warnings(const char *cmd, const char *path, const cli_pa
  * with tiles of `tile` (tsr_pmodel_set_options.split_error: knot spans
  * curved one way and straight the other cut across the curve). false
  * after printing an error (the old model kept). */
-/* Prints on stderr what loading changed or could not: cage faces
- * reversed (a note), parts that cannot be oriented (a warning). */
+/* Prints on stderr what loading changed or found: cage faces against
+ * their neighbours (reversed: a note; else a warning naming the first and
+ * --orient-faces), parts that cannot be oriented (a warning). */
 void cli_patch_model_notes(const char *cmd, const char *path, const cli_patch_model *pm);
 
 bool cli_patch_model_split(const char *cmd, const char *path, cli_patch_model *pm, double weld, double max_error,

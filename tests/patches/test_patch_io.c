@@ -679,17 +679,21 @@ TEST(cage_orient)
         return;
     /* faces 1 (5 6 4 3 for 3 4 6 5) and 2 (7 8 6 5 for 5 6 8 7) are listed backwards: reversed, the other
      * four, the majority, keep their order */
-    uint32_t before = cage_disagreements(&c), rev = 99, bad = 99;
+    uint32_t before = cage_disagreements(&c), rev = 99, bad = 99, first = 99;
     CHECK_MSG(before > 0, "the fixture is consistent: %u", before);
-    CHECK(tsr_cage_orient(&c, &rev, &bad) == TSR_OK);
-    CHECK_MSG(rev == 2 && bad == 0, "reversed %u unorientable %u", rev, bad);
+    /* counted only */
+    CHECK(tsr_cage_orient(&c, false, &rev, &first, &bad) == TSR_OK);
+    CHECK_MSG(rev == 2 && first == 1 && bad == 0, "reversed %u first %u unorientable %u", rev, first, bad);
+    CHECK(cage_disagreements(&c) == before);
+    CHECK(tsr_cage_orient(&c, true, &rev, &first, &bad) == TSR_OK);
+    CHECK_MSG(rev == 2 && first == 1 && bad == 0, "reversed %u first %u unorientable %u", rev, first, bad);
     CHECK_MSG(cage_disagreements(&c) == 0, "%u edges still run one way twice", cage_disagreements(&c));
     /* face 1 (corners 4..7) is now 5 3 4 6 with its texture corners 1 4 3 2 */
     CHECK(c.face_verts[4] == 4 && c.face_verts[5] == 2 && c.face_verts[6] == 3 && c.face_verts[7] == 5);
     CHECK(c.face_uvs && c.face_uvs[4] == 0 && c.face_uvs[5] == 3 && c.face_uvs[6] == 2 && c.face_uvs[7] == 1);
     CHECK(c.num_holes == 1 && c.hole_faces[0] == 3);
     /* again: nothing to do */
-    CHECK(tsr_cage_orient(&c, &rev, &bad) == TSR_OK && rev == 0 && bad == 0);
+    CHECK(tsr_cage_orient(&c, true, &rev, &first, &bad) == TSR_OK && rev == 0 && first == UINT32_MAX && bad == 0);
     tsr_cage_free(&c);
     /* a Möbius band of four quads: no orientation agrees; left as it is */
     const char *band = "v 0 0 0\nv 0 0 1\nv 1 0 0\nv 1 0 1\nv 1 1 0\nv 1 1 1\nv 0 1 0\nv 0 1 1\n"
@@ -700,11 +704,20 @@ TEST(cage_orient)
         return;
     uint32_t verts[16];
     memcpy(verts, c.face_verts, sizeof verts);
-    CHECK(tsr_cage_orient(&c, &rev, &bad) == TSR_OK);
+    CHECK(tsr_cage_orient(&c, true, &rev, NULL, &bad) == TSR_OK);
     CHECK_MSG(rev == 0 && bad == 1, "band: reversed %u unorientable %u", rev, bad);
     CHECK(!memcmp(verts, c.face_verts, sizeof verts));
     tsr_cage_free(&c);
-    CHECK(tsr_cage_orient(NULL, &rev, &bad) == TSR_OK && rev == 0);
+    CHECK(tsr_cage_orient(NULL, true, &rev, NULL, &bad) == TSR_OK && rev == 0);
+    /* two overlapping faces run their shared edge the same way: a fold,
+     * left a seam (OpenSubdiv's reading), nothing reversed */
+    const char *fold = "v 0.3 0 -0.7\nv 0.7 0 -0.7\nv 0.3 -0.2 -0.9\nv 0.7 -0.2 -0.9\nf 3 4 1\nf 3 4 2\n";
+    st = tsr_cage_parse(fold, strlen(fold), "fold.obj", NULL, &c, &e);
+    CHECK_MSG(st == TSR_OK, "%s", e.message);
+    if (st == TSR_OK) {
+        CHECK(tsr_cage_orient(&c, true, &rev, NULL, &bad) == TSR_OK && rev == 0 && bad == 0);
+        tsr_cage_free(&c);
+    }
 }
 
 TEST(bad_files_name_the_line)

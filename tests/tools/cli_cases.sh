@@ -283,11 +283,15 @@ patch_input_messages)
   grep -q warning "$cap/stderr" && fail "a bound within the tolerance warned: $(cat "$cap/stderr")"
   { printf '\357\273\277'; cat "$dir/wavy.bpt"; } > "$dir/bom.bpt"
   "$tessera" patch "$dir/bom.bpt" -o "$dir/w.obj" --quiet || fail "a byte order mark was refused"
-  # a cube cage with one face listed backwards: reversed with a note, and
-  # the mesh is closed (every edge in two triangles, run both ways)
+  # a cube cage with one face listed backwards: warned of; with
+  # --orient-faces reversed with a note, and the mesh is closed (every edge
+  # in two triangles, run both ways)
   printf 'v -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\nv -1 1 -1\nv 1 1 -1\nv -1 -1 -1\nv 1 -1 -1\nf 1 2 4 3\nf 5 6 4 3\nf 5 6 8 7\nf 7 8 2 1\nf 2 8 6 4\nf 7 1 3 5\n' > "$dir/cube.obj"
   "$tessera" patch "$dir/cube.obj" -o "$dir/cube_out.obj" 2> "$cap/stderr" || fail "cube: $(cat "$cap/stderr")"
-  grep -q "cube\.obj: note: 1 cage face listed its vertices against its neighbours' order; reversed" "$cap/stderr" ||
+  grep -q "cube\.obj: warning: 1 cage face (the first: face 2) listed against its neighbours' order: OpenSubdiv leaves the edges it shares open.*--orient-faces reverses it" "$cap/stderr" ||
+    fail "cube: no warning: $(cat "$cap/stderr")"
+  "$tessera" patch "$dir/cube.obj" -o "$dir/cube_out.obj" --orient-faces 2> "$cap/stderr" || fail "cube: $(cat "$cap/stderr")"
+  grep -q "cube\.obj: note: 1 cage face listed against its neighbours' order; reversed (--orient-faces)" "$cap/stderr" ||
     fail "cube: no note: $(cat "$cap/stderr")"
   awk '/^f /{for (i = 2; i <= 4; i++) { split($i, a, "/"); split($(i == 4 ? 2 : i + 1), b, "/"); e[a[1] " " b[1]]++ } }
        END { for (k in e) { split(k, v, " "); if (e[k] != 1 || e[v[2] " " v[1]] != 1) bad++ } exit bad > 0 }' \
