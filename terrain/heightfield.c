@@ -401,19 +401,27 @@ static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_
         }
     } else {
         /* Several channels are accepted only when they agree: grey stored
-         * as RGB. An alpha channel marks no-data where it is 0 and is
-         * otherwise ignored. Anything else is ambiguous. */
-        size_t colour = nch == 2 || nch == 4 ? nch - 1 : nch;
+         * as RGB. A last channel the file marks as alpha (a PNG's, a TIFF's
+         * extra sample) marks no-data where it is 0 and is otherwise
+         * ignored. Anything else is ambiguous: bands of a multi-band GIS
+         * raster that differ are refused, not read as the first. */
+        bool alpha = nch >= 2 && info.alpha_channel == (int)nch - 1;
+        size_t colour = alpha ? nch - 1 : nch;
         for (size_t i = 0; i < n; i++) {
             const float *p = px + i * nch;
             for (size_t c = 1; c < colour; c++)
                 if (p[c] != p[0] && !(isnan(p[c]) && isnan(p[0]))) {
                     tsr_heightfield_destroy(hf);
                     tsr_free(alloc, px);
+                    if (colour == 3)
+                        return tsr_error_set(err, TSR_ERR_FORMAT,
+                                             "%s: a colour image (channels differ at column %zu, row %zu); "
+                                             "use --decode terrain-rgb for Terrain-RGB tiles",
+                                             path, i % info.width, i / info.width);
                     return tsr_error_set(err, TSR_ERR_FORMAT,
-                                         "%s: a colour image (channels differ at column %zu, row %zu); "
-                                         "use --decode terrain-rgb for Terrain-RGB tiles",
-                                         path, i % info.width, i / info.width);
+                                         "%s: %zu bands that differ (band %zu at column %zu, row %zu); a heightfield "
+                                         "has one (extract the band of heights first, e.g. gdal_translate -b 1)",
+                                         path, nch, c + 1, i % info.width, i / info.width);
                 }
             hf->data[i] = info.has_scale ? (float)(p[0] * info.scale + info.offset) : p[0];
             if (colour < nch && p[colour] == 0)

@@ -136,6 +136,7 @@ tsr_status tsr_io_image_read(const char *path, const tsr_allocator *alloc, uint6
     info->width = (uint32_t)std::min<uint64_t>(w, UINT32_MAX);
     info->height = (uint32_t)std::min<uint64_t>(h, UINT32_MAX);
     info->channels = (uint32_t)spec.nchannels;
+    info->alpha_channel = spec.alpha_channel;
     std::snprintf(info->format, sizeof info->format, "%s", in->format_name());
     std::snprintf(info->type, sizeof info->type, "%s", spec.format.c_str());
     if (w > TSR_HEIGHTFIELD_MAX_SIDE || h > TSR_HEIGHTFIELD_MAX_SIDE || w * h > max_samples)

@@ -45,6 +45,7 @@ struct tsr_heightfield {
 /* What the image bridge found in a file. */
 typedef struct tsr_image_info {
     uint32_t width, height, channels;
+    int alpha_channel; /* the channel the file marks as alpha (OpenImageIO's spec), or -1 */
     char format[16]; /* OpenImageIO's format name: "png", "tiff", "openexr"... */
     char type[16];   /* sample type: "uint8", "uint16", "float"... */
     bool has_scale;  /* a Tessera scale/offset found in the metadata */

@@ -73,9 +73,13 @@ static void help_patches(FILE *f);
 
 static void help(FILE *f)
 {
-    help_terrain(f);
-    fprintf(f, "\n");
-    help_patches(f);
+    fprintf(f, "usage: tessera check terrain IN [options]\n"
+               "       tessera check patches IN [options]\n\n"
+               "Tessellation error tests: each tessellates its input, measures the error independently of\n"
+               "how the mesh was made and validates the mesh; exit 1 when a bound or a check fails.\n\n"
+               "  terrain   view-dependent terrain cuts for random or given cameras, in pixels\n"
+               "  patches   Bezier, NURBS and subdivision surfaces, view-independent and per camera\n\n"
+               "'tessera check terrain --help' and 'tessera check patches --help' give their options.\n");
 }
 
 static int run_terrain(int argc, char **argv)

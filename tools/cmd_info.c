@@ -10,7 +10,8 @@ static void help(FILE *f)
 {
     fprintf(f, "usage: tessera info FILE [options]\n\n"
                "Prints a heightfield's format, size, minimum, maximum, mean height and no-data count.\n"
-               "Heights are in the file's units (8/16-bit images give their integer values).\n\n"
+               "Heights are in the file's units (8/16-bit images give their integer values); with --dz, the\n"
+               "range scaled as meshes get it is printed too (z, JSON z_min and z_max).\n\n"
                "options:\n"
                "  --json                print the same as a JSON object\n" CLI_HEIGHTFIELD_HELP
                "  -h, --help            this help\n");
@@ -66,6 +67,11 @@ static int run(int argc, char **argv)
         cJSON_AddNumberToObject(j, "max", st.max);
         cJSON_AddNumberToObject(j, "mean", st.mean);
         cJSON_AddNumberToObject(j, "nodata", (double)st.nodata);
+        if (o.dz > 0) { /* what the meshes get: z = h * dz */
+            cJSON_AddNumberToObject(j, "dz", o.dz);
+            cJSON_AddNumberToObject(j, "z_min", st.min * o.dz);
+            cJSON_AddNumberToObject(j, "z_max", st.max * o.dz);
+        }
         cli_georef_json(j, hf, &o);
         char *s = cJSON_Print(j);
         printf("%s\n", s);
@@ -79,6 +85,9 @@ static int run(int argc, char **argv)
         if (g && g->has_nodata)
             printf(" (the file's no-data value: %.9g%s)", g->nodata, o.load.has_nodata ? ", replaced by --nodata" : "");
         printf("\nspacing: %s\n", spacing);
+        if (o.dz > 0)
+            printf("z:       %.9g to %.9g (heights * %.9g, --dz: what meshes get)\n", st.min * o.dz, st.max * o.dz,
+                   o.dz);
         if (g && g->has_transform)
             printf("origin:  %.12g, %.12g (sample 0, 0; pixel %.9g x %.9g)\n", g->origin[0], g->origin[1],
                    g->pixel[0], g->pixel[1]);

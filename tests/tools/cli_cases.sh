@@ -50,6 +50,13 @@ tiled_tiff)
   "$tessera" mesh "$dir/tiledz.tif" -o "$dir/t.obj" --quiet || fail "mesh of a tiled TIFF"
   "$tessera" mesh "$dir/g.tif" -o "$dir/g.obj" --quiet || fail "mesh"
   cmp -s "$dir/t.obj" "$dir/g.obj" || fail "the tiled file's mesh differs"
+  # a two-band raster (no alpha marked) whose bands differ is refused, not
+  # read as its first band; a second band marked alpha is no-data at 0
+  oiiotool --pattern constant:color=0.5,0.1 8x8 2 -d uint16 -o "$dir/two.tif" || fail "oiiotool failed"
+  expect_error 1 "two\.tif: 2 bands that differ \(band 2 at column 0, row 0\); a heightfield has one" -- \
+    "$tessera" mesh "$dir/two.tif" -o "$out"
+  oiiotool --pattern checker:width=4:height=4:color1=0.5,0:color2=0.5,1 8x8 2 -d uint16 --chnames Y,A -o "$dir/ga.tif" || fail "oiiotool failed"
+  "$tessera" info "$dir/ga.tif" --json | grep -q '"nodata":[[:space:]]*32' || fail "ga.tif: $("$tessera" info "$dir/ga.tif")"
   rm -f "$dir"/*.tif "$dir"/*.obj "$dir"/*.stats ;;
 height_overflow)
   # heights times --dz beyond float32 (which vertices are written in): an
@@ -318,7 +325,16 @@ gis_warnings)
     "$tessera" mesh "$dir/ft.tif" -o "$dir/f.obj" $extra 2> "$cap/stderr" || fail "mesh ft $extra"
     grep -q warning "$cap/stderr" && fail "ft $extra: $(cat "$cap/stderr")"
   done
-  rm -f "$dir"/*.tif "$dir"/*.obj
+  # info --dz gives the scaled range the meshes get
+  "$tessera" generate --size 17 -o "$dir/g.png" --quiet || fail "generate"
+  "$tessera" info "$dir/g.png" --dz 0.5 --json > "$dir/i.json" || fail "info --dz"
+  python3 - "$dir/i.json" <<'PY' || fail "info --dz: $(cat "$dir/i.json")"
+import json, sys
+j = json.load(open(sys.argv[1]))
+sys.exit(0 if j["dz"] == 0.5 and j["z_min"] == 0.5 * j["min"] and j["z_max"] == 0.5 * j["max"] and j["max"] > 0 else 1)
+PY
+  "$tessera" info "$dir/g.png" --dz 0.5 | grep -q "^z: .*(heights \* 0\.5, --dz" || fail "info --dz: no z line"
+  rm -f "$dir"/*.tif "$dir"/*.obj "$dir"/*.png "$dir"/*.json
   echo "ok [$case]" ;;
 patch_inward_shell)
   # a closed box of six bilinear patches, each facing the box's inside: the
