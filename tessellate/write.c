@@ -55,27 +55,75 @@ void tsr_atomic_remove_pending(void)
             unlink(pending_path[k]);
 }
 
+/* The file an output to path lands in: path itself, or, where path is a
+ * symbolic link, the file it points to (followed to the end, also when
+ * that file does not exist yet), so the link stays a link. false when the
+ * links go round or the result does not fit. */
+static bool output_target(const char *path, char *out, size_t cap)
+{
+    char cur[4096], link[4096];
+    if (strlen(path) >= sizeof cur)
+        return false;
+    strcpy(cur, path);
+    for (int hops = 0; hops < 40; hops++) {
+        struct stat st;
+        if (lstat(cur, &st) != 0 || !S_ISLNK(st.st_mode)) {
+            if (strlen(cur) >= cap)
+                return false;
+            strcpy(out, cur);
+            return true;
+        }
+        ssize_t n = readlink(cur, link, sizeof link - 1);
+        if (n < 0)
+            return false;
+        link[n] = '\0';
+        if (link[0] == '/') {
+            strcpy(cur, link);
+        } else { /* relative to the link's folder */
+            const char *slash = strrchr(cur, '/');
+            size_t dir = slash ? (size_t)(slash - cur) + 1 : 0;
+            if (dir + (size_t)n >= sizeof cur)
+                return false;
+            memmove(cur + dir, link, (size_t)n + 1);
+        }
+    }
+    return false;
+}
+
 tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *err)
 {
-    const char *slash = strrchr(path, '/');
-    const char *base = slash ? slash + 1 : path;
+    char target[4096];
+    if (!output_target(path, target, sizeof target))
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: a symbolic link that loops or is too long", path);
+    const char *slash = strrchr(target, '/');
+    const char *base = slash ? slash + 1 : target;
     const char *dot = strrchr(base, '.');
     const char *ext = dot ? dot : "";
-    size_t dirlen = (size_t)(base - path);
-    int n = snprintf(tmp, cap, "%.*s.%.*s.tsr-tmp-XXXXXX%s", (int)dirlen, path,
+    size_t dirlen = (size_t)(base - target);
+    int n = snprintf(tmp, cap, "%.*s.%.*s.tsr-tmp-XXXXXX%s", (int)dirlen, target,
                      (int)(dot ? (size_t)(dot - base) : strlen(base)), base, ext);
     if (*base == '\0')
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path names a folder, not a file", path);
     if (n < 0 || (size_t)n >= cap)
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path too long", path);
+    /* an existing file keeps its permissions; one without any write
+     * permission is not replaced (as opening it for writing would fail,
+     * also for root) */
+    struct stat old;
+    bool exists = stat(target, &old) == 0;
+    if (exists && S_ISDIR(old.st_mode))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path names a folder, not a file", path);
+    if (exists && !(old.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)))
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: the file is read-only", path);
     int fd = mkstemps(tmp, (int)strlen(ext));
     if (fd < 0)
         return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
-    /* mkstemps makes the file 0600; the output gets the permissions any
-     * new file would (0666 less the umask) */
+    /* mkstemps makes the file 0600; the output gets the permissions of the
+     * file it replaces, else those any new file would (0666 less the
+     * umask) */
     mode_t mask = umask(0);
     umask(mask);
-    fchmod(fd, 0666 & ~mask);
+    fchmod(fd, exists ? old.st_mode & 07777 : 0666 & ~mask);
     close(fd);
     pending_add(tmp);
     return TSR_OK;
@@ -83,7 +131,8 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
 
 tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err)
 {
-    if (rename(tmp, path) != 0) {
+    char target[4096];
+    if (!output_target(path, target, sizeof target) || rename(tmp, target) != 0) {
         int e = errno;
         remove(tmp);
         pending_drop(tmp);

@@ -120,7 +120,27 @@ unwritable_output)
   if [ "$(id -u)" -ne 0 ]; then
     mkdir "$dir/ro" && chmod 500 "$dir/ro"
     expect_error 1 "ro/x\.glb: cannot write" -- "$tessera" mesh "$dir/g.png" -o "$dir/ro/x.glb"
-  fi ;;
+  fi
+  # a read-only file is not replaced (also for root), through a link
+  # neither; a link to a writable file stays a link, the file it points to
+  # gets the mesh and keeps its permissions; a looping link is refused
+  "$tessera" mesh "$dir/g.png" -o "$dir/ro.obj" --quiet || fail "mesh"
+  chmod 444 "$dir/ro.obj" && sum=$(cksum < "$dir/ro.obj")
+  ln -s ro.obj "$dir/to_ro.obj"
+  expect_error 1 "ro\.obj: cannot write: the file is read-only" -- "$tessera" mesh "$dir/g.png" -o "$dir/ro.obj" --max-error 9
+  expect_error 1 "to_ro\.obj: cannot write: the file is read-only" -- "$tessera" mesh "$dir/g.png" -o "$dir/to_ro.obj" --max-error 9
+  [ "$(cksum < "$dir/ro.obj")" = "$sum" ] || fail "the read-only file changed"
+  rm -f "$dir/ro.obj" "$dir/to_ro.obj"
+  "$tessera" mesh "$dir/g.png" -o "$dir/real.obj" --quiet && chmod 640 "$dir/real.obj" || fail "mesh"
+  ln -s real.obj "$dir/link.obj"
+  "$tessera" mesh "$dir/g.png" -o "$dir/link.obj" --max-error 50 --stats "$dir/s.json" --quiet || fail "mesh through a link"
+  [ -L "$dir/link.obj" ] || fail "the link was replaced by a file"
+  grep -q "^# Tessera mesh: [0-9]* vertices, $(grep -o '"triangles":[[:space:]]*[0-9]*' "$dir/s.json" | grep -o '[0-9]*$') triangles" "$dir/real.obj" ||
+    fail "the linked file did not get the mesh: $(head -1 "$dir/real.obj")"
+  [ "$(stat -c %a "$dir/real.obj")" = 640 ] || fail "permissions $(stat -c %a "$dir/real.obj"), not 640"
+  ln -s loop_b.obj "$dir/loop_a.obj" && ln -s loop_a.obj "$dir/loop_b.obj"
+  expect_error 1 "loop_a\.obj: cannot write: a symbolic link that loops" -- "$tessera" mesh "$dir/g.png" -o "$dir/loop_a.obj"
+  rm -f "$dir"/*.obj "$dir/s.json" ;;
 outputs_checked_first)
   # Every output is checked before the work: an unwritable --stats (or
   # image, or video) fails the command with nothing written, not after the
