@@ -282,16 +282,37 @@ static bool solid_fits(const tsr_mesh *m, uint32_t max_t, uint32_t max_v)
     return (!max_t || m->triangle_count <= max_t) && (!max_v || m->vertex_count <= max_v);
 }
 
+/* Vertices where the surface's boundary passes more than once (two
+ * no-data holes, or a hole and the edge, meeting at a sample's corner):
+ * a solid's walls touch themselves along the vertical edge below. */
+static uint32_t count_pinches(const tsr_mesh *m)
+{
+    tsr_halfedges he;
+    uint8_t *seen = calloc((size_t)m->vertex_count + 1, 1);
+    uint32_t n = 0;
+    if (!seen || tsr_halfedges_build(&he, m, NULL) != TSR_OK) {
+        free(seen);
+        return 0;
+    }
+    for (uint32_t h = 0; h < he.count; h++)
+        if (he.twin[h] == TSR_NO_TWIN && m->indices[h] < m->vertex_count && seen[m->indices[h]]++ == 1)
+            n++;
+    tsr_halfedges_free(&he);
+    free(seen);
+    return n;
+}
+
 /* build_measured, then with base_z the walls and bottom down to it (split:
  * flat-shaded, their vertices apart from the top's). */
 static int build_solid(const tsr_heightfield *hf, tsr_tin_options *to, double max_error, double ztop,
                        const char *in, const uint32_t win[4], const double *base_z, bool split, tsr_mesh *mesh,
-                       tsr_tin_report *rep, tsr_error_report *er, double *bound)
+                       tsr_tin_report *rep, tsr_error_report *er, double *bound, uint32_t *pinches)
 {
     int rc = build_measured(hf, to, max_error, ztop, in, win[0], win[1], win[2], win[3], mesh, rep, er, bound);
     if (rc != CLI_OK || !base_z)
         return rc;
     uint32_t top = mesh->triangle_count;
+    *pinches = count_pinches(mesh);
     tsr_error err = {0};
     if (tsr_mesh_add_base(mesh, *base_z, &err) != TSR_OK || (split && tsr_mesh_split_flat(mesh, top, 30, &err) != TSR_OK)) {
         cli_error("mesh", "--base: %s", err.message);
@@ -308,6 +329,7 @@ static int run(int argc, char **argv)
     double max_error = 0, base = 0;
     bool quiet = false, has_base = false, has_window = false, no_flip_given = false, north_up = false;
     uint32_t win[4] = {0};
+    uint32_t pinches = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (cli_is_help(a)) {
@@ -519,7 +541,7 @@ static int run(int argc, char **argv)
      * too): the top's budgets are scaled by x in (0, 1], searched for the
      * largest x whose solid fits (within 0.5 % of the budget). */
     uint32_t budget_t = to.max_triangles, budget_v = to.max_vertices;
-    rc = build_solid(hf, &to, max_error, ztop, in, win4, has_base ? &base_z : NULL, split, &mesh, &rep, &er, &bound);
+    rc = build_solid(hf, &to, max_error, ztop, in, win4, has_base ? &base_z : NULL, split, &mesh, &rep, &er, &bound, &pinches);
     if (rc == CLI_OK && has_base && (budget_t || budget_v) && !solid_fits(&mesh, budget_t, budget_v)) {
         double lo = 0, hi = 1, x = 1;
         bool have_lo = false, last_fits = false;
@@ -551,7 +573,7 @@ static int run(int argc, char **argv)
             to.max_vertices = tv;
             tsr_mesh_free(&mesh);
             tsr_mesh_init(&mesh, to.normals ? TSR_MESH_NORMALS : 0, NULL);
-            rc = build_solid(hf, &to, max_error, ztop, in, win4, &base_z, split, &mesh, &rep, &er, &bound);
+            rc = build_solid(hf, &to, max_error, ztop, in, win4, &base_z, split, &mesh, &rep, &er, &bound, &pinches);
             last_fits = rc == CLI_OK && solid_fits(&mesh, budget_t, budget_v);
             if (last_fits) {
                 lo = x;
@@ -569,7 +591,7 @@ static int run(int argc, char **argv)
             to.max_vertices = budget_v ? (uint32_t)fmax(4, floor(budget_v * lo)) : 0;
             tsr_mesh_free(&mesh);
             tsr_mesh_init(&mesh, to.normals ? TSR_MESH_NORMALS : 0, NULL);
-            rc = build_solid(hf, &to, max_error, ztop, in, win4, &base_z, split, &mesh, &rep, &er, &bound);
+            rc = build_solid(hf, &to, max_error, ztop, in, win4, &base_z, split, &mesh, &rep, &er, &bound, &pinches);
         }
     }
     to.max_triangles = budget_t; /* the stats give the budget asked for */
@@ -627,6 +649,12 @@ static int run(int argc, char **argv)
             fprintf(stderr,
                     "tessera mesh: note: %llu valid samples lie in no triangle (next to no-data) and are not measured\n",
                     (unsigned long long)er.uncovered);
+        if (has_base && pinches && tsr_mesh_format_from_path(out) == TSR_FORMAT_STL)
+            fprintf(stderr,
+                    "tessera mesh: warning: the valid region pinches at %u sample%s (no-data meeting at a corner): "
+                    "the solid touches itself along the wall edge below, which an STL (no shared vertices) makes "
+                    "a non-manifold edge for slicers; .obj, .ply and .glb keep the two sides apart\n",
+                    pinches, pinches == 1 ? "" : "s");
     }
     tsr_mesh_free(&mesh);
     tsr_heightfield_destroy(hf);

@@ -345,6 +345,18 @@ gis_warnings)
     "$tessera" mesh "$dir/ft.tif" -o "$dir/f.obj" $extra 2> "$cap/stderr" || fail "mesh ft $extra"
     grep -q warning "$cap/stderr" && fail "ft $extra: $(cat "$cap/stderr")"
   done
+  # --base over a valid region that pinches at one sample (two blocks
+  # meeting at a corner): the STL gets a warning, the PLY does not need one
+  python3 - "$dir/pinch.f32" <<'PY' || fail "python3 could not write pinch.f32"
+import struct, sys
+v = [10.0 + r + 0.5 * c if (r <= 3 and c <= 3) or (r >= 3 and c >= 3) else float('nan') for r in range(7) for c in range(7)]
+open(sys.argv[1], 'wb').write(struct.pack('<49f', *v))
+PY
+  "$tessera" mesh "$dir/pinch.f32" --raw 7 7 f32 --base 5 -o "$dir/p.stl" 2> "$cap/stderr" || fail "pinch stl"
+  grep -q "warning: the valid region pinches at 1 sample" "$cap/stderr" || fail "pinch: $(cat "$cap/stderr")"
+  "$tessera" mesh "$dir/pinch.f32" --raw 7 7 f32 --base 5 -o "$dir/p.ply" 2> "$cap/stderr" || fail "pinch ply"
+  grep -q warning "$cap/stderr" && fail "pinch ply: $(cat "$cap/stderr")"
+  rm -f "$dir/p.stl" "$dir/p.ply" "$dir/pinch.f32"
   # info --dz gives the scaled range the meshes get
   "$tessera" generate --size 17 -o "$dir/g.png" --quiet || fail "generate"
   "$tessera" info "$dir/g.png" --dz 0.5 --json > "$dir/i.json" || fail "info --dz"
