@@ -677,6 +677,8 @@ static tsr_status find_partial_pairs(const tsr_patch_set *set, const double *dom
                                      double tol, const tsr_allocator *a, epair **pairs, uint32_t *npairs,
                                      uint32_t *cappairs)
 {
+    if (ne < 2)
+        return TSR_OK;
     const uint32_t ns = EDGE_SAMPLES + 1;
     double *S = tsr_alloc(a, (size_t)ne * ns * 3 * sizeof *S), *box = tsr_alloc(a, (size_t)ne * 6 * sizeof *box);
     eend *ends = tsr_alloc(a, (size_t)ne * 2 * sizeof *ends);
