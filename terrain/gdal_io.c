@@ -144,11 +144,21 @@ static void ground_spacing(OGRSpatialReferenceH s, uint32_t w, uint32_t h, tsr_g
     if ((g->crs == TSR_CRS_GEOGRAPHIC || gr.ct) && e1 == OGRERR_NONE && e2 == OGRERR_NONE && gr.rad > 0 &&
         gr.a > 0 && ground_step(&gr, g->origin[0] + 0.5 * (w - 1.0) * g->pixel[0],
                                 g->origin[1] + 0.5 * (h - 1.0) * g->pixel[1], g->pixel[0], g->pixel[1], mid)) {
-        g->spacing[0] = mid[0];
-        g->spacing[1] = mid[1];
+        g->spacing[0] = g->ground[0] = mid[0];
+        g->spacing[1] = g->ground[1] = mid[1];
         g->has_spacing = true;
-        g->spacing_approx = !ground_step(&gr, g->origin[0], g->origin[1], g->pixel[0], g->pixel[1], corner) ||
-                            fabs(corner[0] / mid[0] - 1) > 1e-3 || fabs(corner[1] / mid[1] - 1) > 1e-3;
+        bool at_corner = ground_step(&gr, g->origin[0], g->origin[1], g->pixel[0], g->pixel[1], corner);
+        g->spacing_approx =
+            !at_corner || fabs(corner[0] / mid[0] - 1) > 1e-3 || fabs(corner[1] / mid[1] - 1) > 1e-3;
+        /* a projection near true scale over the raster: its own metres */
+        double lin = g->crs == TSR_CRS_PROJECTED ? OSRGetLinearUnits(s, NULL) : 0;
+        double cx = fabs(g->pixel[0]) * lin, cy = fabs(g->pixel[1]) * lin;
+        if (lin > 0 && at_corner && fabs(mid[0] / cx - 1) <= 0.01 && fabs(mid[1] / cy - 1) <= 0.01 &&
+            fabs(corner[0] / cx - 1) <= 0.01 && fabs(corner[1] / cy - 1) <= 0.01) {
+            g->spacing[0] = cx;
+            g->spacing[1] = cy;
+            g->spacing_crs = true;
+        }
     }
     if (gr.ct)
         OCTDestroyCoordinateTransformation(gr.ct);

@@ -349,8 +349,8 @@ static tsr_status load_image(const char *path, const tsr_load_options *o, tsr_he
         }
         hf->has_georef = true;
         hf->georef.has_spacing = true;
-        hf->georef.spacing[0] = info.spacing[0];
-        hf->georef.spacing[1] = info.spacing[1];
+        hf->georef.spacing[0] = hf->georef.ground[0] = info.spacing[0];
+        hf->georef.spacing[1] = hf->georef.ground[1] = info.spacing[1];
     }
     return hs;
 }

@@ -98,15 +98,22 @@ typedef struct tsr_georef {
     bool has_nodata;    /* the file's no-data value (compared with the stored samples) */
     double nodata;
     double z_scale, z_offset; /* height = stored * z_scale + z_offset (already applied); 1, 0 */
-    /* Ground spacing of the samples in metres at the raster's middle: one
-     * pixel step in x and in y taken to longitude and latitude and
-     * measured on the CRS's ellipsoid, so a projection's own scale (Web
-     * Mercator's 1 / cos(latitude)) is taken out; with no CRS, |pixel| in
+    /* Spacing of the samples in metres. The ground spacing at the raster's
+     * middle (ground): one pixel step in x and in y taken to longitude and
+     * latitude and measured on the CRS's ellipsoid, so a projection's own
+     * scale (Web Mercator's 1 / cos(latitude)) is taken out. spacing is
+     * that, except for a projected CRS within 1 % of true scale at the
+     * middle and at the first sample (UTM, state plane, national grids):
+     * there it is |pixel| in metres (spacing_crs), so the mesh registers
+     * with other data of that CRS (UTM's 30 m pixel, 30.012 m on the
+     * ground off its central meridian, stays 30). With no CRS, |pixel| in
      * the file's unknown unit. */
     bool has_spacing;
-    bool spacing_approx;   /* it differs by over 0.1 % at the first sample */
+    bool spacing_approx;   /* the ground spacing differs by over 0.1 % at the first sample */
     bool spacing_unitless; /* no CRS: the unit is unknown */
+    bool spacing_crs;      /* spacing is the CRS's pixel size, not the ground's */
     double spacing[2];
+    double ground[2];      /* the ground spacing at the middle (has_spacing and a CRS) */
 } tsr_georef;
 
 /* The georeferencing of the file hf was loaded from; NULL when it named

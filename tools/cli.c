@@ -277,6 +277,7 @@ void cli_georef_describe(const tsr_heightfield *hf, const cli_heightfield_option
                                                                                 "sheared, which is not followed"
                                                                               : "default")
                       : g->spacing_unitless ? "from the file, in its unknown unit"
+                      : g->spacing_crs      ? "metres, the file's pixel in its CRS, within 1 % of the ground's"
                       : g->spacing_approx   ? "ground metres at the file's middle; it varies across"
                                             : "ground metres, from the file";
     int n = snprintf(buf, cap, "%.9g x %.9g (%s)", dx, dy, how);
@@ -327,9 +328,11 @@ void cli_georef_json(cJSON *j, const tsr_heightfield *hf, const cli_heightfield_
         add_pair(gj, "pixel", g->pixel[0], g->pixel[1]);
     }
     if (g->has_spacing) {
-        add_pair(gj, "ground_spacing", g->spacing[0], g->spacing[1]);
+        if (!g->spacing_unitless)
+            add_pair(gj, "ground_spacing", g->ground[0], g->ground[1]);
         cJSON_AddBoolToObject(gj, "ground_spacing_varies", g->spacing_approx);
         cJSON_AddBoolToObject(gj, "ground_spacing_unitless", g->spacing_unitless);
+        cJSON_AddBoolToObject(gj, "spacing_crs", g->spacing_crs);
     }
     if (g->has_nodata)
         cJSON_AddNumberToObject(gj, "nodata_value", g->nodata);

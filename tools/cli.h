@@ -56,7 +56,7 @@ typedef struct cli_heightfield_options {
 int cli_heightfield_option(const char *cmd, int argc, char **argv, int *i, cli_heightfield_options *o);
 
 /* The spacing the options give hf: --dx/--dy where given (--dy defaults
- * to --dx), else the georeferenced file's ground spacing, else 1; true
+ * to --dx), else the georeferenced file's spacing (tsr_georef), else 1; true
  * when it came from the file. */
 bool cli_spacing(const tsr_heightfield *hf, const cli_heightfield_options *o, double *dx, double *dy);
 

@@ -86,10 +86,13 @@ TEST(geotiff_utm_georef_and_nodata)
     CHECK(g && g->origin[0] == gt[0] + 15 && g->origin[1] == gt[3] - 15);
     CHECK(g && g->pixel[0] == 30 && g->pixel[1] == -30);
     CHECK(g && g->has_nodata && g->nodata == -9999);
-    /* 30 grid metres on the central meridian are 30 / 0.9996 on the ground */
-    CHECK(g && g->has_spacing && !g->spacing_approx && !g->spacing_unitless);
-    CHECK_NEAR(g->spacing[0], 30 / 0.9996, 30e-6);
-    CHECK_NEAR(g->spacing[1], 30 / 0.9996, 30e-6);
+    /* 30 grid metres on the central meridian are 30 / 0.9996 on the ground;
+     * within 1 % of true scale, the spacing is the CRS's own 30 m, so the
+     * mesh registers with other UTM data */
+    CHECK(g && g->has_spacing && !g->spacing_approx && !g->spacing_unitless && g->spacing_crs);
+    CHECK_NEAR(g->ground[0], 30 / 0.9996, 30e-6);
+    CHECK_NEAR(g->ground[1], 30 / 0.9996, 30e-6);
+    CHECK(g->spacing[0] == 30 && g->spacing[1] == 30);
     tsr_heightfield_destroy(hf);
 
     /* a no-data value asked for replaces the file's */
@@ -196,7 +199,7 @@ TEST(srtm_hgt_written_by_hand)
     CHECK(g->has_nodata && g->nodata == -32768);
     /* three arc-seconds on the ground at the tile's middle, 45.5 N; a
      * degree tile's spacing changes across it */
-    CHECK(g->has_spacing && g->spacing_approx && !g->spacing_unitless);
+    CHECK(g->has_spacing && g->spacing_approx && !g->spacing_unitless && !g->spacing_crs);
     double ex = deg_lon_m(45.5) / 1200, ey = deg_lat_m(45.5) / 1200;
     CHECK_MSG(fabs(g->spacing[0] / ex - 1) < 1e-4 && fabs(g->spacing[1] / ey - 1) < 1e-4, "%.6f %.6f against %.6f %.6f",
               g->spacing[0], g->spacing[1], ex, ey);
@@ -289,6 +292,7 @@ TEST(data_real_geotiffs)
          * 0.67 % along the meridian at the equator) */
         double lat = mercator_lat(g->origin[1] + 0.5 * (tsr_heightfield_height(hf) - 1) * g->pixel[1]);
         double e = g->pixel[0] * cos(lat * PI / 180);
+        CHECK(!g->spacing_crs && g->spacing[0] == g->ground[0] && g->spacing[1] == g->ground[1]);
         CHECK_MSG(fabs(g->spacing[0] / e - 1) < 1e-2 && fabs(g->spacing[1] / e - 1) < 1e-2,
                   "%s: %.6f x %.6f against %.6f (latitude %.3f)", files[k], g->spacing[0], g->spacing[1], e, lat);
         tsr_heightfield_stats st;
