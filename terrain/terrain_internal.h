@@ -121,8 +121,9 @@ bool tsr_terrain_pick_view(const tsr_terrain *t, pick_view *v);
  * conforming). A leaf is kept only when every valid sample of its closed
  * square lies within tol (file units, vertically) of its triangles,
  * whichever sides get midpoints: the error is exact, not an estimate.
- * Cells with a no-data corner are refined to single cells, and keep the
- * triangle of three valid corners where there is one. full_border: the
+ * Cells with a no-data corner are refined to single cells, which are
+ * holes (as in the delaunay method's domain; grid.c alone draws the
+ * triangle of three valid corners). full_border: the
  * outer border at full resolution (window seams). With a budget
  * (max_tri, max_vert not 0), the smallest tolerance whose mesh fits is
  * found by bisection up to the height range `range` (file units) and

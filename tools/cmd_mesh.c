@@ -21,7 +21,8 @@ static void help(FILE *f)
             "every valid sample is measured against the mesh, and the measured max error never exceeds\n"
             "--max-error. OUT's extension picks the format: .obj, .ply (binary), .stl (binary) or .glb\n"
             "(glTF 2.0, +y up). Sample (c, r) becomes the vertex (c*dx, r*dy, h*dz) (--north-up:\n"
-            "(c*dx, -r*dy, h*dz)); no-data samples become holes, never zeros.\n\n"
+            "(c*dx, -r*dy, h*dz)); no-data samples become holes, never zeros: delaunay and quadtree mesh\n"
+            "the cells whose four corners are valid, grid also the triangle of a cell with three.\n\n"
             "options:\n"
             "  -o, --output OUT      mesh file to write (required)\n"
             "  --max-error E         the bound on the vertical error, in output z units\n"
@@ -238,8 +239,13 @@ static int build_measured(const tsr_heightfield *hf, tsr_tin_options *to, double
             return err.status == TSR_ERR_ARGUMENT ? CLI_USAGE : CLI_FAIL;
         }
         if (mesh->triangle_count == 0) {
-            cli_error("mesh", "%s: nothing to mesh: the valid samples of the %s form no triangle (no-data around "
-                      "each); nothing written", in, to->window_w ? "window" : "heightfield");
+            if (to->method == TSR_TIN_GRID)
+                cli_error("mesh", "%s: nothing to mesh: the valid samples of the %s form no triangle (no cell has "
+                          "three valid corners); nothing written", in, to->window_w ? "window" : "heightfield");
+            else
+                cli_error("mesh", "%s: nothing to mesh: the valid samples of the %s form no triangle (no cell has "
+                          "four valid corners, which --method %s needs; --method grid meshes cells with three); "
+                          "nothing written", in, to->window_w ? "window" : "heightfield", method_name(to->method));
             return CLI_EMPTY;
         }
         if (tsr_terrain_measure_window(hf, mx, my, mw, mh, mesh, NULL, er) != TSR_OK) {

@@ -110,6 +110,16 @@ all_nan_height)
     expect_error 3 "sparse\.f32: nothing to mesh: the valid samples of the window form no triangle" -- \
       "$tessera" mesh "$dir/sparse.f32" --raw 8 8 f32 --window 0,0,8,8 --method $m -o "$out"
   done
+  # three valid samples in an L: a triangle for grid; delaunay and quadtree
+  # need a cell of four and say so
+  printf '\000\000\200\077\000\000\200\077\000\000\200\077\000\000\300\177' > "$dir/ell.f32"
+  for m in delaunay quadtree; do
+    expect_error 3 "ell\.f32: nothing to mesh: .*no cell has four valid corners, which --method $m needs; --method grid meshes cells with three" -- \
+      "$tessera" mesh "$dir/ell.f32" --raw 2 2 f32 --method $m -o "$out"
+  done
+  "$tessera" mesh "$dir/ell.f32" --raw 2 2 f32 --method grid -o "$dir/ell.obj" --quiet || fail "grid of an L"
+  [ "$(grep -c '^f ' "$dir/ell.obj")" -eq 1 ] || fail "grid of an L: not one triangle"
+  rm -f "$dir/ell.obj" "$dir/ell.f32"
   echo "ok [$case]" ;;
 inf_height)
   expect_error 1 "inf\.f32: infinite height at column 1, row 2" -- "$tessera" mesh "$dir/inf.f32" --raw 4 4 f32 -o "$out" ;;
