@@ -718,22 +718,42 @@ static tsr_status finish_surf(lexer *L, obj_state *o)
         if (e->range[2 * a] < lo[a] || e->range[2 * a + 1] > hi[a])
             return fail(L, e->line, TSR_ERR_VALUE, "surf's %s range [%g, %g] leaves the parameter range [%g, %g]",
                         a ? "t" : "s", e->range[2 * a], e->range[2 * a + 1], lo[a], hi[a]);
-    /* a knot repeated more than the degree inside the range breaks the
-     * surface apart there: its pieces need not meet, and no mesh of it
-     * can be both joined and within the error */
+    /* a knot repeated degree + 1 times inside the range ends one run of
+     * control points and starts the next: the surface breaks apart there
+     * unless the two runs' last and first rows coincide (exporters write
+     * split Bézier pieces so); broken, its pieces need not meet, and no
+     * mesh of it can be both joined and within the error */
+    const double *C = F64(b->values) + ca;
+    double clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++) {
+            clo[c] = fmin(clo[c], C[3 * i + c]);
+            chi[c] = fmax(chi[c], C[3 * i + c]);
+        }
+    double gap_tol = 1e-9 * (1 + hypot(hypot(chi[0] - clo[0], chi[1] - clo[1]), chi[2] - clo[2]));
     for (int a = 0; a < 2; a++) {
         const double *k = K + (a ? kv : ku);
         int deg = a ? e->dv : e->du;
-        size_t nk = (size_t)(a ? nv : nu) + (size_t)deg + 1;
+        size_t cnt = a ? nv : nu, other = a ? nu : nv, nk = cnt + (size_t)deg + 1;
         for (size_t i = 0; i < nk;) {
             size_t j = i;
             while (j < nk && k[j] == k[i])
                 j++;
-            if (j - i > (size_t)deg && k[i] > e->range[2 * a] && k[i] < e->range[2 * a + 1])
-                return fail(L, e->line, TSR_ERR_VALUE,
-                            "surf: knot %g of parm %s appears %zu times, more than the degree %d: the surface is "
-                            "discontinuous there (split it into two surfaces)",
-                            k[i], a ? "v" : "u", j - i, deg);
+            if (j - i == (size_t)deg + 1 && k[i] > e->range[2 * a] && k[i] < e->range[2 * a + 1] && i >= 1 &&
+                i < cnt) {
+                double worst = 0;
+                for (size_t r = 0; r < other; r++) {
+                    size_t p0 = a ? (i - 1) * nu + r : r * nu + i - 1, p1 = a ? i * nu + r : r * nu + i;
+                    worst = fmax(worst, hypot(hypot(C[3 * p0] - C[3 * p1], C[3 * p0 + 1] - C[3 * p1 + 1]),
+                                              C[3 * p0 + 2] - C[3 * p1 + 2]));
+                }
+                if (!(worst <= gap_tol))
+                    return fail(L, e->line, TSR_ERR_VALUE,
+                                "surf: knot %g of parm %s appears %zu times, more than the degree %d, and the control "
+                                "points on either side of it are %g apart: the surface is discontinuous there "
+                                "(split it into two surfaces)",
+                                k[i], a ? "v" : "u", j - i, deg, worst);
+            }
             i = j;
         }
     }

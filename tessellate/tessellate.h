@@ -180,13 +180,17 @@ tsr_status tsr_mesh_write(const tsr_mesh *m, const char *path, tsr_mesh_format f
  * (libraries that pick a format from the name still work), and puts its
  * name in tmp (capacity cap). Where path is a symbolic link, beside the
  * file it points to (followed to the end), which commit replaces: the
- * link stays. The temporary gets the permissions of the file it will
- * replace, or a new file's. Fails with a message naming path when the
- * folder is not writable, path is a folder, or the file exists without
- * any write permission ("read-only": not replaced, also for root). */
+ * link stays (a link in a sticky folder anyone may write to, owned by
+ * neither us nor the folder's owner, is not followed: the kernel's
+ * protected_symlinks rule). The temporary gets the permissions of the
+ * file it will replace (less set-uid and set-gid), or a new file's. Fails
+ * with a message naming path when the folder is not writable, path is a
+ * folder or too long, a link loops, or the file exists without any write
+ * permission ("read-only": not replaced, also for root). */
 tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *err);
-/* Renames tmp over path (over the file a symbolic link at path points
- * to); on failure removes tmp and sets err. */
+/* Renames tmp over the file begin resolved path to (read back from tmp's
+ * name, so links changed meanwhile do not move it); on failure removes
+ * tmp and sets err. */
 tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err);
 /* Removes tmp after a failed write. */
 void tsr_atomic_abort(const char *tmp);

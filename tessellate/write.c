@@ -57,44 +57,59 @@ void tsr_atomic_remove_pending(void)
 
 /* The file an output to path lands in: path itself, or, where path is a
  * symbolic link, the file it points to (followed to the end, also when
- * that file does not exist yet), so the link stays a link. false when the
- * links go round or the result does not fit. */
-static bool output_target(const char *path, char *out, size_t cap)
+ * that file does not exist yet), so the link stays a link. As the
+ * kernel's protected_symlinks does, a link in a sticky folder anyone may
+ * write to (/tmp) is followed only when it belongs to us or to the
+ * folder's owner. 0, or 1 when the links go round, 2 when a path is too
+ * long, 3 for a link not followed. */
+static int output_target(const char *path, char *out, size_t cap)
 {
     char cur[4096], link[4096];
     if (strlen(path) >= sizeof cur)
-        return false;
+        return 2;
     strcpy(cur, path);
     for (int hops = 0; hops < 40; hops++) {
         struct stat st;
         if (lstat(cur, &st) != 0 || !S_ISLNK(st.st_mode)) {
             if (strlen(cur) >= cap)
-                return false;
+                return 2;
             strcpy(out, cur);
-            return true;
+            return 0;
         }
+        const char *slash = strrchr(cur, '/');
+        size_t dir = slash ? (size_t)(slash - cur) + 1 : 0;
+        char folder[4096];
+        snprintf(folder, sizeof folder, "%.*s", dir ? (int)dir : 1, dir ? cur : ".");
+        struct stat ds;
+        if (stat(folder, &ds) == 0 && (ds.st_mode & S_ISVTX) && (ds.st_mode & S_IWOTH) && st.st_uid != geteuid() &&
+            st.st_uid != ds.st_uid)
+            return 3;
         ssize_t n = readlink(cur, link, sizeof link - 1);
         if (n < 0)
-            return false;
+            return 1;
         link[n] = '\0';
         if (link[0] == '/') {
             strcpy(cur, link);
         } else { /* relative to the link's folder */
-            const char *slash = strrchr(cur, '/');
-            size_t dir = slash ? (size_t)(slash - cur) + 1 : 0;
             if (dir + (size_t)n >= sizeof cur)
-                return false;
+                return 2;
             memmove(cur + dir, link, (size_t)n + 1);
         }
     }
-    return false;
+    return 1;
 }
 
 tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *err)
 {
     char target[4096];
-    if (!output_target(path, target, sizeof target))
-        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: a symbolic link that loops or is too long", path);
+    int t = output_target(path, target, sizeof target);
+    if (t == 2)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path too long", path);
+    if (t == 1)
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: a symbolic link that loops", path);
+    if (t == 3)
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: a symbolic link in a shared sticky folder, owned by "
+                             "someone else (not followed)", path);
     const char *slash = strrchr(target, '/');
     const char *base = slash ? slash + 1 : target;
     const char *dot = strrchr(base, '.');
@@ -106,9 +121,9 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path names a folder, not a file", path);
     if (n < 0 || (size_t)n >= cap)
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path too long", path);
-    /* an existing file keeps its permissions; one without any write
-     * permission is not replaced (as opening it for writing would fail,
-     * also for root) */
+    /* an existing file keeps its permissions (not set-uid or set-gid);
+     * one without any write permission is not replaced (as opening it for
+     * writing would fail, also for root) */
     struct stat old;
     bool exists = stat(target, &old) == 0;
     if (exists && S_ISDIR(old.st_mode))
@@ -123,16 +138,39 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
      * umask) */
     mode_t mask = umask(0);
     umask(mask);
-    fchmod(fd, exists ? old.st_mode & 07777 : 0666 & ~mask);
+    fchmod(fd, exists ? old.st_mode & 01777 : 0666 & ~mask);
     close(fd);
     pending_add(tmp);
     return TSR_OK;
 }
 
+/* The file tsr_atomic_begin resolved path to, rebuilt from the temporary's
+ * name (".STEM.tsr-tmp-XXXXXX.EXT" beside it), so that commit renames into
+ * the folder the temporary is in, whatever links changed meanwhile. */
+static bool target_of_tmp(const char *tmp, char *out, size_t cap)
+{
+    const char *slash = strrchr(tmp, '/');
+    const char *base = slash ? slash + 1 : tmp;
+    const char *mark = NULL; /* the last one: the name itself may hold the marker */
+    for (const char *m = strstr(base, ".tsr-tmp-"); m; m = strstr(m + 1, ".tsr-tmp-"))
+        mark = m;
+    size_t dirlen = (size_t)(base - tmp);
+    if (base[0] != '.' || !mark || strlen(mark) < 15)
+        return false;
+    const char *ext = mark + 15; /* past ".tsr-tmp-XXXXXX" */
+    int n = snprintf(out, cap, "%.*s%.*s%s", (int)dirlen, tmp, (int)(mark - base - 1), base + 1, ext);
+    return n > 0 && (size_t)n < cap;
+}
+
 tsr_status tsr_atomic_commit(const char *tmp, const char *path, tsr_error *err)
 {
     char target[4096];
-    if (!output_target(path, target, sizeof target) || rename(tmp, target) != 0) {
+    if (!target_of_tmp(tmp, target, sizeof target)) {
+        remove(tmp);
+        pending_drop(tmp);
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: cannot write: '%s' is not a temporary of ours", path, tmp);
+    }
+    if (rename(tmp, target) != 0) {
         int e = errno;
         remove(tmp);
         pending_drop(tmp);

@@ -720,6 +720,26 @@ TEST(cage_orient)
     }
 }
 
+/* A knot repeated degree + 1 times inside the range: refused only where
+ * the control points on either side of it differ (bad_cases:
+ * obj_discontinuous_knot); two Bézier pieces written as one B-spline with
+ * the shared column repeated are one continuous surface. */
+TEST(obj_repeated_knot_continuous)
+{
+    const char *obj = "v 0 0 0\nv 1 0 0\nv 1 0 0\nv 2 0 1\nv 0 1 0\nv 1 1 0\nv 1 1 0\nv 2 1 1\n"
+                      "cstype bspline\ndeg 1 1\nsurf 0 2 0 1 1 2 3 4 5 6 7 8\nparm u 0 0 1 1 2 2\nparm v 0 0 1 1\nend\n";
+    tsr_patch_set s;
+    tsr_error e = {0};
+    CHECK_MSG(tsr_patch_set_parse(obj, strlen(obj), "split.obj", TSR_PATCH_FORMAT_OBJ, NULL, &s, &e) == TSR_OK, "%s",
+              e.message);
+    if (e.status == TSR_OK) {
+        double pos[3];
+        CHECK(s.num_patches == 1 && tsr_patch_eval(&s.patches[0], 1.5, 0.5, pos, NULL, NULL, NULL) == TSR_OK);
+        CHECK(fabs(pos[0] - 1.5) < 1e-12 && fabs(pos[2] - 0.5) < 1e-12);
+        tsr_patch_set_free(&s);
+    }
+}
+
 TEST(bad_files_name_the_line)
 {
     for (size_t i = 0; i < sizeof bad_cases / sizeof bad_cases[0]; i++) {
@@ -780,6 +800,6 @@ TEST(missing_and_odd_paths)
     tsr_cage_free(NULL);
 }
 
-TEST_MAIN(T(data_teapot_loads), T(data_teapot_degenerate_normals), T(bpt_small_and_memory_parse), T(cage_orient),
+TEST_MAIN(T(data_teapot_loads), T(data_teapot_degenerate_normals), T(bpt_small_and_memory_parse), T(cage_orient), T(obj_repeated_knot_continuous),
           T(obj_freeform_trimmed), T(obj_bezier_surfaces), T(data_osd_cages_load), T(cage_small_forms),
           T(bad_files_name_the_line), T(missing_and_odd_paths))

@@ -109,6 +109,76 @@ TEST(unwritable_output_leaves_nothing)
     tsr_mesh_free(&m);
 }
 
+/* Writes "x" to path through the atomic calls; the status. */
+static tsr_status atomic_write(const char *path, tsr_error *err)
+{
+    char tmp[4096];
+    tsr_status st = tsr_atomic_begin(path, tmp, sizeof tmp, err);
+    if (st != TSR_OK)
+        return st;
+    FILE *f = fopen(tmp, "w");
+    if (!f) {
+        tsr_atomic_abort(tmp);
+        return TSR_ERR_IO;
+    }
+    fputs("x", f);
+    fclose(f);
+    return tsr_atomic_commit(tmp, path, err);
+}
+
+/* Outputs through symbolic links, over files with odd modes, to names
+ * that look like our temporaries, and paths too long. */
+TEST(atomic_output_links_and_modes)
+{
+    const char *dir = check_temp_dir();
+    char real[512], link[512], odd[512], sub[512], slink[512];
+    struct stat st;
+    tsr_error err = {0};
+    /* through a link: the file it points to is written, the link stays */
+    snprintf(real, sizeof real, "%s/real.obj", dir);
+    snprintf(link, sizeof link, "%s/link.obj", dir);
+    FILE *f = fopen(real, "w");
+    if (f)
+        fclose(f);
+    CHECK(chmod(real, 04750) == 0);
+    CHECK(symlink("real.obj", link) == 0);
+    CHECK(atomic_write(link, &err) == TSR_OK);
+    CHECK(lstat(link, &st) == 0 && S_ISLNK(st.st_mode));
+    /* the mode is kept, but not set-uid */
+    CHECK_MSG(stat(real, &st) == 0 && st.st_size == 1 && (st.st_mode & 07777) == 0750, "mode %o size %ld",
+              (unsigned)(st.st_mode & 07777), (long)st.st_size);
+    /* a read-only file is not replaced, through the link neither */
+    CHECK(chmod(real, 0444) == 0);
+    CHECK(atomic_write(link, &err) == TSR_ERR_IO && strstr(err.message, "read-only"));
+    CHECK(atomic_write(real, &err) == TSR_ERR_IO);
+    CHECK(chmod(real, 0644) == 0);
+    /* a name holding our temporaries' marker */
+    snprintf(odd, sizeof odd, "%s/a.tsr-tmp-123456.obj", dir);
+    CHECK(atomic_write(odd, &err) == TSR_OK && stat(odd, &st) == 0 && st.st_size == 1);
+    /* a path too long is an argument error (the message, which names
+     * the path, is cut short), not a link problem */
+    char longp[5000];
+    memset(longp, 'a', sizeof longp - 1);
+    longp[sizeof longp - 1] = '\0';
+    longp[0] = '/';
+    tsr_status lst = atomic_write(longp, &err);
+    CHECK_MSG(lst == TSR_ERR_ARGUMENT, "%d", (int)lst);
+    /* a link in a sticky folder anyone writes to, owned by another user,
+     * is not followed (as root, where we can give it away) */
+    snprintf(sub, sizeof sub, "%s/sticky", dir);
+    snprintf(slink, sizeof slink, "%s/sticky/out.obj", dir);
+    if (geteuid() == 0 && mkdir(sub, 01777) == 0 && chmod(sub, 01777) == 0 && symlink(real, slink) == 0 &&
+        lchown(slink, 65534, 65534) == 0) {
+        CHECK(atomic_write(slink, &err) == TSR_ERR_IO && strstr(err.message, "sticky"));
+        CHECK(stat(real, &st) == 0 && st.st_size == 1);
+    }
+    unlink(slink);
+    rmdir(sub);
+    unlink(odd);
+    unlink(link);
+    unlink(real);
+}
+
 /* An interrupted command's temporaries: tsr_atomic_remove_pending (what
  * tessera's SIGINT / SIGTERM handler calls) removes those begun and not
  * finished, and nothing committed or aborted. */
@@ -478,7 +548,7 @@ TEST(cgroup_cpu_limits)
     CHECK(system(cmd) == 0);
 }
 
-TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing), T(pending_temporaries_removed),
+TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing), T(pending_temporaries_removed), T(atomic_output_links_and_modes),
           T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced),
           T(keymap_clear_keeps_room), T(cpu_count_follows_affinity), T(cpu_quota_text),
           T(cgroup_cpu_limits), T(default_allocator_kinds),

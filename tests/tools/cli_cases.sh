@@ -307,7 +307,7 @@ patch_input_messages)
   # large that float32 loses the rest (samples on no triangle), a capped
   # refinement under --no-verify (a warning); a byte order mark is read
   printf 'v 0 0 0\nv 1 0 0\nv 2 0 1\nv 3 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 1\nv 3 1 0\ncstype bspline\ndeg 1 1\nsurf 0 3 0 1 1 2 3 4 5 6 7 8\nparm u 0 0 1 1 3 3\nparm v 0 0 1 1\nend\n' > "$dir/knot.obj"
-  expect_error 1 "knot\.obj:11: surf: knot 1 of parm u appears 2 times, more than the degree 1: the surface is discontinuous there" -- \
+  expect_error 1 "knot\.obj:11: surf: knot 1 of parm u appears 2 times, more than the degree 1, and the control points on either side of it are 1\.41421 apart: the surface is discontinuous there" -- \
     "$tessera" patch "$dir/knot.obj" -o "$out"
   sed -e 's/^v 2 0 1$/v 2 0 1e30/' -e 's/parm u 0 0 1 1 3 3/parm u 0 0 1 2 3 3/' "$dir/knot.obj" > "$dir/huge.obj"
   expect_error 1 "huge\.obj: [0-9]+ of [0-9]+ measured samples of untrimmed patches fall on no triangle" -- \
