@@ -90,6 +90,7 @@ struct tsr_pmodel {
     uint32_t links, collapsed, mirrored, trimmed;
     uint32_t flat;           /* subd patches without area, left out */
     uint32_t conform_breaks; /* breakpoints a patch took from a neighbour */
+    uint32_t partial_unlinked; /* partial overlaps left unlinked (the breakpoint budget) */
     uint32_t split_breaks;   /* breakpoints cut across curved directions */
 };
 
@@ -815,6 +816,7 @@ typedef struct edge_pairs {
     pedge *ed;
     epair *pairs;
     uint32_t ne, npairs;
+    uint32_t nwhole; /* pairs[0, nwhole) whole, the rest partial */
 } edge_pairs;
 
 static void edge_pairs_free(edge_pairs *ep, const tsr_allocator *a)
@@ -855,6 +857,7 @@ static tsr_status find_edge_pairs(const tsr_patch_set *set, const double *doms, 
                                            (epair){i, j, (uint8_t)(fwd | bwd << 1), 0, {0, 1}, {0, 1}}, a))
                 st = TSR_ERR_NOMEM;
         }
+    uint32_t nwhole = npairs;
     if (st == TSR_OK)
         st = find_partial_pairs(set, doms, ed, ne, tol, a, &pairs, &npairs, &cappairs);
     if (st != TSR_OK) {
@@ -862,7 +865,7 @@ static tsr_status find_edge_pairs(const tsr_patch_set *set, const double *doms, 
         tsr_free(a, pairs);
         return st;
     }
-    *out = (edge_pairs){ed, pairs, ne, npairs};
+    *out = (edge_pairs){ed, pairs, ne, npairs, nwhole};
     return TSR_OK;
 }
 
@@ -1095,10 +1098,37 @@ static void free_breaks(brk *brks, uint32_t np, const tsr_allocator *a)
 
 /* The breakpoints of every patch (2 per patch, u then v): its knots, cuts
  * for split_error (when > 0; *split counts them), and those shared
- * through whole edges (*shared). */
+ * through whole edges and partial overlaps (*shared). When sharing
+ * reaches its budget with partial overlaps among the pairs (staggered
+ * rows spread every row's breakpoints through all: rows^2 of them), it
+ * starts again with whole edges only, as before they were linked, and
+ * *dropped (may be NULL) counts the partial pairs so left unlinked. */
+static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms, const edge_pairs *ep,
+                                    double tol, double split_error, double N, const tsr_allocator *a, brk **out,
+                                    uint32_t *split, uint32_t *shared, bool *full);
+
 static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, const edge_pairs *ep, double tol,
                               double split_error, double N, const tsr_allocator *a, brk **out, uint32_t *split,
-                              uint32_t *shared)
+                              uint32_t *shared, uint32_t *dropped)
+{
+    bool full = false;
+    if (dropped)
+        *dropped = 0;
+    tsr_status st = make_breaks_pairs(set, doms, ep, tol, split_error, N, a, out, split, shared, &full);
+    if (st != TSR_OK || !full || ep->nwhole == ep->npairs)
+        return st;
+    free_breaks(*out, set->num_patches, a);
+    *out = NULL;
+    edge_pairs whole = *ep;
+    whole.npairs = ep->nwhole;
+    if (dropped)
+        *dropped = ep->npairs - ep->nwhole;
+    return make_breaks_pairs(set, doms, &whole, tol, split_error, N, a, out, split, shared, &full);
+}
+
+static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms, const edge_pairs *ep,
+                                    double tol, double split_error, double N, const tsr_allocator *a, brk **out,
+                                    uint32_t *split, uint32_t *shared, bool *full)
 {
     uint32_t np = set->num_patches, nsplit = 0;
     brk *brks = tsr_alloc(a, (size_t)np * 2 * sizeof *brks);
@@ -1127,8 +1157,11 @@ static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, cons
         nbreaks += brks[2 * i].n + brks[2 * i + 1].n;
     }
     uint64_t budget = 4 * nbreaks + 1024;
+    if (budget > (1u << 24))
+        budget = 1u << 24;
     if (st == TSR_OK)
-        st = share_breaks(set, doms, ep, brks, tol, budget > (1u << 24) ? 1u << 24 : (uint32_t)budget, a, shared);
+        st = share_breaks(set, doms, ep, brks, tol, (uint32_t)budget, a, shared);
+    *full = st == TSR_OK && *shared >= budget;
     if (st != TSR_OK) {
         free_breaks(brks, np, a);
         return st;
@@ -1222,11 +1255,13 @@ tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_s
         edge_pairs ep = {0};
         st = find_edge_pairs(set, doms, tol, a, &ep);
         if (st == TSR_OK)
-            st = make_breaks(set, doms, &ep, tol, 0, split_tile, a, &brks, NULL, &m->conform_breaks);
+            st = make_breaks(set, doms, &ep, tol, 0, split_tile, a, &brks, NULL, &m->conform_breaks,
+                             &m->partial_unlinked);
         if (st == TSR_OK && split_error > 0) {
             brk *cut = NULL;
             uint32_t split = 0, shared = 0;
-            st = make_breaks(set, doms, &ep, tol, split_error, split_tile, a, &cut, &split, &shared);
+            uint32_t dropped = 0;
+            st = make_breaks(set, doms, &ep, tol, split_error, split_tile, a, &cut, &split, &shared, &dropped);
             /* trimmed patches are triangulated in (u, v) from their pieces'
              * lattice points; cuts make those far from evenly spread */
             bool trims_cut = false;
@@ -1239,6 +1274,7 @@ tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_s
                 brks = cut;
                 m->split_breaks = split;
                 m->conform_breaks = shared;
+                m->partial_unlinked = dropped;
             } else {
                 free_breaks(cut, np, a);
             }
@@ -1545,6 +1581,7 @@ void tsr_pmodel_get_info(const tsr_pmodel *m, tsr_pmodel_info *info)
     info->trimmed_sources = m->trimmed;
     info->flat_patches = m->flat;
     info->conform_breaks = m->conform_breaks;
+    info->partial_unlinked = m->partial_unlinked;
     info->split_breaks = m->split_breaks;
     memcpy(info->lo, m->lo, sizeof info->lo);
     memcpy(info->hi, m->hi, sizeof info->hi);

@@ -44,7 +44,10 @@
  *    the two edges meet at exactly two such points or shared ends; its
  *    parameters must be in proportion as above. Parts whose parameters
  *    are not in proportion (two rational parameterisations of one arc)
- *    stay unlinked and leave gaps (tsr_mesh_find_gaps finds them);
+ *    stay unlinked and leave gaps (tsr_mesh_find_gaps finds them); so do
+ *    all partial overlaps when sharing breakpoints through them passes
+ *    the budget of 4 per breakpoint of the patches' own (a brick wall of
+ *    many staggered rows: tsr_pmodel_info.partial_unlinked);
  *    tsr_pmodel_info.conform_breaks counts the breakpoints so added;
  *  - subd patches as tsr_subd_patch_neighbours says (a quad edge meeting
  *    an N-gon links each half to one sub-patch).
@@ -221,7 +224,11 @@ typedef struct tsr_pmodel_info {
     uint32_t trimmed_sources;
     uint32_t flat_patches; /* subd patches left out: their limit has no area */
     uint32_t conform_breaks; /* breakpoints added to patches of a set where a neighbour
-                                sharing a whole edge has them (Links, above) */
+                                sharing all or part of an edge has them (Links, above) */
+    uint32_t partial_unlinked; /* pairs of edges sharing part of their curve left unlinked:
+                                  sharing breakpoints through them passed its budget (4 per
+                                  breakpoint of the patches' own, staggered rows spreading
+                                  each row's through all), so only whole edges share them */
     uint32_t split_breaks;   /* breakpoints added across curved directions (split_error) */
     double lo[3], hi[3];   /* box of the model */
     bool own_alloc;        /* made with a caller's allocator, or from a tsr_subd that was

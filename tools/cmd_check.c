@@ -986,6 +986,7 @@ static int run_patches(int argc, char **argv)
             rc = CLI_FAIL;
         } else {
             tsr_pmodel_get_info(vi_model, &vi_info);
+            cli_patch_partial_warning("check", in, vi_model);
         }
     }
     tsr_ptess_options base = {0};

@@ -303,6 +303,8 @@ static int run(int argc, char **argv)
             return CLI_FAIL;
         }
     }
+    if (!quiet && !pm.is_subd)
+        cli_patch_partial_warning("patch", in, pm.model);
     tsr_ptess_result r;
     tsr_ptess_measure_result meas;
     uint32_t tightened = 0;

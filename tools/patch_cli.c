@@ -279,3 +279,15 @@ void cli_patch_model_notes(const char *cmd, const char *path, const cli_patch_mo
                 "faces disagree are left open\n",
                 cmd, path, pm->cage_unorientable, pm->cage_unorientable == 1 ? "" : "s");
 }
+
+void cli_patch_partial_warning(const char *cmd, const char *path, const tsr_pmodel *m)
+{
+    tsr_pmodel_info info;
+    tsr_pmodel_get_info(m, &info);
+    if (info.partial_unlinked)
+        fprintf(stderr,
+                "tessera %s: %s: warning: %u pairs of patch edges sharing part of their curve are left unlinked: "
+                "cutting the patches where they meet passes the budget of breakpoints (staggered rows spread every "
+                "row's cuts through all), so the mesh has gaps there\n",
+                cmd, path, info.partial_unlinked);
+}

@@ -70,6 +70,10 @@ uint32_t cli_patch_flat_warnings(const char *cmd, const char *path, const cli_pa
  * --orient-faces), parts that cannot be oriented (a warning). */
 void cli_patch_model_notes(const char *cmd, const char *path, const cli_patch_model *pm);
 
+/* Warns on stderr when m left partial overlaps unlinked
+ * (tsr_pmodel_info.partial_unlinked). */
+void cli_patch_partial_warning(const char *cmd, const char *path, const tsr_pmodel *m);
+
 bool cli_patch_model_split(const char *cmd, const char *path, cli_patch_model *pm, double weld, double max_error,
                            uint32_t tile);
 

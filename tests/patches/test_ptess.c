@@ -1330,6 +1330,74 @@ TEST(t_configurations_linked)
     free(b.s);
 }
 
+/* A brick wall: R rows of bilinear plane patches 1 high, X wide, the
+ * joints of row r at x = (0.37 r mod 1) + k: every row's top edges meet
+ * the next row's bottom edges staggered. */
+static void wall_obj(sbuf *b, int R, int X)
+{
+    int nv = 0;
+    sb_printf(b, "cstype bezier\ndeg 1 1\n");
+    for (int r = 0; r < R; r++) {
+        double o = fmod(0.37 * r, 1.0), xs[64];
+        int n = 0;
+        xs[n++] = 0;
+        for (int k = 0; k <= X; k++)
+            if (o + k > 1e-9 && o + k < X - 1e-9)
+                xs[n++] = o + k;
+        xs[n++] = X;
+        for (int i = 0; i + 1 < n; i++) {
+            sb_printf(b, "v %.17g %d 0\nv %.17g %d 0\nv %.17g %d 0\nv %.17g %d 0\n", xs[i], r, xs[i + 1], r, xs[i],
+                      r + 1, xs[i + 1], r + 1);
+            sb_printf(b, "surf 0 1 0 1 %d %d %d %d\nend\n", nv + 1, nv + 2, nv + 3, nv + 4);
+            nv += 4;
+        }
+    }
+}
+
+TEST(staggered_rows_linked_or_left_whole)
+{
+    /* 6 rows: every staggered joint linked, one disc */
+    for (int big = 0; big < 2; big++) {
+        sbuf b = {0};
+        wall_obj(&b, big ? 60 : 6, big ? 10 : 4);
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        if (!parse_set(&b, big ? "wall60.obj" : "wall6.obj", &set)) {
+            free(b.s);
+            return;
+        }
+        if (make_model(&set, &m)) {
+            tsr_pmodel_info info;
+            tsr_pmodel_get_info(m, &info);
+            if (!big) {
+                CHECK_MSG(info.partial_unlinked == 0 && info.conform_breaks > 0, "unlinked %u breaks %u",
+                          info.partial_unlinked, info.conform_breaks);
+                tsr_ptess_options o = {0};
+                o.max_error = 1e-3;
+                tsr_ptess_result r;
+                if (run_ptess(m, &o, &r)) {
+                    tsr_validation v = validate(&r.mesh);
+                    check_conforming("wall", &v);
+                    CHECK_MSG(v.boundary_loops == 1 && v.euler == 1, "loops %u euler %lld", v.boundary_loops,
+                              (long long)v.euler);
+                }
+                tsr_ptess_result_free(&r);
+            } else {
+                /* 60 rows would spread 60 rows' joints through every row
+                 * (some 36,000 breakpoints): beyond the budget, the partial
+                 * overlaps are left unlinked and said to be, whole edges
+                 * (none here) share as before */
+                CHECK_MSG(info.partial_unlinked > 0 && info.conform_breaks < 20000 && info.pieces == set.num_patches,
+                          "unlinked %u breaks %u pieces %u of %u", info.partial_unlinked, info.conform_breaks,
+                          info.pieces, set.num_patches);
+            }
+        }
+        tsr_pmodel_destroy(m);
+        tsr_patch_set_free(&set);
+        free(b.s);
+    }
+}
+
 /* ---- view dependence --------------------------------------------------------------- */
 
 /* A long quarter cylinder along x, seen from near its x = 0 end. */
@@ -4269,7 +4337,7 @@ TEST(measure_threads_same_figures)
 
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
-          T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_linked), T(t_configurations_linked),
+          T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_linked), T(t_configurations_linked), T(staggered_rows_linked_or_left_whole),
           T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(trim_loops_meet_the_lattice), T(trim_loop_shapes), T(measure_passes_slivers_by), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
           T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
          T(rational_cylinder_cut_near_its_strip),
