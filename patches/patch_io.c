@@ -739,8 +739,7 @@ static tsr_status finish_surf(lexer *L, obj_state *o)
             size_t j = i;
             while (j < nk && k[j] == k[i])
                 j++;
-            if (j - i == (size_t)deg + 1 && k[i] > e->range[2 * a] && k[i] < e->range[2 * a + 1] && i >= 1 &&
-                i < cnt) {
+            if (j - i == (size_t)deg + 1 && k[i] > e->range[2 * a] && k[i] < e->range[2 * a + 1] && i >= 1 && i < cnt) {
                 double worst = 0;
                 for (size_t r = 0; r < other; r++) {
                     size_t p0 = a ? (i - 1) * nu + r : r * nu + i - 1, p1 = a ? i * nu + r : r * nu + i;

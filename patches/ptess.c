@@ -222,8 +222,14 @@ static uint32_t edge_ctrl_index(const tsr_patch *b, int e, uint32_t k)
 static uint32_t edge_ctrl_count(const tsr_patch *b, int e) { return (uint32_t)(e & 1 ? b->degree_v : b->degree_u) + 1; }
 
 /* max and min for finite values, inlined (fmax and fmin are calls) */
-static inline double dmax(double a, double b) { return a > b ? a : b; }
-static inline double dmin(double a, double b) { return a < b ? a : b; }
+static inline double dmax(double a, double b)
+{
+    return a > b ? a : b;
+}
+static inline double dmin(double a, double b)
+{
+    return a < b ? a : b;
+}
 
 static double dist3(const double *a, const double *b)
 {
@@ -690,7 +696,10 @@ static tsr_status find_partial_pairs(const tsr_patch_set *set, const double *dom
     for (uint32_t i = 0; i < ne && st == TSR_OK; i++) {
         double *s = S + (size_t)i * ns * 3, *b = box + 6 * i, seg = 0, ext = 0;
         for (uint32_t k = 0; k < ns; k++) {
-            const double *known = k == 0 ? ed[i].end[0] : k == ns - 1 ? ed[i].end[1] : 2 * k == ns - 1 ? ed[i].mid : NULL;
+            const double *known = k == 0            ? ed[i].end[0]
+                                  : k == ns - 1     ? ed[i].end[1]
+                                  : 2 * k == ns - 1 ? ed[i].mid
+                                                    : NULL;
             if (known)
                 memcpy(s + 3 * k, known, 3 * sizeof *s);
             else
@@ -753,8 +762,8 @@ static tsr_status find_partial_pairs(const tsr_patch_set *set, const double *dom
                             P[2] > b[5] || dist3(P, ed[i].end[0]) <= tol || dist3(P, ed[i].end[1]) <= tol)
                             continue;
                         double t = edge_project(set, doms, &ed[i], S + (size_t)i * ns * 3, P, &d);
-                        if (d <= tol && !corr_push(&co, &nc, &capc, i < j ? (ecorr){i, j, t, k} : (ecorr){j, i, k, t},
-                                                   a))
+                        if (d <= tol &&
+                            !corr_push(&co, &nc, &capc, i < j ? (ecorr){i, j, t, k} : (ecorr){j, i, k, t}, a))
                             st = TSR_ERR_NOMEM;
                     }
                     if (scan)
@@ -853,8 +862,8 @@ static tsr_status find_edge_pairs(const tsr_patch_set *set, const double *doms, 
             const pedge *x = &ed[i], *y = &ed[j];
             bool fwd = dist3(x->end[0], y->end[0]) <= tol && dist3(x->end[1], y->end[1]) <= tol;
             bool bwd = dist3(x->end[0], y->end[1]) <= tol && dist3(x->end[1], y->end[0]) <= tol;
-            if ((fwd || bwd) && !pair_push(&pairs, &npairs, &cappairs,
-                                           (epair){i, j, (uint8_t)(fwd | bwd << 1), 0, {0, 1}, {0, 1}}, a))
+            if ((fwd || bwd) &&
+                !pair_push(&pairs, &npairs, &cappairs, (epair){i, j, (uint8_t)(fwd | bwd << 1), 0, {0, 1}, {0, 1}}, a))
                 st = TSR_ERR_NOMEM;
         }
     uint32_t nwhole = npairs;
@@ -926,10 +935,10 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, con
                     continue;
                 /* each side is cut where the shared part ends */
                 for (int q = 0; q < 2 && st == TSR_OK; q++) {
-                    int r1 = brk_insert(&brks[2 * x->patch + (x->edge & 1)], doms + 4 * x->patch, x->edge & 1,
-                                        pr->ta[q], a);
-                    int r2 = brk_insert(&brks[2 * y->patch + (y->edge & 1)], doms + 4 * y->patch, y->edge & 1,
-                                        pr->tb[q], a);
+                    int r1 =
+                        brk_insert(&brks[2 * x->patch + (x->edge & 1)], doms + 4 * x->patch, x->edge & 1, pr->ta[q], a);
+                    int r2 =
+                        brk_insert(&brks[2 * y->patch + (y->edge & 1)], doms + 4 * y->patch, y->edge & 1, pr->tb[q], a);
                     if (r1 < 0 || r2 < 0)
                         st = TSR_ERR_NOMEM;
                     *added += (uint32_t)(r1 > 0) + (uint32_t)(r2 > 0);
@@ -959,7 +968,6 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, con
     tsr_free(a, pairs);
     return st;
 }
-
 
 static void bezier_second(int du, int dv, const double *P, const double *W, double M[3]);
 
@@ -1103,9 +1111,9 @@ static void free_breaks(brk *brks, uint32_t np, const tsr_allocator *a)
  * rows spread every row's breakpoints through all: rows^2 of them), it
  * starts again with whole edges only, as before they were linked, and
  * *dropped (may be NULL) counts the partial pairs so left unlinked. */
-static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms, const edge_pairs *ep,
-                                    double tol, double split_error, double N, const tsr_allocator *a, brk **out,
-                                    uint32_t *split, uint32_t *shared, bool *full);
+static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms, const edge_pairs *ep, double tol,
+                                    double split_error, double N, const tsr_allocator *a, brk **out, uint32_t *split,
+                                    uint32_t *shared, bool *full);
 
 static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, const edge_pairs *ep, double tol,
                               double split_error, double N, const tsr_allocator *a, brk **out, uint32_t *split,
@@ -1126,9 +1134,9 @@ static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, cons
     return make_breaks_pairs(set, doms, &whole, tol, split_error, N, a, out, split, shared, &full);
 }
 
-static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms, const edge_pairs *ep,
-                                    double tol, double split_error, double N, const tsr_allocator *a, brk **out,
-                                    uint32_t *split, uint32_t *shared, bool *full)
+static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms, const edge_pairs *ep, double tol,
+                                    double split_error, double N, const tsr_allocator *a, brk **out, uint32_t *split,
+                                    uint32_t *shared, bool *full)
 {
     uint32_t np = set->num_patches, nsplit = 0;
     brk *brks = tsr_alloc(a, (size_t)np * 2 * sizeof *brks);

@@ -223,8 +223,8 @@ typedef struct tsr_pmodel_info {
     uint32_t mirrored;        /* pieces flipped to agree with their neighbours */
     uint32_t trimmed_sources;
     uint32_t flat_patches; /* subd patches left out: their limit has no area */
-    uint32_t conform_breaks; /* breakpoints added to patches of a set where a neighbour
-                                sharing all or part of an edge has them (Links, above) */
+    uint32_t conform_breaks;   /* breakpoints added to patches of a set where a neighbour
+                                  sharing all or part of an edge has them (Links, above) */
     uint32_t partial_unlinked; /* pairs of edges sharing part of their curve left unlinked:
                                   sharing breakpoints through them passed its budget (4 per
                                   breakpoint of the patches' own, staggered rows spreading

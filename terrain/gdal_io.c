@@ -148,8 +148,7 @@ static void ground_spacing(OGRSpatialReferenceH s, uint32_t w, uint32_t h, tsr_g
         g->spacing[1] = g->ground[1] = mid[1];
         g->has_spacing = true;
         bool at_corner = ground_step(&gr, g->origin[0], g->origin[1], g->pixel[0], g->pixel[1], corner);
-        g->spacing_approx =
-            !at_corner || fabs(corner[0] / mid[0] - 1) > 1e-3 || fabs(corner[1] / mid[1] - 1) > 1e-3;
+        g->spacing_approx = !at_corner || fabs(corner[0] / mid[0] - 1) > 1e-3 || fabs(corner[1] / mid[1] - 1) > 1e-3;
         /* a projection near true scale over the raster: its own metres */
         double lin = g->crs == TSR_CRS_PROJECTED ? OSRGetLinearUnits(s, NULL) : 0;
         double cx = fabs(g->pixel[0]) * lin, cy = fabs(g->pixel[1]) * lin;

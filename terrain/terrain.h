@@ -113,7 +113,7 @@ typedef struct tsr_georef {
     bool spacing_unitless; /* no CRS: the unit is unknown */
     bool spacing_crs;      /* spacing is the CRS's pixel size, not the ground's */
     double spacing[2];
-    double ground[2];      /* the ground spacing at the middle (has_spacing and a CRS) */
+    double ground[2]; /* the ground spacing at the middle (has_spacing and a CRS) */
 } tsr_georef;
 
 /* The georeferencing of the file hf was loaded from; NULL when it named

@@ -729,8 +729,7 @@ tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t
     for (uint32_t i = 0; i < nb; i++)
         for (uint32_t j = i + 1; j < nb && e[j].lo[0] <= e[i].hi[0]; j++) {
             if (e[j].lo[1] > e[i].hi[1] || e[j].hi[1] < e[i].lo[1] || e[j].lo[2] > e[i].hi[2] ||
-                e[j].hi[2] < e[i].lo[2] || e[i].a == e[j].a || e[i].a == e[j].b || e[i].b == e[j].a ||
-                e[i].b == e[j].b)
+                e[j].hi[2] < e[i].lo[2] || e[i].a == e[j].a || e[i].a == e[j].b || e[i].b == e[j].a || e[i].b == e[j].b)
                 continue;
             if (!in[i] && gap_along(m, &e[i], &e[j], eps2))
                 in[i] = true;

@@ -108,8 +108,10 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
     if (t == 1)
         return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: a symbolic link that loops", path);
     if (t == 3)
-        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: a symbolic link in a shared sticky folder, owned by "
-                             "someone else (not followed)", path);
+        return tsr_error_set(err, TSR_ERR_IO,
+                             "%s: cannot write: a symbolic link in a shared sticky folder, owned by "
+                             "someone else (not followed)",
+                             path);
     const char *slash = strrchr(target, '/');
     const char *base = slash ? slash + 1 : target;
     const char *dot = strrchr(base, '.');

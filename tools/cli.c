@@ -272,10 +272,10 @@ void cli_georef_describe(const tsr_heightfield *hf, const cli_heightfield_option
     double dx, dy;
     bool file = cli_spacing(hf, o, &dx, &dy);
     bool given = o->dx > 0 || o->dy > 0;
-    const char *how = !file                 ? (given                          ? "as given"
-                                               : g && g->rotated              ? "default: the file's grid is rotated or "
-                                                                                "sheared, which is not followed"
-                                                                              : "default")
+    const char *how = !file                 ? (given             ? "as given"
+                                               : g && g->rotated ? "default: the file's grid is rotated or "
+                                                                   "sheared, which is not followed"
+                                                                 : "default")
                       : g->spacing_unitless ? "from the file, in its unknown unit"
                       : g->spacing_crs      ? "metres, the file's pixel in its CRS, within 1 % of the ground's"
                       : g->spacing_approx   ? "ground metres at the file's middle; it varies across"

@@ -361,9 +361,8 @@ static void help_patches(FILE *f)
         "                        (subdivision and trimmed patches) and measured beyond the tolerance, with at\n"
         "                        most half their tolerance, up to N times (default 6; 0: never), as ptess.h\n"
         "                        prescribes; Bezier pieces are never retried, their bound is a proof\n"
-        "  --scheme S            catmark or bilinear: the subdivision scheme of a polygon OBJ\n"
-        CLI_WELD_HELP
-        CLI_ORIENT_HELP
+        "  --scheme S            catmark or bilinear: the subdivision scheme of a polygon OBJ\n" CLI_WELD_HELP
+            CLI_ORIENT_HELP
         "  --assume-linked       take every patch edge as linked: nothing counts as a seam and every\n"
         "                        T-junction fails (what a crack between joined patches would give)\n"
         "  --json                print the results as JSON\n"
@@ -621,8 +620,8 @@ typedef struct patch_run {
     boundary_report bnd;
     uint32_t t_junctions;            /* counted: failures */
     uint32_t t_junctions_discounted; /* along unlinked patch edges (bnd.unlinked_junctions): no failure */
-    uint32_t gaps;       /* open edges facing another within the tolerance (tsr_mesh_find_gaps): failures */
-    uint32_t gaps_open;  /* the same along unlinked patch edges or on trimmed patches: no failure */
+    uint32_t gaps;                   /* open edges facing another within the tolerance (tsr_mesh_find_gaps): failures */
+    uint32_t gaps_open;              /* the same along unlinked patch edges or on trimmed patches: no failure */
     bool watertight, conforming, ok;
     char failed[600];  /* why the tessellation itself failed, or "" */
     char invalid[300]; /* tsr_validation_describe of the mesh */
@@ -742,8 +741,8 @@ static int patch_run_do(const tsr_pmodel *m, const tsr_pmodel_info *info, const 
             if (!gap[h])
                 continue;
             tsr_psource_info si;
-            bool open = (unlinked && unlinked[h]) ||
-                        (tsr_pmodel_source_info(m, res.tri_source[h / 3], &si) && si.trimmed);
+            bool open =
+                (unlinked && unlinked[h]) || (tsr_pmodel_source_info(m, res.tri_source[h / 3], &si) && si.trimmed);
             pr->gaps += !open;
             pr->gaps_open += open;
         }

@@ -15,76 +15,75 @@
 
 static void help(FILE *f)
 {
-    fprintf(f,
-            "usage: tessera mesh IN -o OUT [options]\n\n"
-            "Converts a heightfield into a triangle mesh whose vertical error is bounded: after building,\n"
-            "every valid sample is measured against the mesh, and the measured max error never exceeds\n"
-            "--max-error. OUT's extension picks the format: .obj, .ply (binary), .stl (binary) or .glb\n"
-            "(glTF 2.0, +y up). Sample (c, r) becomes the vertex (c*dx, r*dy, h*dz) (--north-up:\n"
-            "(c*dx, -r*dy, h*dz)); no-data samples become holes, never zeros: delaunay and quadtree mesh\n"
-            "the cells whose four corners are valid, grid also the triangle of a cell with three.\n\n"
-            "options:\n"
-            "  -o, --output OUT      mesh file to write (required)\n"
-            "  --max-error E         the bound on the vertical error, in output z units\n"
-            "                        (default: 0.1%% of the heightfield's height range, also with\n"
-            "                        --window, unless a budget is given)\n"
-            "  --triangles N         a budget: at most N triangles (stops when reached; the error\n"
-            "                        achieved is reported)\n"
-            "  --vertices N          a budget: at most N vertices (with --max-error too, both must\n"
+    fprintf(f, "usage: tessera mesh IN -o OUT [options]\n\n"
+               "Converts a heightfield into a triangle mesh whose vertical error is bounded: after building,\n"
+               "every valid sample is measured against the mesh, and the measured max error never exceeds\n"
+               "--max-error. OUT's extension picks the format: .obj, .ply (binary), .stl (binary) or .glb\n"
+               "(glTF 2.0, +y up). Sample (c, r) becomes the vertex (c*dx, r*dy, h*dz) (--north-up:\n"
+               "(c*dx, -r*dy, h*dz)); no-data samples become holes, never zeros: delaunay and quadtree mesh\n"
+               "the cells whose four corners are valid, grid also the triangle of a cell with three.\n\n"
+               "options:\n"
+               "  -o, --output OUT      mesh file to write (required)\n"
+               "  --max-error E         the bound on the vertical error, in output z units\n"
+               "                        (default: 0.1%% of the heightfield's height range, also with\n"
+               "                        --window, unless a budget is given)\n"
+               "  --triangles N         a budget: at most N triangles (stops when reached; the error\n"
+               "                        achieved is reported)\n"
+               "  --vertices N          a budget: at most N vertices (with --max-error too, both must\n"
                "                        hold: exit 1, nothing written, when the budget is reached\n"
                "                        above the bound)\n"
-            "  --method M            delaunay (default): greedy insertion of the worst sample\n"
-            "                        (Garland-Heckbert) on the constrained-Delaunay kernel, with\n"
-            "                        data-dependent edge flips after each insertion;\n"
-            "                        quadtree: a restricted quadtree, each leaf two triangles\n"
-            "                        on its better diagonal or four from its centre, plus side\n"
-            "                        midpoints, kept only where every sample is within the\n"
-            "                        bound: 2-10x faster, 1.2-3x the triangles;\n"
-            "                        grid: every --step-th sample\n"
-            "  --no-flip             delaunay: no data-dependent flips: a Delaunay triangulation,\n"
-            "                        1.3-2x faster, about a quarter more triangles for the bound\n"
-            "                        (--flip, the default, flips an edge when that lowers its two\n"
-            "                        triangles' error above the bound)\n"
-            "  --block N             delaunay with a bound: mesh blocks of about N x N cells on\n"
-            "                        their own, their seams fixed like window borders (default\n"
-            "                        256, at least 16; the mesh depends on N, not on --threads)\n"
-            "  --threads N           delaunay: blocks meshed at once; quadtree: nodes tested at\n"
-            "                        once (default: one per processor this process may use, by its\n"
-            "                        CPU affinity and cgroup CPU limit; the mesh is the same)\n"
-            "  --step N              grid: keep every N-th column and row (default 1)\n"
-            "  --tile N              quadtree: draw each leaf as an N x N grid tile instead (2, 4,\n"
-            "                        8, ..., 128; the terrain LOD's tiles and error pyramid: more\n"
-            "                        triangles)\n"
-            "  --border-error E      delaunay: tolerance of the border and no-data boundary\n"
-            "                        simplification (default: the --max-error; with a budget\n"
-            "                        and no bound, the border is refined like the interior)\n"
-            "  --window X,Y,W,H      mesh only W x H samples from column X, row Y; vertices keep the\n"
-            "                        whole heightfield's coordinates, and adjacent windows (sharing\n"
-            "                        a border row or column, same options, a bound rather than a\n"
-            "                        budget) have identical border vertices, so tiles meshed as\n"
-            "                        separate jobs fit exactly (quadtree: its window borders are\n"
-            "                        kept at full resolution)\n"
-            "  --base DEPTH          a closed solid for 3D printing: walls down to a flat bottom\n"
-            "                        DEPTH below the heightfield's lowest sample (the whole\n"
-            "                        heightfield's, also with --window: tiles share the bottom);\n"
-            "                        --triangles and --vertices count the walls and bottom too\n"
-            "  --north-up            y = -r*dy: +y is the image's up (north in a north-up GIS raster),\n"
-            "                        so x east, y north, z up is right-handed and the terrain is not\n"
-            "                        mirrored in a z-up viewer (the default's y runs down the rows)\n"
-            "  --normals             per-vertex normals from the heightfield's gradients (with --base,\n"
-            "                        the walls and bottom flat-shaded: their vertices are written apart\n"
-            "                        from the top's, except in .stl, which has facet normals)\n"
-            "  --normal-map FILE     a normal map image, one pixel per sample (.png, .tif); with\n"
-            "                        --window, of the window (the whole map's pixels there)\n"
-            "  --hillshade FILE      a hillshade image, one pixel per sample (.png, .tif; with\n"
-            "                        no-data, an alpha channel: 0 there); with --window, of the window\n"
-            "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
-            "                        peak_bytes, method, the input's size, range, no-data count and\n"
-            "                        dz (with --nodata, its value), and the window's own range\n"
-            "  --quiet               print nothing on success (no summary, no progress bar)\n" CLI_HEIGHTFIELD_HELP
-            "  -h, --help            this help\n\n"
-            "exit status: 0 written, 1 bad input or failed output, 2 bad usage, 3 nothing to mesh\n"
-            "(the heightfield or window all no-data, or no triangle of valid samples; nothing written)\n");
+               "  --method M            delaunay (default): greedy insertion of the worst sample\n"
+               "                        (Garland-Heckbert) on the constrained-Delaunay kernel, with\n"
+               "                        data-dependent edge flips after each insertion;\n"
+               "                        quadtree: a restricted quadtree, each leaf two triangles\n"
+               "                        on its better diagonal or four from its centre, plus side\n"
+               "                        midpoints, kept only where every sample is within the\n"
+               "                        bound: 2-10x faster, 1.2-3x the triangles;\n"
+               "                        grid: every --step-th sample\n"
+               "  --no-flip             delaunay: no data-dependent flips: a Delaunay triangulation,\n"
+               "                        1.3-2x faster, about a quarter more triangles for the bound\n"
+               "                        (--flip, the default, flips an edge when that lowers its two\n"
+               "                        triangles' error above the bound)\n"
+               "  --block N             delaunay with a bound: mesh blocks of about N x N cells on\n"
+               "                        their own, their seams fixed like window borders (default\n"
+               "                        256, at least 16; the mesh depends on N, not on --threads)\n"
+               "  --threads N           delaunay: blocks meshed at once; quadtree: nodes tested at\n"
+               "                        once (default: one per processor this process may use, by its\n"
+               "                        CPU affinity and cgroup CPU limit; the mesh is the same)\n"
+               "  --step N              grid: keep every N-th column and row (default 1)\n"
+               "  --tile N              quadtree: draw each leaf as an N x N grid tile instead (2, 4,\n"
+               "                        8, ..., 128; the terrain LOD's tiles and error pyramid: more\n"
+               "                        triangles)\n"
+               "  --border-error E      delaunay: tolerance of the border and no-data boundary\n"
+               "                        simplification (default: the --max-error; with a budget\n"
+               "                        and no bound, the border is refined like the interior)\n"
+               "  --window X,Y,W,H      mesh only W x H samples from column X, row Y; vertices keep the\n"
+               "                        whole heightfield's coordinates, and adjacent windows (sharing\n"
+               "                        a border row or column, same options, a bound rather than a\n"
+               "                        budget) have identical border vertices, so tiles meshed as\n"
+               "                        separate jobs fit exactly (quadtree: its window borders are\n"
+               "                        kept at full resolution)\n"
+               "  --base DEPTH          a closed solid for 3D printing: walls down to a flat bottom\n"
+               "                        DEPTH below the heightfield's lowest sample (the whole\n"
+               "                        heightfield's, also with --window: tiles share the bottom);\n"
+               "                        --triangles and --vertices count the walls and bottom too\n"
+               "  --north-up            y = -r*dy: +y is the image's up (north in a north-up GIS raster),\n"
+               "                        so x east, y north, z up is right-handed and the terrain is not\n"
+               "                        mirrored in a z-up viewer (the default's y runs down the rows)\n"
+               "  --normals             per-vertex normals from the heightfield's gradients (with --base,\n"
+               "                        the walls and bottom flat-shaded: their vertices are written apart\n"
+               "                        from the top's, except in .stl, which has facet normals)\n"
+               "  --normal-map FILE     a normal map image, one pixel per sample (.png, .tif); with\n"
+               "                        --window, of the window (the whole map's pixels there)\n"
+               "  --hillshade FILE      a hillshade image, one pixel per sample (.png, .tif; with\n"
+               "                        no-data, an alpha channel: 0 there); with --window, of the window\n"
+               "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
+               "                        peak_bytes, method, the input's size, range, no-data count and\n"
+               "                        dz (with --nodata, its value), and the window's own range\n"
+               "  --quiet               print nothing on success (no summary, no progress bar)\n" CLI_HEIGHTFIELD_HELP
+               "  -h, --help            this help\n\n"
+               "exit status: 0 written, 1 bad input or failed output, 2 bad usage, 3 nothing to mesh\n"
+               "(the heightfield or window all no-data, or no triangle of valid samples; nothing written)\n");
 }
 
 /* --north-up: y = -r dy instead of r dy, so +y is the image's up (north
@@ -240,12 +239,16 @@ static int build_measured(const tsr_heightfield *hf, tsr_tin_options *to, double
         }
         if (mesh->triangle_count == 0) {
             if (to->method == TSR_TIN_GRID)
-                cli_error("mesh", "%s: nothing to mesh: the valid samples of the %s form no triangle (no cell has "
-                          "three valid corners); nothing written", in, to->window_w ? "window" : "heightfield");
+                cli_error("mesh",
+                          "%s: nothing to mesh: the valid samples of the %s form no triangle (no cell has "
+                          "three valid corners); nothing written",
+                          in, to->window_w ? "window" : "heightfield");
             else
-                cli_error("mesh", "%s: nothing to mesh: the valid samples of the %s form no triangle (no cell has "
+                cli_error("mesh",
+                          "%s: nothing to mesh: the valid samples of the %s form no triangle (no cell has "
                           "four valid corners, which --method %s needs; --method grid meshes cells with three); "
-                          "nothing written", in, to->window_w ? "window" : "heightfield", method_name(to->method));
+                          "nothing written",
+                          in, to->window_w ? "window" : "heightfield", method_name(to->method));
             return CLI_EMPTY;
         }
         if (tsr_terrain_measure_window(hf, mx, my, mw, mh, mesh, NULL, er) != TSR_OK) {
@@ -310,9 +313,9 @@ static uint32_t count_pinches(const tsr_mesh *m)
 
 /* build_measured, then with base_z the walls and bottom down to it (split:
  * flat-shaded, their vertices apart from the top's). */
-static int build_solid(const tsr_heightfield *hf, tsr_tin_options *to, double max_error, double ztop,
-                       const char *in, const uint32_t win[4], const double *base_z, bool split, tsr_mesh *mesh,
-                       tsr_tin_report *rep, tsr_error_report *er, double *bound, uint32_t *pinches)
+static int build_solid(const tsr_heightfield *hf, tsr_tin_options *to, double max_error, double ztop, const char *in,
+                       const uint32_t win[4], const double *base_z, bool split, tsr_mesh *mesh, tsr_tin_report *rep,
+                       tsr_error_report *er, double *bound, uint32_t *pinches)
 {
     int rc = build_measured(hf, to, max_error, ztop, in, win[0], win[1], win[2], win[3], mesh, rep, er, bound);
     if (rc != CLI_OK || !base_z)
@@ -547,7 +550,8 @@ static int run(int argc, char **argv)
      * too): the top's budgets are scaled by x in (0, 1], searched for the
      * largest x whose solid fits (within 0.5 % of the budget). */
     uint32_t budget_t = to.max_triangles, budget_v = to.max_vertices;
-    rc = build_solid(hf, &to, max_error, ztop, in, win4, has_base ? &base_z : NULL, split, &mesh, &rep, &er, &bound, &pinches);
+    rc = build_solid(hf, &to, max_error, ztop, in, win4, has_base ? &base_z : NULL, split, &mesh, &rep, &er, &bound,
+                     &pinches);
     if (rc == CLI_OK && has_base && (budget_t || budget_v) && !solid_fits(&mesh, budget_t, budget_v)) {
         double lo = 0, hi = 1, x = 1;
         bool have_lo = false, last_fits = false;

@@ -37,9 +37,7 @@ static void help(FILE *f)
             "                        faces needing few tiles N or N/2 (when even), likewise\n"
             "  --max-level L         quadtree depth per patch, 1..12 (default 10)\n"
             "  --scheme S            catmark or bilinear, for a polygon cage (default: bilinear when the\n"
-            "                        file name starts with \"bilinear\", else catmark)\n"
-            CLI_WELD_HELP
-            CLI_ORIENT_HELP
+            "                        file name starts with \"bilinear\", else catmark)\n" CLI_WELD_HELP CLI_ORIENT_HELP
             "  --normals             per-vertex normals of the true surface; where surfaces meet at an\n"
             "                        angle (sharp creases and corners of a cage, faces of a box of\n"
             "                        patches) the vertex is written once per side, each with its side's\n"
@@ -326,12 +324,14 @@ static int run(int argc, char **argv)
     }
     double tol = opt.camera ? v.pixel_error : opt.max_error;
     if (rc == CLI_OK && verify && meas.max_error > tol) {
-        cli_error("patch", "%s: measured error %.6g is above %.6g even after re-tessellating %u patches finer "
+        cli_error("patch",
+                  "%s: measured error %.6g is above %.6g even after re-tessellating %u patches finer "
                   "(down to --max-level %u)",
                   in, meas.max_error, tol, tightened, opt.max_level ? opt.max_level : 10);
         rc = CLI_FAIL;
     } else if (rc == CLI_OK && verify && meas.uncovered) {
-        cli_error("patch", "%s: %llu of %llu measured samples of untrimmed patches fall on no triangle of the mesh "
+        cli_error("patch",
+                  "%s: %llu of %llu measured samples of untrimmed patches fall on no triangle of the mesh "
                   "(a gap, or triangles with no area: coordinates as large as %g leave float32 no room for small "
                   "features), even after re-tessellating %u patches finer",
                   in, (unsigned long long)meas.uncovered, (unsigned long long)meas.samples, maxabs, tightened);

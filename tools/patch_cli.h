@@ -16,10 +16,10 @@ typedef struct cli_patch_model {
     bool is_subd;
     const char *kind;    /* "bpt", "obj-surfaces", "cage-catmark" or "cage-bilinear" */
     double diag;         /* model box diagonal */
-    uint32_t cage_reversed;     /* cage faces against their neighbours (tsr_cage_orient): reversed when asked */
+    uint32_t cage_reversed;       /* cage faces against their neighbours (tsr_cage_orient): reversed when asked */
     uint32_t cage_first_reversed; /* the first of them, 0-based */
-    bool cage_oriented;         /* they were reversed (--orient-faces) */
-    uint32_t cage_unorientable; /* parts of the cage no orientation agrees across (left as they are) */
+    bool cage_oriented;           /* they were reversed (--orient-faces) */
+    uint32_t cage_unorientable;   /* parts of the cage no orientation agrees across (left as they are) */
 } cli_patch_model;
 
 /* Loads path: .bpt, or .obj with free-form surfaces (cstype/surf), else
@@ -37,9 +37,9 @@ bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *sc
                                cli_patch_model *out);
 
 /* The --orient-faces option's help, shared by patch and check. */
-#define CLI_ORIENT_HELP                                                                                \
-    "  --orient-faces        reverse cage faces listed against their neighbours' order (OpenSubdiv\n"   \
-    "                        leaves the edges they share open: a crack); without it they are\n"        \
+#define CLI_ORIENT_HELP                                                                                                \
+    "  --orient-faces        reverse cage faces listed against their neighbours' order (OpenSubdiv\n"                  \
+    "                        leaves the edges they share open: a crack); without it they are\n"                        \
     "                        only warned of\n"
 
 /* The --weld option's help, shared by patch and check. */

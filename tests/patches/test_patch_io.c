@@ -161,16 +161,19 @@ TEST(bpt_small_and_memory_parse)
               e.message);
     CHECK(s.num_patches == 2);
     tsr_patch_set_free(&s);
-    const char *obj = "\xEF\xBB\xBF" "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 1\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nend\n";
+    const char *obj = "\xEF\xBB\xBF"
+                      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 1\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nend\n";
     CHECK_MSG(tsr_patch_set_parse(obj, strlen(obj), "bom.obj", TSR_PATCH_FORMAT_OBJ, NULL, &s, &e) == TSR_OK, "%s",
               e.message);
     CHECK(s.num_patches == 1);
     tsr_patch_set_free(&s);
-    const char *cage = "\xEF\xBB\xBF" "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    const char *cage = "\xEF\xBB\xBF"
+                       "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
     tsr_cage c;
     CHECK_MSG(tsr_cage_parse(cage, strlen(cage), "bom_cage.obj", NULL, &c, &e) == TSR_OK, "%s", e.message);
     tsr_cage_free(&c);
-    const char *bad = "\xEF\xBB\xBF" "1\n1 1\n0 0 x\n1 0 0\n0 1 0\n1 1 1\n";
+    const char *bad = "\xEF\xBB\xBF"
+                      "1\n1 1\n0 0 x\n1 0 0\n0 1 0\n1 1 1\n";
     CHECK(tsr_patch_set_parse(bad, strlen(bad), "bom_bad.bpt", TSR_PATCH_FORMAT_BPT, NULL, &s, &e) != TSR_OK);
     CHECK_MSG(!strncmp(e.message, "bom_bad.bpt:3: ", 15), "%s", e.message);
     CHECK(tsr_patch_format_from_path("a/b.BPT") == TSR_PATCH_FORMAT_BPT);
@@ -726,8 +729,9 @@ TEST(cage_orient)
  * the shared column repeated are one continuous surface. */
 TEST(obj_repeated_knot_continuous)
 {
-    const char *obj = "v 0 0 0\nv 1 0 0\nv 1 0 0\nv 2 0 1\nv 0 1 0\nv 1 1 0\nv 1 1 0\nv 2 1 1\n"
-                      "cstype bspline\ndeg 1 1\nsurf 0 2 0 1 1 2 3 4 5 6 7 8\nparm u 0 0 1 1 2 2\nparm v 0 0 1 1\nend\n";
+    const char *obj =
+        "v 0 0 0\nv 1 0 0\nv 1 0 0\nv 2 0 1\nv 0 1 0\nv 1 1 0\nv 1 1 0\nv 2 1 1\n"
+        "cstype bspline\ndeg 1 1\nsurf 0 2 0 1 1 2 3 4 5 6 7 8\nparm u 0 0 1 1 2 2\nparm v 0 0 1 1\nend\n";
     tsr_patch_set s;
     tsr_error e = {0};
     CHECK_MSG(tsr_patch_set_parse(obj, strlen(obj), "split.obj", TSR_PATCH_FORMAT_OBJ, NULL, &s, &e) == TSR_OK, "%s",
@@ -800,6 +804,6 @@ TEST(missing_and_odd_paths)
     tsr_cage_free(NULL);
 }
 
-TEST_MAIN(T(data_teapot_loads), T(data_teapot_degenerate_normals), T(bpt_small_and_memory_parse), T(cage_orient), T(obj_repeated_knot_continuous),
-          T(obj_freeform_trimmed), T(obj_bezier_surfaces), T(data_osd_cages_load), T(cage_small_forms),
-          T(bad_files_name_the_line), T(missing_and_odd_paths))
+TEST_MAIN(T(data_teapot_loads), T(data_teapot_degenerate_normals), T(bpt_small_and_memory_parse), T(cage_orient),
+          T(obj_repeated_knot_continuous), T(obj_freeform_trimmed), T(obj_bezier_surfaces), T(data_osd_cages_load),
+          T(cage_small_forms), T(bad_files_name_the_line), T(missing_and_odd_paths))

@@ -1231,7 +1231,10 @@ static double tc_blossom(double a, double b, double c)
     return w[0];
 }
 
-static double tc_g(double x) { return tc_blossom(x / 2, x / 2, x / 2); }
+static double tc_g(double x)
+{
+    return tc_blossom(x / 2, x / 2, x / 2);
+}
 
 /* A bicubic patch over u in [u0, u1] (x = 2u; u1 < u0 runs backwards) and
  * y in [y0, y1]. */
@@ -1252,8 +1255,8 @@ static void tc_patch(sbuf *b, int *nv, double u0, double u1, double y0, double y
 static bool tc_on_outline(double x, double y, double eps)
 {
     bool ylo = fabs(y + 1) <= eps, yhi = fabs(y - 2) <= eps, y0 = fabs(y) <= eps;
-    return ylo || yhi || fabs(x + 1) <= eps || (fabs(x - 3) <= eps && y <= eps) ||
-           (y0 && (x >= 2 - eps || x <= eps)) || ((fabs(x) <= eps || fabs(x - 2) <= eps) && y >= -eps);
+    return ylo || yhi || fabs(x + 1) <= eps || (fabs(x - 3) <= eps && y <= eps) || (y0 && (x >= 2 - eps || x <= eps)) ||
+           ((fabs(x) <= eps || fabs(x - 2) <= eps) && y >= -eps);
 }
 
 TEST(t_configurations_linked)
@@ -1309,8 +1312,8 @@ TEST(t_configurations_linked)
             CHECK_MSG(off == 0, "E %g: %u open edges inside the union, first half-edge %u", E, off, first);
             /* vertical error at the vertices and at 6 points inside every triangle */
             double worst = 0;
-            static const double bary[6][3] = {{1. / 3, 1. / 3, 1. / 3}, {0.5, 0.5, 0}, {0, 0.5, 0.5},
-                                              {0.5, 0, 0.5},            {0.8, 0.1, 0.1}, {0.1, 0.1, 0.8}};
+            static const double bary[6][3] = {{1. / 3, 1. / 3, 1. / 3}, {0.5, 0.5, 0},  {0, 0.5, 0.5}, {0.5, 0, 0.5},
+                                              {0.8, 0.1, 0.1},          {0.1, 0.1, 0.8}};
             for (uint32_t t = 0; t < r.mesh.triangle_count; t++)
                 for (int s = 0; s < 6; s++) {
                     double x = 0, z = 0;
@@ -4337,12 +4340,15 @@ TEST(measure_threads_same_figures)
 
 TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_cylinder_error), T(sphere_octant_pole),
           T(sphere_closed_outward_nets), T(sphere_closed_mirrored_octants), T(sphere_closed_first_inward),
-          T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_linked), T(t_configurations_linked), T(staggered_rows_linked_or_left_whole),
-          T(stitched_tiles_within_bound), T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas), T(trim_loops_meet_the_lattice), T(trim_loop_shapes), T(measure_passes_slivers_by), T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
-          T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
-         T(rational_cylinder_cut_near_its_strip),
-          T(camera_near_finer), T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
-          T(data_osd_corner_estimate), T(data_osd_half_tiles), T(crease_normals_box), T(crease_normals_smooth_sphere), T(crease_normals_far_sphere),
-          T(crease_normals_bspline_kink), T(small_faces_small_memory), T(measure_threads_same_figures),
-          T(data_osd_crease_normals),
-          T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
+          T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_linked),
+          T(t_configurations_linked), T(staggered_rows_linked_or_left_whole), T(stitched_tiles_within_bound),
+          T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas),
+          T(trim_loops_meet_the_lattice), T(trim_loop_shapes), T(measure_passes_slivers_by),
+          T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
+          T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve),
+          T(rational_product_weights_within_bound), T(rational_cylinder_cut_near_its_strip), T(camera_near_finer),
+          T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
+          T(data_osd_corner_estimate), T(data_osd_half_tiles), T(crease_normals_box), T(crease_normals_smooth_sphere),
+          T(crease_normals_far_sphere), T(crease_normals_bspline_kink), T(small_faces_small_memory),
+          T(measure_threads_same_figures), T(data_osd_crease_normals), T(null_and_empty_inputs), T(data_teapot),
+          T(data_osd_cages))

@@ -548,8 +548,7 @@ TEST(cgroup_cpu_limits)
     CHECK(system(cmd) == 0);
 }
 
-TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing), T(pending_temporaries_removed), T(atomic_output_links_and_modes),
-          T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced),
-          T(keymap_clear_keeps_room), T(cpu_count_follows_affinity), T(cpu_quota_text),
-          T(cgroup_cpu_limits), T(default_allocator_kinds),
-          T(custom_allocator_dense_blocks))
+TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing),
+          T(pending_temporaries_removed), T(atomic_output_links_and_modes), T(binary_layouts), T(status_table),
+          T(custom_allocator_is_used_and_balanced), T(keymap_clear_keeps_room), T(cpu_count_follows_affinity),
+          T(cpu_quota_text), T(cgroup_cpu_limits), T(default_allocator_kinds), T(custom_allocator_dense_blocks))

@@ -393,8 +393,8 @@ TEST(gaps_between_open_edges)
     /* a strip narrower than eps is one gap by the definition */
     CHECK(tsr_mesh_find_gaps(&m, 8.5, NULL, &n) == TSR_OK);
     CHECK_MSG(n == 32, "%u gap edges at 8.5", n);
-    CHECK(tsr_mesh_find_gaps(&m, -1, NULL, &n) == TSR_ERR_ARGUMENT && tsr_mesh_find_gaps(NULL, 1, NULL, &n) ==
-          TSR_ERR_ARGUMENT);
+    CHECK(tsr_mesh_find_gaps(&m, -1, NULL, &n) == TSR_ERR_ARGUMENT &&
+          tsr_mesh_find_gaps(NULL, 1, NULL, &n) == TSR_ERR_ARGUMENT);
     tsr_mesh_free(&m);
     free(hit);
 }
@@ -439,5 +439,5 @@ TEST(random_grids_with_one_defect)
 
 TEST_MAIN(T(grid_is_valid), T(flipped_triangle), T(nonmanifold_edge), T(coincident_sheets_no_t_junction), T(t_junction),
           T(t_junction_in_3d_long_edge), T(height_field_junctions_in_xy), T(inward_shells_found_and_turned),
-          T(degenerate_and_duplicate), T(closed_tetrahedron), T(holes_count_loops), T(coincident_vertices_make_a_crack), T(gaps_between_open_edges),
-          T(bad_index_and_nan_position), T(random_grids_with_one_defect))
+          T(degenerate_and_duplicate), T(closed_tetrahedron), T(holes_count_loops), T(coincident_vertices_make_a_crack),
+          T(gaps_between_open_edges), T(bad_index_and_nan_position), T(random_grids_with_one_defect))
