@@ -421,9 +421,10 @@ typedef struct pedge {
 /* Two edges lying along one curve. Whole edges whose ends meet: ends bit
  * 0 forwards, bit 1 reversed; partial overlaps (ends 0): fractions ta[0]
  * < ta[1] of a's parameter are tb[0], tb[1] of b's, in proportion between
- * (once state is 1 or 2, whole pairs too). state 0 not yet compared, 1
- * one curve forwards, 2 one curve reversed (t on a is 1 - t on b), -1 not
- * one curve. */
+ * (once state is 1 or 2, whole pairs too; tb[0] > tb[1] when b runs the
+ * other way). state 0 not yet compared, -1 not one curve; for whole
+ * pairs 1 one curve forwards, 2 reversed (t on a is 1 - t on b); for
+ * partial ones 1 one curve, either way (tb says which). */
 typedef struct epair {
     uint32_t a, b; /* into the pedge list */
     uint8_t ends;

@@ -398,12 +398,14 @@ bool tsr_point_on_open_segment(const float p[3], const float a[3], const float b
 tsr_status tsr_mesh_find_inward_shells(const tsr_mesh *m, uint8_t *flip, uint32_t *shells);
 
 /* Gaps: open edges facing each other. A boundary half-edge (one with no
- * twin) is in a gap when both its ends lie within eps of another boundary
- * half-edge that runs the other way (their directions' dot product below
- * -1/2) and shares no vertex with it: two surfaces meeting along a curve
- * with different vertices leave such a crack up to eps wide (a long chord
- * of one side against the short chords of the other). Consecutive edges
- * of one rim run the same way and are never counted. hit (3 *
+ * twin) is in a gap when its two ends and its midpoint each lie within eps
+ * of some boundary half-edge that runs the other way (their directions'
+ * dot product below -1/2) and shares no vertex with it: two surfaces
+ * meeting along a curve with different vertices leave such a crack up to
+ * eps wide (a long chord of one side against the short chords of the
+ * other, or both sides cut at interleaved points). Consecutive edges of
+ * one rim run the same way and are never counted; a strip narrower than
+ * eps is a gap by this definition. hit (3 *
  * triangle_count entries, may be NULL) receives true at half-edge 3 t + k
  * (from corner k to k + 1 of triangle t) for those in a gap, false at the
  * others; *count (may be NULL) their number. Degenerate edges are left

@@ -671,20 +671,25 @@ static double gap_seg_dist2(const float *p, const float *a, const float *b)
     return d2;
 }
 
-/* Whether open edge e lies along f (both its ends within eps of f), the
- * two running opposite ways. */
-static bool gap_along(const tsr_mesh *m, const gap_edge *e, const gap_edge *f, double eps2)
+/* Which of open edge e's ends and midpoint (bits 0, 1, 2) lie within eps
+ * of f, when the two run opposite ways (0 otherwise). */
+static unsigned gap_along(const tsr_mesh *m, const gap_edge *e, const gap_edge *f, double eps2)
 {
     const float *a0 = m->positions + 3 * (size_t)e->a, *a1 = m->positions + 3 * (size_t)e->b;
     const float *b0 = m->positions + 3 * (size_t)f->a, *b1 = m->positions + 3 * (size_t)f->b;
     double dot = 0, la = 0, lb = 0;
+    float mid[3];
     for (int k = 0; k < 3; k++) {
         double u = (double)a1[k] - a0[k], v = (double)b1[k] - b0[k];
         dot += u * v;
         la += u * u;
         lb += v * v;
+        mid[k] = (float)(0.5 * ((double)a0[k] + a1[k]));
     }
-    return dot < -0.5 * sqrt(la * lb) && gap_seg_dist2(a0, b0, b1) <= eps2 && gap_seg_dist2(a1, b0, b1) <= eps2;
+    if (!(dot < -0.5 * sqrt(la * lb)))
+        return 0;
+    return (gap_seg_dist2(a0, b0, b1) <= eps2 ? 1u : 0u) | (gap_seg_dist2(a1, b0, b1) <= eps2 ? 2u : 0u) |
+           (gap_seg_dist2(mid, b0, b1) <= eps2 ? 4u : 0u);
 }
 
 tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t *count)
@@ -702,7 +707,7 @@ tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t
     for (uint32_t h = 0; h < he.count; h++)
         nb += he.twin[h] == TSR_NO_TWIN;
     gap_edge *e = malloc((nb ? nb : 1) * sizeof *e);
-    bool *in = calloc(nb ? nb : 1, sizeof *in);
+    uint8_t *in = calloc(nb ? nb : 1, sizeof *in); /* gap_along's bits, over all opposite edges */
     if (!e || !in) {
         free(e);
         free(in);
@@ -731,13 +736,13 @@ tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t
             if (e[j].lo[1] > e[i].hi[1] || e[j].hi[1] < e[i].lo[1] || e[j].lo[2] > e[i].hi[2] ||
                 e[j].hi[2] < e[i].lo[2] || e[i].a == e[j].a || e[i].a == e[j].b || e[i].b == e[j].a || e[i].b == e[j].b)
                 continue;
-            if (!in[i] && gap_along(m, &e[i], &e[j], eps2))
-                in[i] = true;
-            if (!in[j] && gap_along(m, &e[j], &e[i], eps2))
-                in[j] = true;
+            if (in[i] != 7)
+                in[i] |= (uint8_t)gap_along(m, &e[i], &e[j], eps2);
+            if (in[j] != 7)
+                in[j] |= (uint8_t)gap_along(m, &e[j], &e[i], eps2);
         }
     for (uint32_t i = 0; i < nb; i++)
-        if (in[i]) {
+        if (in[i] == 7) {
             n++;
             if (hit)
                 hit[e[i].h] = true;

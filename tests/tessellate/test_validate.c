@@ -369,10 +369,10 @@ TEST(gaps_between_open_edges)
     bool *hit = calloc(3 * (size_t)m.triangle_count, sizeof *hit);
     uint32_t n = 99;
     /* the upper strip's 8 short bottom edges lie along the lower strip's
-     * long top edges within 0.02, running the other way; the long ones do
-     * not lie along any one short edge */
+     * 4 long top edges within 0.02, running the other way, and the long
+     * ones along the short ones */
     CHECK(tsr_mesh_find_gaps(&m, 0.02, hit, &n) == TSR_OK);
-    CHECK_MSG(n == 8, "%u gap edges", n);
+    CHECK_MSG(n == 12, "%u gap edges", n);
     uint32_t upper = 0;
     for (uint32_t h = 0; h < 3 * m.triangle_count; h++)
         upper += hit[h] && h / 3 >= 8 && m.positions[3 * (size_t)m.indices[h] + 1] < 1.5f;
@@ -383,7 +383,32 @@ TEST(gaps_between_open_edges)
     tsr_mesh_free(&m);
     /* the same vertices on the line: still a gap (of width 0), not welded */
     gap_strips(&m, 0);
-    CHECK(tsr_mesh_find_gaps(&m, 1e-6, NULL, &n) == TSR_OK && n == 8);
+    CHECK(tsr_mesh_find_gaps(&m, 1e-6, NULL, &n) == TSR_OK && n == 12);
+    tsr_mesh_free(&m);
+    /* both sides cut at interleaved points (0 2 4 6 below, 0 1 3 5 6 above,
+     * 0.001 apart): no edge lies along any one edge of the other side, all
+     * 7 lie along the other side */
+    tsr_mesh_init(&m, 0, NULL);
+    const float below[4] = {0, 2, 4, 6}, above[5] = {0, 1, 3, 5, 6};
+    for (int i = 0; i < 4; i++) {
+        tsr_mesh_add_vertex(&m, (float[3]){below[i], 0, 0}, NULL, NULL);
+        tsr_mesh_add_vertex(&m, (float[3]){below[i], 1, 0}, NULL, NULL);
+    }
+    for (uint32_t i = 0; i < 3; i++) {
+        tsr_mesh_add_triangle(&m, 2 * i, 2 * i + 2, 2 * i + 3);
+        tsr_mesh_add_triangle(&m, 2 * i, 2 * i + 3, 2 * i + 1);
+    }
+    uint32_t b0 = m.vertex_count;
+    for (int i = 0; i < 5; i++) {
+        tsr_mesh_add_vertex(&m, (float[3]){above[i], 1.001f, 0}, NULL, NULL);
+        tsr_mesh_add_vertex(&m, (float[3]){above[i], 2, 0}, NULL, NULL);
+    }
+    for (uint32_t i = 0; i < 4; i++) {
+        tsr_mesh_add_triangle(&m, b0 + 2 * i, b0 + 2 * i + 2, b0 + 2 * i + 3);
+        tsr_mesh_add_triangle(&m, b0 + 2 * i, b0 + 2 * i + 3, b0 + 2 * i + 1);
+    }
+    CHECK(tsr_mesh_find_gaps(&m, 0.01, NULL, &n) == TSR_OK);
+    CHECK_MSG(n == 7, "%u gap edges between interleaved cuts", n);
     tsr_mesh_free(&m);
     /* a grid's rim: consecutive edges run the same way, the far sides are
      * farther than eps: no gap, even with eps above the edge length */
