@@ -389,6 +389,9 @@ void tsr_validation_describe(const tsr_validation *v, char *buf, size_t cap);
  * vertex inside another triangle's edge is a T-junction). */
 bool tsr_point_on_open_segment(const float p[3], const float a[3], const float b[3], double eps);
 
+/* The squared distance from p to the segment ab (to a when a = b). */
+double tsr_point_segment_dist2(const float p[3], const float a[3], const float b[3]);
+
 /* Closed shells that face inward: the triangles of m joined through shared
  * edges (halfedge twins) into components; a component with no boundary
  * and no non-manifold edge whose signed volume (sum of p0 . (p1 x p2) / 6)

@@ -653,8 +653,7 @@ static int cmp_gap_edge(const void *x, const void *y)
     return a < b ? -1 : a > b;
 }
 
-/* The squared distance from p to the segment ab. */
-static double gap_seg_dist2(const float *p, const float *a, const float *b)
+double tsr_point_segment_dist2(const float p[3], const float a[3], const float b[3])
 {
     double ab[3], ap[3], l2 = 0, t = 0;
     for (int k = 0; k < 3; k++) {
@@ -688,8 +687,8 @@ static unsigned gap_along(const tsr_mesh *m, const gap_edge *e, const gap_edge *
     }
     if (!(dot < -0.5 * sqrt(la * lb)))
         return 0;
-    return (gap_seg_dist2(a0, b0, b1) <= eps2 ? 1u : 0u) | (gap_seg_dist2(a1, b0, b1) <= eps2 ? 2u : 0u) |
-           (gap_seg_dist2(mid, b0, b1) <= eps2 ? 4u : 0u);
+    return (tsr_point_segment_dist2(a0, b0, b1) <= eps2 ? 1u : 0u) | (tsr_point_segment_dist2(a1, b0, b1) <= eps2 ? 2u : 0u) |
+           (tsr_point_segment_dist2(mid, b0, b1) <= eps2 ? 4u : 0u);
 }
 
 tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t *count)

@@ -417,24 +417,6 @@ static int cmp_boundary_edge(const void *x, const void *y)
     return a->lo[0] < b->lo[0] ? -1 : a->lo[0] > b->lo[0];
 }
 
-static double seg_dist2(const float *p, const float *a, const float *b)
-{
-    double ab[3], ap[3], l2 = 0, t = 0;
-    for (int k = 0; k < 3; k++) {
-        ab[k] = (double)b[k] - a[k];
-        ap[k] = (double)p[k] - a[k];
-        l2 += ab[k] * ab[k];
-        t += ab[k] * ap[k];
-    }
-    t = l2 > 0 ? t / l2 : 0;
-    t = t < 0 ? 0 : t > 1 ? 1 : t;
-    double d2 = 0;
-    for (int k = 0; k < 3; k++)
-        d2 += (ap[k] - t * ab[k]) * (ap[k] - t * ab[k]);
-    return d2;
-}
-
-
 typedef struct vertex_key {
     double x; /* the coordinate along the sweep axis */
     uint32_t v;
@@ -515,9 +497,9 @@ static tsr_status check_boundary(const tsr_mesh *m, double eps, const bool *unli
                 continue;
             const float *a0 = m->positions + 3 * (size_t)e[i].a, *a1 = m->positions + 3 * (size_t)e[i].b;
             const float *b0 = m->positions + 3 * (size_t)e[j].a, *b1 = m->positions + 3 * (size_t)e[j].b;
-            if (seg_dist2(a0, b0, b1) <= eps2 && seg_dist2(a1, b0, b1) <= eps2)
+            if (tsr_point_segment_dist2(a0, b0, b1) <= eps2 && tsr_point_segment_dist2(a1, b0, b1) <= eps2)
                 hit[i] = true;
-            if (seg_dist2(b0, a0, a1) <= eps2 && seg_dist2(b1, a0, a1) <= eps2)
+            if (tsr_point_segment_dist2(b0, a0, a1) <= eps2 && tsr_point_segment_dist2(b1, a0, a1) <= eps2)
                 hit[j] = true;
         }
     for (uint32_t i = 0; i < nb; i++) {
@@ -728,25 +710,11 @@ static int patch_run_do(const tsr_pmodel *m, const tsr_pmodel_info *info, const 
      * patch (whose trim curves ptess.h does not join) they are reported,
      * not failed. */
     pr->gaps = pr->gaps_open = 0;
-    if (!pr->has_camera) {
-        bool *gap = malloc((3 * (size_t)res.mesh.triangle_count + 1) * sizeof *gap);
-        if (!gap || tsr_mesh_find_gaps(&res.mesh, pr->tol, gap, NULL) != TSR_OK) {
-            free(gap);
-            free(unlinked);
-            tsr_ptess_result_free(&res);
-            cli_error("check", "out of memory");
-            return CLI_FAIL;
-        }
-        for (uint32_t h = 0; h < 3 * res.mesh.triangle_count; h++) {
-            if (!gap[h])
-                continue;
-            tsr_psource_info si;
-            bool open =
-                (unlinked && unlinked[h]) || (tsr_pmodel_source_info(m, res.tri_source[h / 3], &si) && si.trimmed);
-            pr->gaps += !open;
-            pr->gaps_open += open;
-        }
-        free(gap);
+    if (!pr->has_camera && !cli_patch_gaps(m, &res, pr->tol, unlinked, &pr->gaps, &pr->gaps_open)) {
+        free(unlinked);
+        tsr_ptess_result_free(&res);
+        cli_error("check", "out of memory");
+        return CLI_FAIL;
     }
     free(unlinked);
     tsr_ptess_result_free(&res);

@@ -356,15 +356,8 @@ static int run(int argc, char **argv)
      * with different vertices); on untrimmed patches of a set only (a
      * cage's open edges are open by contract, trim curves are not joined) */
     uint32_t gaps = 0;
-    if (validated && !pm.is_subd && !opt.camera) {
-        bool *gap = malloc((3 * (size_t)r.mesh.triangle_count + 1) * sizeof *gap);
-        if (gap && tsr_mesh_find_gaps(&r.mesh, opt.max_error, gap, NULL) == TSR_OK)
-            for (uint32_t h = 0; h < 3 * r.mesh.triangle_count; h++) {
-                tsr_psource_info si;
-                gaps += gap[h] && tsr_pmodel_source_info(pm.model, r.tri_source[h / 3], &si) && !si.trimmed;
-            }
-        free(gap);
-    }
+    if (validated && !pm.is_subd && !opt.camera)
+        cli_patch_gaps(pm.model, &r, opt.max_error, NULL, &gaps, NULL);
     /* normals: a vertex where surfaces meet at an angle is written once
      * per side (the welded mesh above is what was validated and measured) */
     tsr_mesh split;

@@ -291,3 +291,28 @@ void cli_patch_partial_warning(const char *cmd, const char *path, const tsr_pmod
                 "row's cuts through all), so the mesh has gaps there\n",
                 cmd, path, info.partial_unlinked);
 }
+
+bool cli_patch_gaps(const tsr_pmodel *m, const tsr_ptess_result *r, double eps, const bool *unlinked,
+                    uint32_t *gaps, uint32_t *open)
+{
+    *gaps = 0;
+    if (open)
+        *open = 0;
+    bool *gap = malloc((3 * (size_t)r->mesh.triangle_count + 1) * sizeof *gap);
+    if (!gap || tsr_mesh_find_gaps(&r->mesh, eps, gap, NULL) != TSR_OK) {
+        free(gap);
+        return false;
+    }
+    for (uint32_t h = 0; h < 3 * r->mesh.triangle_count; h++) {
+        if (!gap[h])
+            continue;
+        tsr_psource_info si;
+        bool unjoined =
+            (unlinked && unlinked[h]) || (tsr_pmodel_source_info(m, r->tri_source[h / 3], &si) && si.trimmed);
+        *gaps += !unjoined;
+        if (open)
+            *open += unjoined;
+    }
+    free(gap);
+    return true;
+}

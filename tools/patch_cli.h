@@ -70,6 +70,14 @@ uint32_t cli_patch_flat_warnings(const char *cmd, const char *path, const cli_pa
  * --orient-faces), parts that cannot be oriented (a warning). */
 void cli_patch_model_notes(const char *cmd, const char *path, const cli_patch_model *pm);
 
+/* Gaps of r's mesh within eps (tsr_mesh_find_gaps), split into *gaps
+ * (failures: between untrimmed patches along linked edges) and *open
+ * (may be NULL: along a half-edge marked in unlinked, which may be NULL,
+ * or on a trimmed patch, whose trim curves are not joined). false when out
+ * of memory. */
+bool cli_patch_gaps(const tsr_pmodel *m, const tsr_ptess_result *r, double eps, const bool *unlinked,
+                    uint32_t *gaps, uint32_t *open);
+
 /* Warns on stderr when m left partial overlaps unlinked
  * (tsr_pmodel_info.partial_unlinked). */
 void cli_patch_partial_warning(const char *cmd, const char *path, const tsr_pmodel *m);
