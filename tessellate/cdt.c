@@ -843,6 +843,61 @@ static bool restore_delaunay(tsr_cdt *d, uint32_t t, int k)
     return ok;
 }
 
+/* The triangle with the directed edge x -> y (its index in *k), or NONE. */
+static uint32_t edge_triangle(tsr_cdt *d, uint32_t x, uint32_t y, int *k)
+{
+    int ix;
+    uint32_t t0 = triangle_at(d, x, &ix), t = t0;
+    for (uint32_t guard = 0; t != NONE && guard <= d->nt; guard++) {
+        const uint32_t *v = d->tv + 3 * (size_t)t;
+        if (v[(ix + 1) % 3] == y) {
+            *k = ix;
+            return t;
+        }
+        t = d->tn[3 * (size_t)t + (ix + 2) % 3];
+        const uint32_t *w = d->tv + 3 * (size_t)t;
+        ix = w[0] == x ? 0 : w[1] == x ? 1 : 2;
+        if (t == t0)
+            break;
+    }
+    return NONE;
+}
+
+/* split_crossing's last resort before a far vertex: the rounded crossing
+ * R of a segment and the constrained edge x-y (mark m), inserted wherever
+ * it falls (into a triangle, onto an edge, constrained or not, or onto a
+ * vertex there), x-y bent through it, and it pushed as the segment's next
+ * target. STEP_DONE: not done (R falls outside the hull), the caller goes
+ * on. */
+static step_result through_rounded(tsr_cdt *d, uint32_t x, uint32_t y, uint32_t m, const double R[2], int depth)
+{
+    int kind, which;
+    uint32_t lt = tsr__cdt_locate(d, R, &kind, &which), w;
+    if (kind == IN_GHOST)
+        return STEP_DONE;
+    if (kind == ON_VERTEX)
+        w = d->tv[3 * (size_t)lt + which];
+    else {
+        w = add_vertex(d, R[0], R[1]);
+        if (w == NONE || tsr__cdt_insert_at(d, w, lt, kind, which) == NONE)
+            return STEP_NOMEM;
+        d->intersections++;
+    }
+    int k;
+    uint32_t t = w == x || w == y ? NONE : edge_triangle(d, x, y, &k);
+    if (t != NONE) { /* still an edge (else w fell on it and split it, marks kept) */
+        tsr__cdt_mark_edge(d, t, k, 0);
+        if (!restore_delaunay(d, t, k))
+            return STEP_NOMEM;
+        tsr_status st = insert_chain(d, x, w, m, depth + 1);
+        if (st == TSR_OK)
+            st = insert_chain(d, w, y, m, depth + 1);
+        if (st != TSR_OK)
+            return STEP_NOMEM;
+    }
+    return append(d, &d->targets, &d->ntargets, &d->cap_targets, w) ? STEP_AGAIN : STEP_NOMEM;
+}
+
 /* Segment a-b crosses the constrained edge k of t (x-y): splits that edge
  * at (about) the crossing point, and pushes the new vertex as the next
  * target. Where the rounded crossing cannot be used (it falls on or
@@ -871,9 +926,12 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
     for (int i = 1; i < 4; i++)
         if (f[i] * (i < 2 ? lxy : lab) < f[e] * (e < 2 ? lxy : lab))
             e = i;
+    double R[2] = {NAN, NAN}; /* the rounded crossing, when it is one */
     if (f[e] > 0 && f[e] < 1) {
         const double *E = from[e], *F = to[e];
-        uint32_t pv = add_vertex(d, E[0] + f[e] * (F[0] - E[0]), E[1] + f[e] * (F[1] - E[1]));
+        R[0] = E[0] + f[e] * (F[0] - E[0]);
+        R[1] = E[1] + f[e] * (F[1] - E[1]);
+        uint32_t pv = add_vertex(d, R[0], R[1]);
         if (pv == NONE)
             return STEP_NOMEM;
         bool nomem;
@@ -915,6 +973,20 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
         }
         if (dev < best_dev)
             best = i, best_dev = dev;
+    }
+    if (depth < 8 && isfinite(R[0])) {
+        /* the rounded crossing bends both the segment and the crossed
+         * edge by rounding only: where it lies beyond the two triangles
+         * beside the edge (on a third constraint an ulp away, as where
+         * nearly collinear edges meet), it is inserted as it falls and
+         * both are routed through it, rather than through a vertex far
+         * from one of them */
+        double dev = fmax(fabs(tsr_orient2d(A, B, R)) / lab, fabs(tsr_orient2d(X, Y, R)) / lxy);
+        if (dev < best_dev) {
+            step_result r = through_rounded(d, x, y, cdt_mark(d, t, k), R, depth);
+            if (r != STEP_DONE)
+                return r;
+        }
     }
     if (best >= 2) {
         uint32_t m = cdt_mark(d, t, k), w = cand[best];

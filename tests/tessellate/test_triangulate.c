@@ -700,6 +700,37 @@ TEST(wide_dynamic_range_crossing)
     build_free(&b);
 }
 
+/* Fuzz find json_crossing_rounded_beyond_its_triangles: a ring with a
+ * nearly vertical edge from (0, 1.8e18) to (4, 0), within 1e-17 of x = 4
+ * where it passes (4, 4) and (4, 5), beside edges along x = 4 up to
+ * (4, 4.7e28). The segment (2, 1)-(6, 11) crosses the first at (4 - 1e-17,
+ * 6), which rounds to (4, 6): onto x = 4, beyond the sliver beside the
+ * crossed edge, whose split it would invert. The segment was routed
+ * through (4, 5), 0.37 off its line; the rounded crossing is now inserted
+ * where it falls (here on the edge along x = 4) and both the segment and
+ * the crossed edge go through it. */
+TEST(crossing_rounded_beyond_its_triangles)
+{
+    static const tsr_region regions[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
+    build b = {0};
+    double p[14] = {0, 1777727777777777777.0, 4, 0, 4, 47177777777775777777777777777.0, 4, 5, 4, 4, 2, 1, 6, 11};
+    ring(&b, p, 7);
+    for (int r = 0; r < 3; r++) {
+        tsr_tri_options o = {.region = regions[r]};
+        tsr_triangulation t = run(&b, &o, "crossing rounded beyond its triangles");
+        for (uint32_t e = 0; e < t.nedge; e++) {
+            if (t.edge_segment[e] != 5) /* (2, 1)-(6, 11): y = 2.5 x - 4 */
+                continue;
+            for (int k = 0; k < 2; k++) {
+                const double *v = t.xy + 2 * (size_t)t.edge[2 * e + k];
+                CHECK_MSG(fabs(v[1] - (2.5 * v[0] - 4)) < 1e-12, "segment 5 through (%.17g, %.17g)", v[0], v[1]);
+            }
+        }
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
 TEST(conforming_delaunay)
 {
     build b = {0};
@@ -832,6 +863,6 @@ TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T
           T(hole_touching_outer_boundary), T(self_touching_ring), T(polygon_with_1024_holes), T(hole_seeds),
           T(quality_refinement), T(small_input_angles_terminate), T(thin_spikes_quality),
           T(vertex_ulps_inside_hull_edge), T(segment_ulps_inside_hull_edge), T(vertex_ulps_inside_hull_corner),
-          T(reversed_duplicate_segment_crossed), T(crossing_beside_sliver), T(wide_dynamic_range_crossing),
+          T(reversed_duplicate_segment_crossed), T(crossing_beside_sliver), T(wide_dynamic_range_crossing), T(crossing_rounded_beyond_its_triangles),
           T(conforming_delaunay), T(random_crossing_segments), T(bad_input_refused), T(incremental_changes),
           T(small_angle_beside_short_hull_edge))
