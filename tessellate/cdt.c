@@ -665,6 +665,46 @@ static bool split_edge_at(tsr_cdt *d, uint32_t t, int k, uint32_t pv)
     return true;
 }
 
+static bool restore_delaunay(tsr_cdt *d, uint32_t t, int k);
+static uint32_t triangle_at(tsr_cdt *d, uint32_t a, int *ia);
+
+/* Lawson's flips from the new vertex's star test the edges opposite it
+ * only; that the edges at it are Delaunay follows where it lies on the
+ * edge it split, or inside the triangle it split. A rounded crossing lies
+ * an ulp beside the split edge, perhaps inside the triangle beyond it,
+ * whose circle then holds the far apex: the edge from the new vertex to
+ * the near apex, between the sliver at the edge's end and its neighbour,
+ * may not be Delaunay (a vertex an ulp from the edge's end made one a
+ * unit long, found by fuzzing). Such edges at pv are flipped, and the
+ * flips carried outwards. */
+static bool settle_star(tsr_cdt *d, uint32_t pv)
+{
+    for (int round = 0; round < 64; round++) {
+        int ip;
+        uint32_t t0 = triangle_at(d, pv, &ip), t = t0, bad = NONE;
+        int bk = 0;
+        for (uint32_t guard = 0; t != NONE && guard <= d->nt; guard++) {
+            const uint32_t *v = d->tv + 3 * (size_t)t;
+            uint32_t s = d->tn[3 * (size_t)t + ip];
+            if (!cdt_mark(d, t, ip) && !is_ghost(d, t) && !is_ghost(d, s) &&
+                tsr_incircle(P(d, v[0]), P(d, v[1]), P(d, v[2]), P(d, apex(d, s, v[ip], v[(ip + 1) % 3]))) > 0) {
+                bad = t, bk = ip;
+                break;
+            }
+            t = d->tn[3 * (size_t)t + (ip + 2) % 3];
+            const uint32_t *w = d->tv + 3 * (size_t)t;
+            ip = w[0] == pv ? 0 : w[1] == pv ? 1 : 2;
+            if (t == t0)
+                break;
+        }
+        if (bad == NONE)
+            return true;
+        if (!restore_delaunay(d, bad, bk))
+            return false;
+    }
+    return true;
+}
+
 bool tsr__cdt_split_edge(tsr_cdt *d, uint32_t t, int k, uint32_t pv, bool *nomem)
 {
     *nomem = false;
@@ -685,7 +725,7 @@ bool tsr__cdt_split_edge(tsr_cdt *d, uint32_t t, int k, uint32_t pv, bool *nomem
      * walks inside marked boundaries, splits hull edges, and it leaves the
      * triangles outside its domain unflipped */
     d->nstack = 0;
-    if (!split_edge_at(d, t, k, pv) || !legalize(d, pv)) {
+    if (!split_edge_at(d, t, k, pv) || !legalize(d, pv) || (!d->tf && !settle_star(d, pv))) {
         *nomem = true;
         return false;
     }

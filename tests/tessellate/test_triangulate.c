@@ -731,6 +731,34 @@ TEST(crossing_rounded_beyond_its_triangles)
     build_free(&b);
 }
 
+/* Fuzz find json_crossing_an_ulp_from_an_end_not_delaunay_*: a segment
+ * crossing a constrained edge x-y 4e-16 of its length from its end y. The
+ * rounded crossing pv, a vertex of its own 2 ulps from y, lies just off
+ * the edge; splitting x-y there left the edge from pv to the apex q
+ * between the sliver (y, pv, q) and (pv, x, q), whose circle holds x: not
+ * Delaunay, since Lawson's flips from pv test only the edges opposite it.
+ * The geometry of the fuzz find (its x and y were rounded crossings
+ * themselves), under every region rule. */
+TEST(crossing_an_ulp_from_an_end)
+{
+    static const tsr_region regions[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
+    build b = {0};
+    pt(&b, 2.7142857142857144, 1.7142857142857144); /* x */
+    pt(&b, 3, 1.3333333333333333);                  /* y */
+    pt(&b, 4.0000000000000027, 1.6666666666666672); /* c */
+    pt(&b, 2, 1);                                   /* q */
+    pt(&b, 4.0000000000000036, 2.6666666666666718);
+    pt(&b, 2, 0);
+    sg(&b, 0, 1);
+    sg(&b, 4, 5);
+    for (int r = 0; r < 3; r++) {
+        tsr_tri_options o = {.region = regions[r]};
+        tsr_triangulation t = run(&b, &o, "crossing an ulp from an end");
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
 TEST(conforming_delaunay)
 {
     build b = {0};
@@ -863,6 +891,6 @@ TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T
           T(hole_touching_outer_boundary), T(self_touching_ring), T(polygon_with_1024_holes), T(hole_seeds),
           T(quality_refinement), T(small_input_angles_terminate), T(thin_spikes_quality),
           T(vertex_ulps_inside_hull_edge), T(segment_ulps_inside_hull_edge), T(vertex_ulps_inside_hull_corner),
-          T(reversed_duplicate_segment_crossed), T(crossing_beside_sliver), T(wide_dynamic_range_crossing), T(crossing_rounded_beyond_its_triangles),
+          T(reversed_duplicate_segment_crossed), T(crossing_beside_sliver), T(wide_dynamic_range_crossing), T(crossing_rounded_beyond_its_triangles), T(crossing_an_ulp_from_an_end),
           T(conforming_delaunay), T(random_crossing_segments), T(bad_input_refused), T(incremental_changes),
           T(small_angle_beside_short_hull_edge))
