@@ -883,6 +883,25 @@ static bool restore_delaunay(tsr_cdt *d, uint32_t t, int k)
     return ok;
 }
 
+/* orient2d(a, b, c) with an accurate magnitude, for lengths and
+ * parameters (its sign is tsr_orient2d's, exact). tsr_orient2d's value is
+ * the floating-point determinant about its third point, whose error is
+ * eps times the product of the two sides at that point: about a point far
+ * from the other two (a segment's end at 1e22 beside points near 1) that
+ * is 1e22 times the determinant's own size, and a crossing computed from
+ * it strays 1e-7 off its segment. About the vertex opposite the longest
+ * side the product is least: the error is then eps over the sine of the
+ * triangle's largest angle. */
+static double orient_value(const double *a, const double *b, const double *c)
+{
+    double ab = (b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]);
+    double bc = (c[0] - b[0]) * (c[0] - b[0]) + (c[1] - b[1]) * (c[1] - b[1]);
+    double ca = (a[0] - c[0]) * (a[0] - c[0]) + (a[1] - c[1]) * (a[1] - c[1]);
+    if (ab >= bc && ab >= ca)
+        return tsr_orient2d(a, b, c);
+    return bc >= ca ? tsr_orient2d(b, c, a) : tsr_orient2d(c, a, b);
+}
+
 /* The triangle with the directed edge x -> y (its index in *k), or NONE. */
 static uint32_t edge_triangle(tsr_cdt *d, uint32_t x, uint32_t y, int *k)
 {
@@ -957,8 +976,8 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
      * along the whole edge would carry an error of the edge's length (an
      * end at 1e30 moves a crossing near 1 by 1e14). x and y lie strictly on
      * either side of a-b, a and b of x-y. */
-    double ox = tsr_orient2d(A, B, X), oy = tsr_orient2d(A, B, Y);
-    double oa = tsr_orient2d(X, Y, A), ob = tsr_orient2d(X, Y, B);
+    double ox = orient_value(A, B, X), oy = orient_value(A, B, Y);
+    double oa = orient_value(X, Y, A), ob = orient_value(X, Y, B);
     double lab = hypot(B[0] - A[0], B[1] - A[1]), lxy = hypot(Y[0] - X[0], Y[1] - X[1]);
     const double *from[4] = {X, Y, A, B}, *to[4] = {Y, X, B, A};
     double f[4] = {ox / (ox - oy), oy / (oy - ox), oa / (oa - ob), ob / (ob - oa)};
@@ -1002,14 +1021,14 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
         const double *W = P(d, w);
         double dev;
         if (i < 2)
-            dev = fabs(tsr_orient2d(A, B, W)) / lab;
+            dev = fabs(orient_value(A, B, W)) / lab;
         else {
             /* from either end: one sum near |x-y|^2 would round away a
              * vertex just inside the far end */
             if (!((W[0] - X[0]) * (Y[0] - X[0]) + (W[1] - X[1]) * (Y[1] - X[1]) > 0 &&
                   (W[0] - Y[0]) * (X[0] - Y[0]) + (W[1] - Y[1]) * (X[1] - Y[1]) > 0))
                 continue;
-            dev = fabs(tsr_orient2d(X, Y, W)) / lxy;
+            dev = fabs(orient_value(X, Y, W)) / lxy;
         }
         if (dev < best_dev)
             best = i, best_dev = dev;
@@ -1021,7 +1040,7 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
          * nearly collinear edges meet), it is inserted as it falls and
          * both are routed through it, rather than through a vertex far
          * from one of them */
-        double dev = fmax(fabs(tsr_orient2d(A, B, R)) / lab, fabs(tsr_orient2d(X, Y, R)) / lxy);
+        double dev = fmax(fabs(orient_value(A, B, R)) / lab, fabs(orient_value(X, Y, R)) / lxy);
         if (dev < best_dev) {
             step_result r = through_rounded(d, x, y, cdt_mark(d, t, k), R, depth);
             if (r != STEP_DONE)

@@ -759,6 +759,40 @@ TEST(crossing_an_ulp_from_an_end)
     build_free(&b);
 }
 
+/* Fuzz find json_crossing_of_a_far_edge_off_its_segment_*: the crossing
+ * of (3, 7)-(8, 0) with an edge from (4, 4) to (7.0e9, 7.8e22) was placed
+ * by a parameter from orientations whose values tsr_orient2d computes
+ * about the far end: the products of 1e22-long sides cancel, the value
+ * was 1e-7 off in relative terms, and the crossing 1.5e-7 off the segment
+ * (the checker's tolerance there: 1e-8). orient_value computes each about
+ * the vertex opposite the longest side. */
+TEST(crossing_of_a_far_edge)
+{
+    static const tsr_region regions[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
+    build b = {0};
+    pt(&b, 4, 4);
+    pt(&b, 7017777777, 7.7777777777777773e22);
+    pt(&b, 3, 7);
+    pt(&b, 8, 0);
+    pt(&b, 0, 64);
+    sg(&b, 0, 1);
+    sg(&b, 2, 3);
+    for (int r = 0; r < 3; r++) {
+        tsr_tri_options o = {.region = regions[r]};
+        tsr_triangulation t = run(&b, &o, "crossing of a far edge");
+        for (uint32_t e = 0; e < t.nedge; e++) {
+            if (t.edge_segment[e] != 1) /* (3, 7)-(8, 0): y = 7 - 1.4 (x - 3) */
+                continue;
+            for (int k = 0; k < 2; k++) {
+                const double *v = t.xy + 2 * (size_t)t.edge[2 * e + k];
+                CHECK_MSG(fabs(v[1] - (7 - 1.4 * (v[0] - 3))) < 1e-12, "segment 1 through (%.17g, %.17g)", v[0], v[1]);
+            }
+        }
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
 TEST(conforming_delaunay)
 {
     build b = {0};
@@ -891,6 +925,6 @@ TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T
           T(hole_touching_outer_boundary), T(self_touching_ring), T(polygon_with_1024_holes), T(hole_seeds),
           T(quality_refinement), T(small_input_angles_terminate), T(thin_spikes_quality),
           T(vertex_ulps_inside_hull_edge), T(segment_ulps_inside_hull_edge), T(vertex_ulps_inside_hull_corner),
-          T(reversed_duplicate_segment_crossed), T(crossing_beside_sliver), T(wide_dynamic_range_crossing), T(crossing_rounded_beyond_its_triangles), T(crossing_an_ulp_from_an_end),
+          T(reversed_duplicate_segment_crossed), T(crossing_beside_sliver), T(wide_dynamic_range_crossing), T(crossing_rounded_beyond_its_triangles), T(crossing_an_ulp_from_an_end), T(crossing_of_a_far_edge),
           T(conforming_delaunay), T(random_crossing_segments), T(bad_input_refused), T(incremental_changes),
           T(small_angle_beside_short_hull_edge))
