@@ -879,14 +879,26 @@ static tsr_status find_edge_pairs(const tsr_patch_set *set, const double *doms, 
     return TSR_OK;
 }
 
+/* The pieces a breakpoint more on edge e's axis adds: the spans of its
+ * patch's other axis. */
+static inline uint64_t other_spans(const brk *brks, const pedge *e)
+{
+    return brks[2 * e->patch + 1 - (e->edge & 1)].n - 1;
+}
+
 /* Gives every pair of ep whose edges coincide, whole or in part, each
  * other's breakpoints (an edge sharing part of its curve with another
- * also takes the ends of that part), until none gains one or `budget`
- * were added. Whole pairs are compared as curves only once their
- * breakpoints differ (most never do: the teapot, a grid of Bézier
- * patches). */
+ * also takes the ends of that part), until none gains one, `budget` were
+ * added, or the pieces (*pieces, the sum over patches of their u spans
+ * times their v spans, updated) reach `piece_budget`: a patch's pieces
+ * are the product of its two axes' spans, so breakpoints alone do not
+ * bound them (a patch whose edges lie along each other cut both of its
+ * axes in turn: 2 KB of fuzzed OBJ made 8,460 pieces). Whole pairs are
+ * compared as curves only once their breakpoints differ (most never do:
+ * the teapot, a grid of Bézier patches). */
 static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, const edge_pairs *ep, brk *brks,
-                               double tol, uint32_t budget, const tsr_allocator *a, uint32_t *added)
+                               double tol, uint32_t budget, uint64_t piece_budget, const tsr_allocator *a,
+                               uint32_t *added, uint64_t *pieces)
 {
     *added = 0;
     const pedge *ed = ep->ed;
@@ -900,9 +912,10 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, con
     bool changed = true;
     double *copy = NULL;
     uint32_t capcopy = 0;
-    while (changed && st == TSR_OK && *added < budget) {
+#define WITHIN (*added < budget && *pieces < piece_budget)
+    while (changed && st == TSR_OK && WITHIN) {
         changed = false;
-        for (uint32_t k = 0; k < npairs && st == TSR_OK && *added < budget; k++) {
+        for (uint32_t k = 0; k < npairs && st == TSR_OK && WITHIN; k++) {
             epair *pr = &pairs[k];
             const pedge *x = &ed[pr->a], *y = &ed[pr->b];
             if (pr->state < 0)
@@ -943,6 +956,7 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, con
                     if (r1 < 0 || r2 < 0)
                         st = TSR_ERR_NOMEM;
                     *added += (uint32_t)(r1 > 0) + (uint32_t)(r2 > 0);
+                    *pieces += (r1 > 0 ? other_spans(brks, x) : 0) + (r2 > 0 ? other_spans(brks, y) : 0);
                     changed |= r1 > 0 || r2 > 0;
                 }
             }
@@ -953,18 +967,20 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, con
                 uint32_t n = bf->n;
                 for (uint32_t q = 0; q < n; q++)
                     copy[q] = brk_frac(bf, doms + 4 * from->patch, from->edge & 1, q);
-                for (uint32_t q = 1; q + 1 < n && *added < budget; q++) {
+                for (uint32_t q = 1; q + 1 < n && WITHIN; q++) {
                     int r = brk_insert(bt, doms + 4 * to->patch, to->edge & 1, pair_map(pr, copy[q], side == 0), a);
                     if (r < 0) {
                         st = TSR_ERR_NOMEM;
                         break;
                     }
                     *added += (uint32_t)r;
+                    *pieces += r > 0 ? other_spans(brks, to) : 0;
                     changed |= r > 0;
                 }
             }
         }
     }
+#undef WITHIN
     tsr_free(a, copy);
     tsr_free(a, pairs);
     return st;
@@ -1145,7 +1161,7 @@ static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms
         return TSR_ERR_NOMEM;
     memset(brks, 0, (size_t)np * 2 * sizeof *brks);
     tsr_status st = TSR_OK;
-    uint64_t nbreaks = 0;
+    uint64_t nbreaks = 0, pieces = 0;
     for (uint32_t i = 0; i < np && st == TSR_OK; i++) {
         const tsr_patch *p = &set->patches[i];
         for (int axis = 0; axis < 2 && st == TSR_OK; axis++) {
@@ -1164,13 +1180,15 @@ static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms
         if (st == TSR_OK && split_error > 0 && !trimmed)
             st = split_patch(p, doms + 4 * i, &brks[2 * i], &brks[2 * i + 1], split_error, N, a, &nsplit);
         nbreaks += brks[2 * i].n + brks[2 * i + 1].n;
+        if (st == TSR_OK)
+            pieces += (uint64_t)(brks[2 * i].n - 1) * (brks[2 * i + 1].n - 1);
     }
-    uint64_t budget = 4 * nbreaks + 1024;
+    uint64_t budget = 4 * nbreaks + 1024, piece_budget = 4 * pieces + 1024;
     if (budget > (1u << 24))
         budget = 1u << 24;
     if (st == TSR_OK)
-        st = share_breaks(set, doms, ep, brks, tol, (uint32_t)budget, a, shared);
-    *full = st == TSR_OK && *shared >= budget;
+        st = share_breaks(set, doms, ep, brks, tol, (uint32_t)budget, piece_budget, a, shared, &pieces);
+    *full = st == TSR_OK && (*shared >= budget || pieces >= piece_budget);
     if (st != TSR_OK) {
         free_breaks(brks, np, a);
         return st;

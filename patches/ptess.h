@@ -46,8 +46,9 @@
  *    are not in proportion (two rational parameterisations of one arc)
  *    stay unlinked and leave gaps (tsr_mesh_find_gaps finds them); so do
  *    all partial overlaps when sharing breakpoints through them passes
- *    the budget of 4 per breakpoint of the patches' own (a brick wall of
- *    many staggered rows: tsr_pmodel_info.partial_unlinked);
+ *    the budget of 4 per breakpoint of the patches' own plus 1024, or
+ *    makes more than 4 times their pieces plus 1024 (a brick wall of many
+ *    staggered rows: tsr_pmodel_info.partial_unlinked);
  *    tsr_pmodel_info.conform_breaks counts the breakpoints so added;
  *  - subd patches as tsr_subd_patch_neighbours says (a quad edge meeting
  *    an N-gon links each half to one sub-patch).
@@ -227,8 +228,9 @@ typedef struct tsr_pmodel_info {
                                   sharing all or part of an edge has them (Links, above) */
     uint32_t partial_unlinked; /* pairs of edges sharing part of their curve left unlinked:
                                   sharing breakpoints through them passed its budget (4 per
-                                  breakpoint of the patches' own, staggered rows spreading
-                                  each row's through all), so only whole edges share them */
+                                  breakpoint of the patches' own plus 1024, and 4 times their
+                                  pieces plus 1024; staggered rows spreading each row's
+                                  through all), so only whole edges share them */
     uint32_t split_breaks;   /* breakpoints added across curved directions (split_error) */
     double lo[3], hi[3];   /* box of the model */
     bool own_alloc;        /* made with a caller's allocator, or from a tsr_subd that was

@@ -287,7 +287,7 @@ void cli_patch_partial_warning(const char *cmd, const char *path, const tsr_pmod
     if (info.partial_unlinked)
         fprintf(stderr,
                 "tessera %s: %s: warning: %u pairs of patch edges sharing part of their curve are left unlinked: "
-                "cutting the patches where they meet passes the budget of breakpoints (staggered rows spread every "
+                "cutting the patches where they meet passes the budget of breakpoints or pieces (staggered rows spread every "
                 "row's cuts through all), so the mesh has gaps there\n",
                 cmd, path, info.partial_unlinked);
 }
