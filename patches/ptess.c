@@ -1183,7 +1183,11 @@ static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms
         if (st == TSR_OK)
             pieces += (uint64_t)(brks[2 * i].n - 1) * (brks[2 * i + 1].n - 1);
     }
-    uint64_t budget = 4 * nbreaks + 1024, piece_budget = 4 * pieces + 1024;
+    /* the budget of pieces holds only while partial pairs take part: they
+     * have a fall-back (whole pairs alone); whole pairs of patches whose
+     * knots differ multiply pieces by design (a grid of such patches, K x K:
+     * about K^2 times), and stopping them part way would leave cracks */
+    uint64_t budget = 4 * nbreaks + 1024, piece_budget = ep->npairs > ep->nwhole ? 4 * pieces + 1024 : UINT64_MAX;
     if (budget > (1u << 24))
         budget = 1u << 24;
     if (st == TSR_OK)
