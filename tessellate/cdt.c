@@ -1014,26 +1014,36 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
     uint32_t c = v[(k + 2) % 3], q = apex(d, d->tn[3 * (size_t)t + k], x, y);
     uint32_t cand[6] = {x, y, a, b, c, q}, best = NONE;
     double best_dev = INFINITY;
-    for (uint32_t i = 0; i < 6; i++) {
-        uint32_t w = cand[i];
-        if (w == GHOST || (i >= 2 && (depth >= 8 || w == x || w == y)))
-            continue;
-        const double *W = P(d, w);
-        double dev;
-        if (i < 2)
-            dev = fabs(orient_value(A, B, W)) / lab;
-        else {
-            /* from either end: one sum near |x-y|^2 would round away a
-             * vertex just inside the far end */
-            if (!((W[0] - X[0]) * (Y[0] - X[0]) + (W[1] - X[1]) * (Y[1] - X[1]) > 0 &&
-                  (W[0] - Y[0]) * (X[0] - Y[0]) + (W[1] - Y[1]) * (X[1] - Y[1]) > 0))
+    /* an end of the crossed edge behind a or beyond b along the segment
+     * would run its chain backwards (found by a reviewer's stress test:
+     * once the crossing was placed exactly, its split failed on a sliver
+     * and the nearest end lay behind the segment's start): such ends are
+     * taken only where nothing else is left */
+    bool plain = depth >= 8 || d->plain;
+    for (int relaxed = 0; relaxed < 2 && best == NONE; relaxed++)
+        for (uint32_t i = 0; i < (relaxed ? 2u : 6u); i++) {
+            uint32_t w = cand[i];
+            if (w == GHOST || (i >= 2 && (plain || w == x || w == y)))
                 continue;
-            dev = fabs(orient_value(X, Y, W)) / lxy;
+            const double *W = P(d, w);
+            double dev;
+            if (i < 2) {
+                if (!relaxed && !((W[0] - A[0]) * (B[0] - A[0]) + (W[1] - A[1]) * (B[1] - A[1]) > 0 &&
+                                  (W[0] - B[0]) * (A[0] - B[0]) + (W[1] - B[1]) * (A[1] - B[1]) > 0))
+                    continue;
+                dev = fabs(orient_value(A, B, W)) / lab;
+            } else {
+                /* from either end: one sum near |x-y|^2 would round away a
+                 * vertex just inside the far end */
+                if (!((W[0] - X[0]) * (Y[0] - X[0]) + (W[1] - X[1]) * (Y[1] - X[1]) > 0 &&
+                      (W[0] - Y[0]) * (X[0] - Y[0]) + (W[1] - Y[1]) * (X[1] - Y[1]) > 0))
+                    continue;
+                dev = fabs(orient_value(X, Y, W)) / lxy;
+            }
+            if (dev < best_dev)
+                best = i, best_dev = dev;
         }
-        if (dev < best_dev)
-            best = i, best_dev = dev;
-    }
-    if (depth < 8 && isfinite(R[0])) {
+    if (!plain && isfinite(R[0])) {
         /* the rounded crossing bends both the segment and the crossed
          * edge by rounding only: where it lies beyond the two triangles
          * beside the edge (on a third constraint an ulp away, as where
@@ -1240,6 +1250,15 @@ static tsr_status insert_chain(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t mark
             d->ntargets--;
             continue;
         }
+        if (++d->steps > d->step_limit) {
+            /* constraints bending each other back and forth through the
+             * same vertices (a reviewer's stress test: coordinates near 1
+             * beside others near 1e20 to 1e34) */
+            if (d->plain)
+                return TSR_ERR_VALUE;
+            d->plain = true;
+            d->steps = 0;
+        }
         uint32_t reached = a;
         step_result r = recover_piece(d, a, target, oa, ob, mark, depth, &reached);
         if (r == STEP_NOMEM)
@@ -1259,6 +1278,9 @@ tsr_status tsr_cdt_insert_segment(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t i
     if (!tsr__cdt_enable_marks(d, false))
         return TSR_ERR_NOMEM;
     d->ntargets = 0;
+    d->steps = 0;
+    d->step_limit = 64 * (uint64_t)d->nv + 1024;
+    d->plain = false;
     return insert_chain(d, a + 1, b + 1, id + 1, 0);
 }
 

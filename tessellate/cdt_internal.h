@@ -33,6 +33,12 @@ struct tsr_cdt {
     uint32_t last;
     uint32_t dups;
     uint32_t intersections, snapped;
+    /* steps of the segment being inserted, the limit past which crossings
+     * are only routed through the crossed edges' ends (plain: no constraint
+     * is bent, so no two can bend each other back and forth), and past
+     * twice which the insertion gives up */
+    uint64_t steps, step_limit;
+    bool plain;
     uint32_t walk_turn;
     bool started;
     bool track;

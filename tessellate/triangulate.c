@@ -361,6 +361,13 @@ static tsr_status delaunay(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
             continue;
         }
         st = tsr_cdt_insert_segment(d, u, w, s);
+        if (st == TSR_ERR_VALUE) {
+            tsr_cdt_destroy(d);
+            return tsr_error_set(err, st,
+                                 "segment %u (points %u-%u) could not be inserted: its crossings with other segments "
+                                 "keep moving each other within rounding (coordinates of very different magnitudes)",
+                                 s, in->seg[2 * (size_t)s], in->seg[2 * (size_t)s + 1]);
+        }
         if (st != TSR_OK)
             goto fail;
     }

@@ -793,6 +793,52 @@ TEST(crossing_of_a_far_edge)
     build_free(&b);
 }
 
+/* From a reviewer's stress test (random graphs with coordinates from
+ * 1e-5 to 1e35): (1) once the crossing was placed exactly, its split
+ * failed on a sliver and the fallback routed the segment through the end
+ * of the crossed edge nearest its line, which lay behind the segment's
+ * start: a chain running backwards; (2) constraints bent each other back
+ * and forth through the same vertices without end (a hang before this
+ * stop's changes, two more with them). Both run under every region rule
+ * and pass the checker. */
+TEST(crossing_fallbacks_terminate_forwards)
+{
+    static const tsr_region regions[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
+    static const double behind[8] = {-6.4136356527393073e+26, -3.5187034633715118e+18, 3, 8, 14, 13,
+                                     -4.1853874313829265e+26, -2.2962229299802273e+18};
+    static const uint32_t behind_seg[4] = {3, 2, 1, 0};
+    static const double cycle[14] = {44126792249.142136,
+                                     2.3138643705172331e+32,
+                                     6e+20,
+                                     7,
+                                     6,
+                                     6.0000000000000009,
+                                     4,
+                                     2e+20,
+                                     5.4941567508233296e+20,
+                                     5.9999999999999991,
+                                     2.0944702863399872e+20,
+                                     6.0000000000000018,
+                                     4.1134567818614594,
+                                     1.7730864362770812e+20};
+    static const uint32_t cycle_seg[10] = {6, 5, 2, 0, 1, 3, 4, 6, 5, 3};
+    const double *pts[2] = {behind, cycle};
+    const uint32_t *segs[2] = {behind_seg, cycle_seg}, np[2] = {4, 7}, ns[2] = {2, 5};
+    for (int c = 0; c < 2; c++) {
+        build b = {0};
+        for (uint32_t i = 0; i < np[c]; i++)
+            pt(&b, pts[c][2 * i], pts[c][2 * i + 1]);
+        for (uint32_t i = 0; i < ns[c]; i++)
+            sg(&b, segs[c][2 * i], segs[c][2 * i + 1]);
+        for (int r = 0; r < 3; r++) {
+            tsr_tri_options o = {.region = regions[r]};
+            tsr_triangulation t = run(&b, &o, c ? "crossings bending each other" : "fallback behind the start");
+            tsr_triangulation_free(&t);
+        }
+        build_free(&b);
+    }
+}
+
 TEST(conforming_delaunay)
 {
     build b = {0};
@@ -921,10 +967,11 @@ TEST(small_angle_beside_short_hull_edge)
 }
 
 TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T(segments_crossing_at_one_point),
-          T(overlapping_collinear_segments), T(points_on_segments), T(point_on_segment_beside_rounded_crossing), T(integer_grid_1000),
-          T(hole_touching_outer_boundary), T(self_touching_ring), T(polygon_with_1024_holes), T(hole_seeds),
-          T(quality_refinement), T(small_input_angles_terminate), T(thin_spikes_quality),
+          T(overlapping_collinear_segments), T(points_on_segments), T(point_on_segment_beside_rounded_crossing),
+          T(integer_grid_1000), T(hole_touching_outer_boundary), T(self_touching_ring), T(polygon_with_1024_holes),
+          T(hole_seeds), T(quality_refinement), T(small_input_angles_terminate), T(thin_spikes_quality),
           T(vertex_ulps_inside_hull_edge), T(segment_ulps_inside_hull_edge), T(vertex_ulps_inside_hull_corner),
-          T(reversed_duplicate_segment_crossed), T(crossing_beside_sliver), T(wide_dynamic_range_crossing), T(crossing_rounded_beyond_its_triangles), T(crossing_an_ulp_from_an_end), T(crossing_of_a_far_edge),
-          T(conforming_delaunay), T(random_crossing_segments), T(bad_input_refused), T(incremental_changes),
-          T(small_angle_beside_short_hull_edge))
+          T(reversed_duplicate_segment_crossed), T(crossing_beside_sliver), T(wide_dynamic_range_crossing),
+          T(crossing_rounded_beyond_its_triangles), T(crossing_an_ulp_from_an_end), T(crossing_of_a_far_edge),
+          T(crossing_fallbacks_terminate_forwards), T(conforming_delaunay), T(random_crossing_segments),
+          T(bad_input_refused), T(incremental_changes), T(small_angle_beside_short_hull_edge))
