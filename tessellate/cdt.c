@@ -922,6 +922,19 @@ static uint32_t edge_triangle(tsr_cdt *d, uint32_t x, uint32_t y, int *k)
     return NONE;
 }
 
+/* The constrained edge k of t (x-y, mark m) bent through vertex w: its
+ * constraint dropped (and the Delaunay property restored around it), then
+ * x-w and w-y inserted with the same mark. */
+static tsr_status bend_through(tsr_cdt *d, uint32_t t, int k, uint32_t w, uint32_t m, int depth)
+{
+    uint32_t x = d->tv[3 * (size_t)t + k], y = d->tv[3 * (size_t)t + (k + 1) % 3];
+    tsr__cdt_mark_edge(d, t, k, 0);
+    if (!restore_delaunay(d, t, k))
+        return TSR_ERR_NOMEM;
+    tsr_status st = insert_chain(d, x, w, m, depth + 1);
+    return st == TSR_OK ? insert_chain(d, w, y, m, depth + 1) : st;
+}
+
 /* split_crossing's last resort before a far vertex: the rounded crossing
  * R of a segment and the constrained edge x-y (mark m), inserted wherever
  * it falls (into a triangle, onto an edge, constrained or not, or onto a
@@ -944,16 +957,9 @@ static step_result through_rounded(tsr_cdt *d, uint32_t x, uint32_t y, uint32_t 
     }
     int k;
     uint32_t t = w == x || w == y ? NONE : edge_triangle(d, x, y, &k);
-    if (t != NONE) { /* still an edge (else w fell on it and split it, marks kept) */
-        tsr__cdt_mark_edge(d, t, k, 0);
-        if (!restore_delaunay(d, t, k))
-            return STEP_NOMEM;
-        tsr_status st = insert_chain(d, x, w, m, depth + 1);
-        if (st == TSR_OK)
-            st = insert_chain(d, w, y, m, depth + 1);
-        if (st != TSR_OK)
-            return STEP_NOMEM;
-    }
+    /* still an edge (else w fell on it and split it, marks kept) */
+    if (t != NONE && bend_through(d, t, k, w, m, depth) != TSR_OK)
+        return STEP_NOMEM;
     return append(d, &d->targets, &d->ntargets, &d->cap_targets, w) ? STEP_AGAIN : STEP_NOMEM;
 }
 
@@ -1057,16 +1063,8 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
                 return r;
         }
     }
-    if (best >= 2) {
-        uint32_t m = cdt_mark(d, t, k), w = cand[best];
-        tsr__cdt_mark_edge(d, t, k, 0);
-        if (!restore_delaunay(d, t, k))
-            return STEP_NOMEM;
-        tsr_status st = insert_chain(d, x, w, m, depth + 1);
-        if (st == TSR_OK)
-            st = insert_chain(d, w, y, m, depth + 1);
-        return st == TSR_OK ? STEP_AGAIN : STEP_NOMEM;
-    }
+    if (best >= 2)
+        return bend_through(d, t, k, cand[best], cdt_mark(d, t, k), depth) == TSR_OK ? STEP_AGAIN : STEP_NOMEM;
     return append(d, &d->targets, &d->ntargets, &d->cap_targets, cand[best]) ? STEP_AGAIN : STEP_NOMEM;
 }
 

@@ -99,6 +99,23 @@ static tsr_triangulation run(const build *b, const tsr_tri_options *o, const cha
     return t;
 }
 
+static const tsr_region every_region[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
+
+/* Every vertex of the constrained edges listed under segment seg lies on
+ * the line y = y0 + slope (x - x0), within 1e-12. */
+static void check_chain_on_line(const tsr_triangulation *t, uint32_t seg, double x0, double y0, double slope)
+{
+    for (uint32_t e = 0; e < t->nedge; e++) {
+        if (t->edge_segment[e] != seg)
+            continue;
+        for (int k = 0; k < 2; k++) {
+            const double *v = t->xy + 2 * (size_t)t->edge[2 * e + k];
+            CHECK_MSG(fabs(v[1] - (y0 + slope * (v[0] - x0))) < 1e-12, "segment %u through (%.17g, %.17g)", seg, v[0],
+                      v[1]);
+        }
+    }
+}
+
 static double tri_area(const tsr_triangulation *t)
 {
     double a = 0;
@@ -573,7 +590,6 @@ TEST(vertex_ulps_inside_hull_corner)
  * random bundles. */
 TEST(reversed_duplicate_segment_crossed)
 {
-    static const tsr_region regions[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
     build b = {0};
     pt(&b, -8, -14);
     pt(&b, 0.001953125, 0.001953125);
@@ -585,7 +601,7 @@ TEST(reversed_duplicate_segment_crossed)
     sg(&b, 1, 0);
     for (int r = 0; r < 3; r++)
         for (int a = 0; a < 2; a++) {
-            tsr_tri_options o = {.region = regions[r], .max_area = a ? 6 : 0, .max_steiner = 4000};
+            tsr_tri_options o = {.region = every_region[r], .max_area = a ? 6 : 0, .max_steiner = 4000};
             tsr_triangulation t = run(&b, &o, "reversed duplicate");
             CHECK_MSG(t.intersections == 1, "%u crossings", t.intersections);
             CHECK(!t.quality_limited);
@@ -614,7 +630,7 @@ TEST(reversed_duplicate_segment_crossed)
             crossings++;
         }
         for (int r = 0; r < 3; r++) {
-            tsr_tri_options o = {.region = regions[r]};
+            tsr_tri_options o = {.region = every_region[r]};
             tsr_triangulation t = run(&c, &o, "collinear bundle");
             CHECK_MSG(t.intersections <= 3 * crossings, "%u crossings of %u segments", t.intersections, crossings);
             tsr_triangulation_free(&t);
@@ -677,7 +693,6 @@ TEST(crossing_beside_sliver)
  * own coordinates, and no chain strays. */
 TEST(wide_dynamic_range_crossing)
 {
-    static const tsr_region regions[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
     build b = {0};
     double outer[10] = {0, 7777777777777777777777777777777.0, 4, 0, 4, 4, 0, 4, 2, 0};
     double inner[8] = {2, 1, 0, 31, 3, 3, 3, 1};
@@ -685,7 +700,7 @@ TEST(wide_dynamic_range_crossing)
     ring(&b, inner, 4);
     pt(&b, 9, 2);
     for (int r = 0; r < 3; r++) {
-        tsr_tri_options o = {.region = regions[r]};
+        tsr_tri_options o = {.region = every_region[r]};
         tsr_triangulation t = run(&b, &o, "wide dynamic range");
         for (uint32_t e = 0; e < t.nedge; e++) {
             if (t.edge_segment[e] != 4) /* (2, 0)-(0, 7.8e30): x within rounding of 2 below y = 1e15 */
@@ -711,21 +726,13 @@ TEST(wide_dynamic_range_crossing)
  * the crossed edge go through it. */
 TEST(crossing_rounded_beyond_its_triangles)
 {
-    static const tsr_region regions[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
     build b = {0};
     double p[14] = {0, 1777727777777777777.0, 4, 0, 4, 47177777777775777777777777777.0, 4, 5, 4, 4, 2, 1, 6, 11};
     ring(&b, p, 7);
     for (int r = 0; r < 3; r++) {
-        tsr_tri_options o = {.region = regions[r]};
+        tsr_tri_options o = {.region = every_region[r]};
         tsr_triangulation t = run(&b, &o, "crossing rounded beyond its triangles");
-        for (uint32_t e = 0; e < t.nedge; e++) {
-            if (t.edge_segment[e] != 5) /* (2, 1)-(6, 11): y = 2.5 x - 4 */
-                continue;
-            for (int k = 0; k < 2; k++) {
-                const double *v = t.xy + 2 * (size_t)t.edge[2 * e + k];
-                CHECK_MSG(fabs(v[1] - (2.5 * v[0] - 4)) < 1e-12, "segment 5 through (%.17g, %.17g)", v[0], v[1]);
-            }
-        }
+        check_chain_on_line(&t, 5, 2, 1, 2.5); /* (2, 1)-(6, 11) */
         tsr_triangulation_free(&t);
     }
     build_free(&b);
@@ -741,7 +748,6 @@ TEST(crossing_rounded_beyond_its_triangles)
  * themselves), under every region rule. */
 TEST(crossing_an_ulp_from_an_end)
 {
-    static const tsr_region regions[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
     build b = {0};
     pt(&b, 2.7142857142857144, 1.7142857142857144); /* x */
     pt(&b, 3, 1.3333333333333333);                  /* y */
@@ -752,7 +758,7 @@ TEST(crossing_an_ulp_from_an_end)
     sg(&b, 0, 1);
     sg(&b, 4, 5);
     for (int r = 0; r < 3; r++) {
-        tsr_tri_options o = {.region = regions[r]};
+        tsr_tri_options o = {.region = every_region[r]};
         tsr_triangulation t = run(&b, &o, "crossing an ulp from an end");
         tsr_triangulation_free(&t);
     }
@@ -768,7 +774,6 @@ TEST(crossing_an_ulp_from_an_end)
  * the vertex opposite the longest side. */
 TEST(crossing_of_a_far_edge)
 {
-    static const tsr_region regions[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
     build b = {0};
     pt(&b, 4, 4);
     pt(&b, 7017777777, 7.7777777777777773e22);
@@ -778,16 +783,9 @@ TEST(crossing_of_a_far_edge)
     sg(&b, 0, 1);
     sg(&b, 2, 3);
     for (int r = 0; r < 3; r++) {
-        tsr_tri_options o = {.region = regions[r]};
+        tsr_tri_options o = {.region = every_region[r]};
         tsr_triangulation t = run(&b, &o, "crossing of a far edge");
-        for (uint32_t e = 0; e < t.nedge; e++) {
-            if (t.edge_segment[e] != 1) /* (3, 7)-(8, 0): y = 7 - 1.4 (x - 3) */
-                continue;
-            for (int k = 0; k < 2; k++) {
-                const double *v = t.xy + 2 * (size_t)t.edge[2 * e + k];
-                CHECK_MSG(fabs(v[1] - (7 - 1.4 * (v[0] - 3))) < 1e-12, "segment 1 through (%.17g, %.17g)", v[0], v[1]);
-            }
-        }
+        check_chain_on_line(&t, 1, 3, 7, -1.4); /* (3, 7)-(8, 0) */
         tsr_triangulation_free(&t);
     }
     build_free(&b);
@@ -803,7 +801,6 @@ TEST(crossing_of_a_far_edge)
  * and pass the checker. */
 TEST(crossing_fallbacks_terminate_forwards)
 {
-    static const tsr_region regions[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
     static const double behind[8] = {-6.4136356527393073e+26, -3.5187034633715118e+18, 3, 8, 14, 13,
                                      -4.1853874313829265e+26, -2.2962229299802273e+18};
     static const uint32_t behind_seg[4] = {3, 2, 1, 0};
@@ -831,7 +828,7 @@ TEST(crossing_fallbacks_terminate_forwards)
         for (uint32_t i = 0; i < ns[c]; i++)
             sg(&b, segs[c][2 * i], segs[c][2 * i + 1]);
         for (int r = 0; r < 3; r++) {
-            tsr_tri_options o = {.region = regions[r]};
+            tsr_tri_options o = {.region = every_region[r]};
             tsr_triangulation t = run(&b, &o, c ? "crossings bending each other" : "fallback behind the start");
             tsr_triangulation_free(&t);
         }
