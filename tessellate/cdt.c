@@ -852,7 +852,13 @@ static uint32_t triangle_at(tsr_cdt *d, uint32_t a, int *ia)
     return kind == ON_VERTEX ? t : NONE;
 }
 
-typedef enum { STEP_DONE, STEP_AGAIN, STEP_NOMEM } step_result;
+/* STEP_GIVE_UP: a nested insertion passed its step limit (TSR_ERR_VALUE) */
+typedef enum { STEP_DONE, STEP_AGAIN, STEP_NOMEM, STEP_GIVE_UP } step_result;
+
+static step_result step_of(tsr_status st)
+{
+    return st == TSR_OK ? STEP_AGAIN : st == TSR_ERR_VALUE ? STEP_GIVE_UP : STEP_NOMEM;
+}
 
 static tsr_status insert_chain(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t mark, int depth);
 
@@ -958,8 +964,11 @@ static step_result through_rounded(tsr_cdt *d, uint32_t x, uint32_t y, uint32_t 
     int k;
     uint32_t t = w == x || w == y ? NONE : edge_triangle(d, x, y, &k);
     /* still an edge (else w fell on it and split it, marks kept) */
-    if (t != NONE && bend_through(d, t, k, w, m, depth) != TSR_OK)
-        return STEP_NOMEM;
+    if (t != NONE) {
+        step_result r = step_of(bend_through(d, t, k, w, m, depth));
+        if (r != STEP_AGAIN)
+            return r;
+    }
     return append(d, &d->targets, &d->ntargets, &d->cap_targets, w) ? STEP_AGAIN : STEP_NOMEM;
 }
 
@@ -1064,7 +1073,7 @@ static step_result split_crossing(tsr_cdt *d, uint32_t t, int k, uint32_t a, uin
         }
     }
     if (best >= 2)
-        return bend_through(d, t, k, cand[best], cdt_mark(d, t, k), depth) == TSR_OK ? STEP_AGAIN : STEP_NOMEM;
+        return step_of(bend_through(d, t, k, cand[best], cdt_mark(d, t, k), depth));
     return append(d, &d->targets, &d->ntargets, &d->cap_targets, cand[best]) ? STEP_AGAIN : STEP_NOMEM;
 }
 
@@ -1259,8 +1268,8 @@ static tsr_status insert_chain(tsr_cdt *d, uint32_t a, uint32_t b, uint32_t mark
         }
         uint32_t reached = a;
         step_result r = recover_piece(d, a, target, oa, ob, mark, depth, &reached);
-        if (r == STEP_NOMEM)
-            return TSR_ERR_NOMEM;
+        if (r == STEP_NOMEM || r == STEP_GIVE_UP)
+            return r == STEP_NOMEM ? TSR_ERR_NOMEM : TSR_ERR_VALUE;
         if (r == STEP_DONE)
             a = reached;
     }
