@@ -65,7 +65,11 @@
  * max_level levels (lattice size N << max_level). N is the piece's own:
  * for a Bézier piece of an untrimmed source, of tile_n, tile_n + 2, ...,
  * 4 tile_n - 2 (at most TSR_TILE_MAX) the one whose selection has the
- * fewest quads, so rates N 2^l step by (N + 2) / N rather than by 2; for
+ * fewest quads, so rates N 2^l step by (N + 2) / N rather than by 2, or,
+ * where that selection is one tile, tile_n / 2 (when even) with one level
+ * more if the piece then needs fewer quads (a plane, or a cut piece of a
+ * cylinder whose straight direction needs one quad: 2 x 2 quads, not
+ * 4 x 4); for
  * a subd piece whose selection at tile_n has at most 16 tiles, tile_n or
  * tile_n / 2 (when even) with one level more (the same lattice, the same
  * points), whichever selection has fewer quads (a face near the
@@ -182,7 +186,9 @@ tsr_status tsr_pmodel_from_set_tol(const tsr_patch_set *set, double link_tol, co
  *    with M = {M_ss, M_st, M_tt}, the second-derivative bounds of the
  *    pieces of the span (Tessellation, below), a piece cut into k along
  *    s needs about n = max(tile, sqrt((M_ss/k^2 + 2 M_st/k + M_tt) / (8
- *    split_error))) samples a side, k * n^2 quads in all (likewise along
+ *    split_error))) samples a side (tile: the smallest tile a one-tile
+ *    piece may take, split_tile / 2 when even, else split_tile), k * n^2
+ *    quads in all (likewise along
  *    t); k <= 64. From that k, fewer pieces are taken while the pieces'
  *    own bounds (a rational piece's fall faster than 1/k^2), with each
  *    piece's tiles counted whole, say they cost no more quads. The cuts are breakpoints like knots, shared with the
@@ -285,10 +291,12 @@ typedef struct tsr_ptess_options {
      * pixel_error is the screen error allowed. */
     const tsr_camera *camera;
     uint32_t tile_n;    /* quads per tile side, even, 2..TSR_TILE_MAX; 0: 4. Bézier pieces
-                           choose theirs in tile_n .. 4 tile_n - 2, small subd trees
-                           tile_n or tile_n / 2 (see above) */
+                           choose theirs in tile_n .. 4 tile_n - 2 (one-tile ones also
+                           tile_n / 2), small subd trees tile_n or tile_n / 2 (see above) */
     uint32_t max_level; /* quadtree depth per piece, 1..12; 0: 10 */
     bool normals;       /* per-vertex normals of the true surface */
+    bool fixed_tile;    /* every piece's tiles are tile_n quads a side (no choice: a uniform
+                           tessellation at one tile per piece, as `tessera bench patch` runs) */
     /* Optional per-piece factor (0 < f <= 1) on the tolerance (max_error
      * or pixel_error), for re-tessellating pieces that measured beyond it;
      * NULL: all 1. */

@@ -722,6 +722,7 @@ static tsr_ptess_options uniform_options(uint32_t rate)
 {
     tsr_ptess_options o = {0};
     o.max_level = 1;
+    o.fixed_tile = true;
     if (rate <= TSR_TILE_MAX) {
         o.tile_n = rate;
         o.max_error = 1e300;
