@@ -3,9 +3,10 @@
  * loops, degenerate and duplicate triangles, Euler characteristic.
  *
  * Edges are found by sorting (edge key, half-edge) pairs, so the cost is
- * O(T log T) with no hashing assumptions. T-junctions are found with a
- * uniform spatial hash of the vertices: each edge visits the cells its
- * (slightly inflated) bounding box covers. */
+ * O(T log T) with no hashing assumptions. Coincident vertices and
+ * T-junctions are found through a k-d tree of the vertices: each vertex
+ * and each open edge visits the nodes whose (slightly inflated) boxes it
+ * meets. */
 #include "tessellate/tessellate.h"
 
 #include <math.h>
@@ -87,29 +88,133 @@ void tsr_halfedges_free(tsr_halfedges *he)
 static uint32_t he_from(const tsr_mesh *m, uint32_t h) { return m->indices[h]; }
 static uint32_t he_to(const tsr_mesh *m, uint32_t h) { return m->indices[3 * (h / 3) + (h % 3 + 1) % 3]; }
 
-/* ---- spatial hash of vertices ---- */
+/* ---- a k-d tree of the vertices ---- */
 
-typedef struct grid {
-    double origin[3], inv_cell;
-    int dims;        /* 3, or 2 for a height field (cells in xy, z ignored) */
-    uint32_t mask;   /* table size - 1 */
-    uint32_t *start; /* mask + 2 entries */
-    uint32_t *items; /* vertex indices grouped by bucket */
-} grid;
+/* The used vertices in a k-d tree (median splits along the box's longest
+ * side, leaves of at most KD_LEAF vertices), so that a query costs about
+ * its depth plus the vertices near it however they are spread: a uniform
+ * grid sized by the mean edge length degrades where the density does not
+ * match (a patch whose weights gather most of its samples in one spot put
+ * 10^5 vertices into one cell, and each long open edge covering more
+ * cells than there are vertices scanned them all). Boxes and tests use
+ * the first dims coordinates (2 for a height field). */
+#define KD_LEAF 16u
 
-static uint32_t cell_hash(int64_t x, int64_t y, int64_t z, uint32_t mask)
+typedef struct kdnode {
+    float lo[3], hi[3];
+    uint32_t begin, end; /* its vertices: idx[begin .. end) */
+    uint32_t kid[2];     /* children (0: a leaf) */
+} kdnode;
+
+typedef struct kdtree {
+    const float *pos;
+    int dims;
+    uint32_t *idx;
+    kdnode *node;
+    uint32_t count;
+} kdtree;
+
+static float kd_coord(const kdtree *t, uint32_t v, int k)
 {
-    uint64_t h = (uint64_t)x * 0x9E3779B97F4A7C15ull ^ (uint64_t)y * 0xC2B2AE3D27D4EB4Full ^
-                 (uint64_t)z * 0x165667B19E3779F9ull;
-    h ^= h >> 29;
-    return (uint32_t)h & mask;
+    return t->pos[3 * (size_t)v + k];
 }
 
-static void cell_of(const grid *g, const float *p, int64_t c[3])
+/* Reorders idx[b .. e) so that idx[m] is the vertex of rank m - b by
+ * coordinate k, the ones before it no greater and the ones after no less. */
+static void kd_select(kdtree *t, uint32_t b, uint32_t e, uint32_t m, int k)
 {
-    c[2] = 0;
-    for (int k = 0; k < g->dims; k++)
-        c[k] = (int64_t)floor((p[k] - g->origin[k]) * g->inv_cell);
+    uint32_t *a = t->idx;
+    while (e - b > 2) {
+        uint32_t mid = b + (e - b) / 2;
+        /* median of three as the pivot */
+        float x = kd_coord(t, a[b], k), y = kd_coord(t, a[mid], k), z = kd_coord(t, a[e - 1], k);
+        float piv = x < y ? (y < z ? y : x < z ? z : x) : (x < z ? x : y < z ? z : y);
+        uint32_t i = b, j = e - 1;
+        for (;;) {
+            while (kd_coord(t, a[i], k) < piv)
+                i++;
+            while (kd_coord(t, a[j], k) > piv)
+                j--;
+            if (i >= j)
+                break;
+            uint32_t tmp = a[i];
+            a[i] = a[j];
+            a[j] = tmp;
+            i++;
+            j--;
+        }
+        /* [b, j] <= pivot <= [j + 1, e) */
+        if (m <= j)
+            e = j + 1;
+        else
+            b = j + 1;
+    }
+    if (e - b == 2 && kd_coord(t, a[b], k) > kd_coord(t, a[b + 1], k)) {
+        uint32_t tmp = a[b];
+        a[b] = a[b + 1];
+        a[b + 1] = tmp;
+    }
+}
+
+static uint32_t kd_build(kdtree *t, uint32_t b, uint32_t e, int depth)
+{
+    uint32_t id = t->count++;
+    kdnode *n = &t->node[id];
+    n->begin = b;
+    n->end = e;
+    n->kid[0] = n->kid[1] = 0;
+    for (int k = 0; k < 3; k++)
+        n->lo[k] = n->hi[k] = 0;
+    for (int k = 0; k < t->dims; k++) {
+        n->lo[k] = INFINITY;
+        n->hi[k] = -INFINITY;
+    }
+    for (uint32_t i = b; i < e; i++)
+        for (int k = 0; k < t->dims; k++) {
+            float c = kd_coord(t, t->idx[i], k);
+            n->lo[k] = c < n->lo[k] ? c : n->lo[k];
+            n->hi[k] = c > n->hi[k] ? c : n->hi[k];
+        }
+    if (e - b <= KD_LEAF || depth >= 60)
+        return id;
+    int axis = 0;
+    for (int k = 1; k < t->dims; k++)
+        if ((double)n->hi[k] - n->lo[k] > (double)n->hi[axis] - n->lo[axis])
+            axis = k;
+    if (!(n->hi[axis] > n->lo[axis]))
+        return id; /* all at one point: a leaf however many */
+    uint32_t m = b + (e - b) / 2;
+    kd_select(t, b, e, m, axis);
+    uint32_t l = kd_build(t, b, m, depth + 1);
+    uint32_t r = kd_build(t, m, e, depth + 1);
+    t->node[id].kid[0] = l;
+    t->node[id].kid[1] = r;
+    return id;
+}
+
+/* Whether the box [lo - r, hi + r] meets segment ab (a point: a == b). */
+static bool kd_meets(const kdtree *t, const kdnode *n, const float *a, const float *b, double r)
+{
+    double t0 = 0, t1 = 1;
+    for (int k = 0; k < t->dims; k++) {
+        double lo = n->lo[k] - r, hi = n->hi[k] + r, o = a[k], d = (double)b[k] - a[k];
+        if (d == 0) {
+            if (o < lo || o > hi)
+                return false;
+            continue;
+        }
+        double u = (lo - o) / d, w = (hi - o) / d;
+        if (u > w) {
+            double tmp = u;
+            u = w;
+            w = tmp;
+        }
+        t0 = u > t0 ? u : t0;
+        t1 = w < t1 ? w : t1;
+        if (t0 > t1)
+            return false;
+    }
+    return true;
 }
 
 /* tsr_point_on_open_segment in the first dims coordinates */
@@ -399,96 +504,67 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
         v->vertices += used[i];
     v->euler = (int64_t)v->vertices - (int64_t)v->edges + (int64_t)sub.triangle_count;
 
-    /* Spatial hash: coincident vertices and T-junctions. */
+    /* Coincident vertices and T-junctions, through a k-d tree of the used
+     * vertices (queries inflated by 2 eps: rounding cannot drop a vertex
+     * within eps). */
     if (st == TSR_OK && v->vertices > 0) {
-        grid g;
-        uint32_t tsize = 1;
-        while (tsize < 2 * v->vertices)
-            tsize <<= 1;
-        g.mask = tsize - 1;
-        g.dims = dims;
-        /* cell: the mean edge length (in xy for a height field), never below 4 eps */
-        double sum = 0;
-        uint32_t cnt = 0;
-        for (uint32_t h = 0; h < he.count; h++) {
-            uint32_t a = he_from(&sub, h), b = he_to(&sub, h);
-            if (a == b)
-                continue;
-            const float *pa = m->positions + 3 * (size_t)a, *pb = m->positions + 3 * (size_t)b;
-            double d2 = 0;
-            for (int k = 0; k < dims; k++)
-                d2 += ((double)pa[k] - pb[k]) * ((double)pa[k] - pb[k]);
-            sum += sqrt(d2);
-            cnt++;
-        }
-        double cell = cnt ? sum / cnt : 1;
-        if (cell < 4 * eps)
-            cell = 4 * eps;
-        g.inv_cell = 1 / cell;
-        for (int k = 0; k < 3; k++)
-            g.origin[k] = lo[k];
-        g.start = tsr_alloc(al, ((size_t)tsize + 2) * sizeof *g.start);
-        g.items = tsr_alloc(al, ((size_t)v->vertices + 1) * sizeof *g.items);
-        uint32_t *bucket = tsr_alloc(al, (nv + 1) * sizeof *bucket);
-        if (!g.start || !g.items || !bucket) {
+        kdtree t = {m->positions, dims, NULL, NULL, 0};
+        uint32_t cap = v->vertices / 4 + 2;
+        t.idx = tsr_alloc(al, (size_t)v->vertices * sizeof *t.idx);
+        t.node = tsr_alloc(al, (size_t)cap * sizeof *t.node);
+        uint32_t *stack = tsr_alloc(al, 128 * sizeof *stack);
+        if (!t.idx || !t.node || !stack) {
             st = TSR_ERR_NOMEM;
         } else {
-            memset(g.start, 0, ((size_t)tsize + 2) * sizeof *g.start);
-            for (size_t i = 0; i < nv; i++) {
-                if (!used[i])
-                    continue;
-                int64_t c[3];
-                cell_of(&g, m->positions + 3 * i, c);
-                bucket[i] = cell_hash(c[0], c[1], c[2], g.mask);
-                g.start[bucket[i] + 2]++;
-            }
-            for (uint32_t b = 0; b <= tsize; b++)
-                g.start[b + 1] += g.start[b];
+            uint32_t n = 0;
             for (size_t i = 0; i < nv; i++)
                 if (used[i])
-                    g.items[g.start[bucket[i] + 1]++] = (uint32_t)i;
-            /* now bucket b holds items[start[b] .. start[b+1]) */
-
-            /* coincident vertices: same or neighbouring cell within eps */
+                    t.idx[n++] = (uint32_t)i;
+            kd_build(&t, 0, n, 0);
+            double r = 2 * eps;
+            /* coincident vertices: pairs i < j within eps; the first
+             * reported is the smallest i's smallest j */
             for (size_t i = 0; i < nv; i++) {
                 if (!used[i])
                     continue;
                 const float *p = m->positions + 3 * i;
-                int64_t c[3];
-                cell_of(&g, p, c);
-                for (int dx = -1; dx <= 1; dx++)
-                    for (int dy = -1; dy <= 1; dy++)
-                        for (int dz = dims == 3 ? -1 : 0; dz <= (dims == 3 ? 1 : 0); dz++) {
-                            uint32_t b = cell_hash(c[0] + dx, c[1] + dy, c[2] + dz, g.mask);
-                            for (uint32_t k = g.start[b]; k < g.start[b + 1]; k++) {
-                                uint32_t j = g.items[k];
-                                if (j <= i)
-                                    continue;
-                                const float *q = m->positions + 3 * (size_t)j;
-                                int64_t cj[3];
-                                cell_of(&g, q, cj);
-                                if (cj[0] != c[0] + dx || cj[1] != c[1] + dy || cj[2] != c[2] + dz)
-                                    continue; /* hash collision: another cell */
-                                double d2 = 0;
-                                for (int a = 0; a < dims; a++)
-                                    d2 += ((double)p[a] - q[a]) * ((double)p[a] - q[a]);
-                                if (d2 <= eps * eps) {
-                                    v->coincident_vertices++;
-                                    if (v->first_coincident[0] == UINT32_MAX) {
-                                        v->first_coincident[0] = (uint32_t)i;
-                                        v->first_coincident[1] = j;
-                                    }
-                                }
-                            }
+                uint32_t sp = 0, first = UINT32_MAX;
+                stack[sp++] = 0;
+                while (sp) {
+                    const kdnode *nd = &t.node[stack[--sp]];
+                    if (!kd_meets(&t, nd, p, p, r))
+                        continue;
+                    if (nd->kid[0]) {
+                        stack[sp++] = nd->kid[0];
+                        stack[sp++] = nd->kid[1];
+                        continue;
+                    }
+                    for (uint32_t k = nd->begin; k < nd->end; k++) {
+                        uint32_t j = t.idx[k];
+                        if (j <= i)
+                            continue;
+                        const float *q = m->positions + 3 * (size_t)j;
+                        double d2 = 0;
+                        for (int a = 0; a < dims; a++)
+                            d2 += ((double)p[a] - q[a]) * ((double)p[a] - q[a]);
+                        if (d2 <= eps * eps) {
+                            v->coincident_vertices++;
+                            first = j < first ? j : first;
                         }
+                    }
+                }
+                if (first != UINT32_MAX && v->first_coincident[0] == UINT32_MAX) {
+                    v->first_coincident[0] = (uint32_t)i;
+                    v->first_coincident[1] = first;
+                }
             }
             /* T-junctions: for each open or non-manifold edge, the
-             * vertices in the cells of its inflated bounding box. When the
-             * box covers more cells than there are vertices, scan all. An
-             * edge two triangles share closes the surface there: a vertex
-             * on it (of a coincident sheet: a surface folded onto itself,
+             * vertices strictly inside it within eps. An edge two
+             * triangles share closes the surface there: a vertex on it
+             * (of a coincident sheet: a surface folded onto itself,
              * back-to-back faces) leaves no gap, and a real T-junction
-             * always leaves its long edge open on one side. */
+             * always leaves its long edge open on one side. The first
+             * reported is the first such edge's smallest vertex. */
             for (uint32_t h = 0; h < he.count; h++) {
                 uint32_t a = he_from(&sub, h), b = he_to(&sub, h), tw = he.twin[h];
                 if (a == b)
@@ -496,59 +572,35 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                 if (tw != TSR_NO_TWIN && tw != TSR_NONMANIFOLD)
                     continue;
                 const float *pa = m->positions + 3 * (size_t)a, *pb = m->positions + 3 * (size_t)b;
-                float bl[3], bh[3];
-                for (int k = 0; k < 3; k++) {
-                    bl[k] = (float)((pa[k] < pb[k] ? pa[k] : pb[k]) - eps);
-                    bh[k] = (float)((pa[k] > pb[k] ? pa[k] : pb[k]) + eps);
-                }
-                int64_t c0[3], c1[3];
-                cell_of(&g, bl, c0);
-                cell_of(&g, bh, c1);
-                double cells = 1;
-                for (int k = 0; k < 3; k++)
-                    cells *= (double)(c1[k] - c0[k] + 1);
-                if (cells > v->vertices) {
-                    for (size_t j = 0; j < nv; j++) {
-                        if (!used[j] || j == a || j == b)
-                            continue;
-                        if (on_open_segment(m->positions + 3 * j, pa, pb, eps, dims)) {
+                uint32_t sp = 0, first = UINT32_MAX;
+                stack[sp++] = 0;
+                while (sp) {
+                    const kdnode *nd = &t.node[stack[--sp]];
+                    if (!kd_meets(&t, nd, pa, pb, r))
+                        continue;
+                    if (nd->kid[0]) {
+                        stack[sp++] = nd->kid[0];
+                        stack[sp++] = nd->kid[1];
+                        continue;
+                    }
+                    for (uint32_t k = nd->begin; k < nd->end; k++) {
+                        uint32_t j = t.idx[k];
+                        if (j != a && j != b && on_open_segment(m->positions + 3 * (size_t)j, pa, pb, eps, dims)) {
                             v->t_junctions++;
-                            if (v->first_t_junction[0] == UINT32_MAX) {
-                                v->first_t_junction[0] = (uint32_t)j;
-                                v->first_t_junction[1] = a;
-                                v->first_t_junction[2] = b;
-                            }
+                            first = j < first ? j : first;
                         }
                     }
-                    continue;
                 }
-                for (int64_t x = c0[0]; x <= c1[0]; x++)
-                    for (int64_t y = c0[1]; y <= c1[1]; y++)
-                        for (int64_t z = c0[2]; z <= c1[2]; z++) {
-                            uint32_t bk = cell_hash(x, y, z, g.mask);
-                            for (uint32_t k = g.start[bk]; k < g.start[bk + 1]; k++) {
-                                uint32_t j = g.items[k];
-                                if (j == a || j == b)
-                                    continue;
-                                int64_t cj[3];
-                                cell_of(&g, m->positions + 3 * (size_t)j, cj);
-                                if (cj[0] != x || cj[1] != y || cj[2] != z)
-                                    continue; /* hash collision: another cell */
-                                if (on_open_segment(m->positions + 3 * (size_t)j, pa, pb, eps, dims)) {
-                                    v->t_junctions++;
-                                    if (v->first_t_junction[0] == UINT32_MAX) {
-                                        v->first_t_junction[0] = j;
-                                        v->first_t_junction[1] = a;
-                                        v->first_t_junction[2] = b;
-                                    }
-                                }
-                            }
-                        }
+                if (first != UINT32_MAX && v->first_t_junction[0] == UINT32_MAX) {
+                    v->first_t_junction[0] = first;
+                    v->first_t_junction[1] = a;
+                    v->first_t_junction[2] = b;
+                }
             }
         }
-        tsr_free(al, g.start);
-        tsr_free(al, g.items);
-        tsr_free(al, bucket);
+        tsr_free(al, t.idx);
+        tsr_free(al, t.node);
+        tsr_free(al, stack);
     }
     tsr_halfedges_free(&he);
     tsr_free(al, sub_idx);

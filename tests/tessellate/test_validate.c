@@ -1,6 +1,10 @@
 /* Validation checks, each against meshes whose defects are known by
  * construction: the oracle is how the mesh was built. */
 #include "check.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
 #include "tessellate/tessellate.h"
 
 /* An n x n grid of unit quads in the z = 0 plane, two CCW triangles each. */
@@ -462,7 +466,121 @@ TEST(random_grids_with_one_defect)
     }
 }
 
+/* Whether p lies strictly inside segment ab (farther than eps from both
+ * ends along it) within eps of it, in the first dims coordinates: the
+ * oracle's own test, in long double. */
+static bool oracle_on_segment(const float *p, const float *a, const float *b, double eps, int dims)
+{
+    long double ab2 = 0, t = 0, d2 = 0;
+    for (int k = 0; k < dims; k++) {
+        ab2 += ((long double)b[k] - a[k]) * ((long double)b[k] - a[k]);
+        t += ((long double)b[k] - a[k]) * ((long double)p[k] - a[k]);
+    }
+    if (ab2 <= 0)
+        return false;
+    t /= ab2;
+    long double len = sqrtl(ab2);
+    if (t * len <= eps || (1 - t) * len <= eps)
+        return false;
+    for (int k = 0; k < dims; k++) {
+        long double q = ((long double)p[k] - a[k]) - t * ((long double)b[k] - a[k]);
+        d2 += q * q;
+    }
+    return d2 <= (long double)eps * eps;
+}
+
+/* Vertices spread very unevenly (most in a cluster a thousandth of the
+ * box across, a point repeated more often than a leaf of validate's tree
+ * holds, some on the midpoints of long edges): coincident pairs and
+ * T-junctions counted by validate against every pair and every (vertex,
+ * open edge) tried by brute force, in 3D and as a height field. */
+TEST(clustered_vertices_against_brute_force)
+{
+    uint64_t st = 0x9E3779B97F4A7C15ull;
+    for (int seed = 0; seed < 6; seed++) {
+        tsr_mesh m;
+        tsr_mesh_init(&m, 0, NULL);
+        uint32_t nv = 1500 + 300 * (uint32_t)seed, nt = 700;
+        for (uint32_t i = 0; i < nv; i++) {
+            float p[3];
+            for (int k = 0; k < 3; k++) {
+                st ^= st << 13, st ^= st >> 7, st ^= st << 17;
+                double u = (double)(st >> 11) * 0x1p-53;
+                p[k] = (float)(i % 5 == 0 ? u : 0.5 + 1e-3 * u);
+            }
+            if (i % 97 < 40 && i > 200)
+                memcpy(p, m.positions + 3 * 200, sizeof p); /* one point many times over */
+            tsr_mesh_add_vertex(&m, p, NULL, NULL);
+        }
+        for (uint32_t t = 0; t < nt; t++) {
+            uint32_t v[3];
+            for (int k = 0; k < 3; k++) {
+                do {
+                    st ^= st << 13, st ^= st >> 7, st ^= st << 17;
+                    v[k] = (uint32_t)(st % nv);
+                } while ((k > 0 && v[k] == v[0]) || (k > 1 && v[k] == v[1]));
+            }
+            tsr_mesh_add_triangle(&m, v[0], v[1], v[2]);
+            if (t % 7 == 0) { /* a vertex on the middle of this triangle's first edge */
+                const float *a = m.positions + 3 * (size_t)v[0], *b = m.positions + 3 * (size_t)v[1];
+                float q[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+                uint32_t w = tsr_mesh_add_vertex(&m, q, NULL, NULL);
+                uint32_t o = (v[2] + 1) % nv;
+                if (o != w && o != v[2])
+                    tsr_mesh_add_triangle(&m, w, v[2], o);
+            }
+        }
+        uint32_t n = m.vertex_count, T = m.triangle_count;
+        unsigned char *used = calloc(n, 1);
+        for (uint32_t k = 0; k < 3 * T; k++)
+            used[m.indices[k]] = 1;
+        for (int dims = 3; dims >= 2; dims--) {
+            double eps = 1e-4;
+            tsr_validate_options o = {0};
+            o.epsilon = eps;
+            o.height_field = dims == 2;
+            tsr_validation v;
+            CHECK(tsr_mesh_validate(&m, &o, &v) == TSR_OK);
+            uint64_t pairs = 0, junctions = 0;
+            for (uint32_t i = 0; i < n; i++)
+                for (uint32_t j = i + 1; used[i] && j < n; j++) {
+                    if (!used[j])
+                        continue;
+                    long double d2 = 0;
+                    for (int k = 0; k < dims; k++)
+                        d2 += ((long double)m.positions[3 * i + k] - m.positions[3 * j + k]) *
+                              ((long double)m.positions[3 * i + k] - m.positions[3 * j + k]);
+                    pairs += d2 <= (long double)eps * eps;
+                }
+            /* open half-edges: an undirected edge of one half-edge (or of
+             * three or more: non-manifold) */
+            for (uint32_t t = 0; t < T; t++)
+                for (int e = 0; e < 3; e++) {
+                    uint32_t a = m.indices[3 * t + e], b = m.indices[3 * t + (e + 1) % 3], count = 0;
+                    for (uint32_t u = 0; u < T; u++)
+                        for (int f = 0; f < 3; f++) {
+                            uint32_t c = m.indices[3 * u + f], d = m.indices[3 * u + (f + 1) % 3];
+                            count += (c == a && d == b) || (c == b && d == a);
+                        }
+                    if (count == 2)
+                        continue;
+                    for (uint32_t j = 0; j < n; j++)
+                        junctions += used[j] && j != a && j != b &&
+                                     oracle_on_segment(m.positions + 3 * (size_t)j, m.positions + 3 * (size_t)a,
+                                                       m.positions + 3 * (size_t)b, eps, dims);
+                }
+            CHECK_MSG(v.coincident_vertices == pairs && v.t_junctions == junctions,
+                      "seed %d dims %d: coincident %u against %llu, T-junctions %u against %llu", seed, dims,
+                      v.coincident_vertices, (unsigned long long)pairs, v.t_junctions, (unsigned long long)junctions);
+            CHECK(pairs > 100 && junctions > 50);
+        }
+        free(used);
+        tsr_mesh_free(&m);
+    }
+}
+
 TEST_MAIN(T(grid_is_valid), T(flipped_triangle), T(nonmanifold_edge), T(coincident_sheets_no_t_junction), T(t_junction),
           T(t_junction_in_3d_long_edge), T(height_field_junctions_in_xy), T(inward_shells_found_and_turned),
           T(degenerate_and_duplicate), T(closed_tetrahedron), T(holes_count_loops), T(coincident_vertices_make_a_crack),
-          T(gaps_between_open_edges), T(bad_index_and_nan_position), T(random_grids_with_one_defect))
+          T(gaps_between_open_edges), T(bad_index_and_nan_position), T(random_grids_with_one_defect),
+          T(clustered_vertices_against_brute_force))
