@@ -9,7 +9,12 @@
  * included: the same density as per_side x per_side per piece. (The
  * model does not expose the pieces' rectangles, which for a B-spline
  * follow its knots and are not equal in general, so the grid is laid
- * over the domain rather than over each piece.) Plus the midpoint of
+ * over the domain rather than over each piece.) Where that is more than
+ * 64 samples per triangle of the source's mesh (many small pieces, as a
+ * cylinder cut across its curve, each piece a tile of 2 x 2 quads), the
+ * grid is thinned to 64 per triangle, and never below per_side x
+ * per_side: a cut cylinder of 1,792 triangles took 922,880 samples, 30
+ * times what the tessellation took. Plus the midpoint of
  * every triangle's every edge, in (u, v) of that triangle's source,
  * where the mesh's point is the midpoint of the edge's two welded
  * vertices: the sagitta of every edge is measured, whatever the grid.
@@ -593,6 +598,10 @@ static bool keep_gap(const measurer *M, const gap_tri *g)
     return kept_edge(M, q, o);
 }
 
+/* The most grid samples a source takes per triangle of its mesh, beyond
+ * per_side x per_side (Samples, above). */
+#define SAMPLES_PER_TRIANGLE 64u
+
 static tsr_status measure_source(measurer *M, uint32_t per_side)
 {
     tsr_psource_info si;
@@ -626,6 +635,20 @@ static tsr_status measure_source(measurer *M, uint32_t per_side)
 
     uint64_t nu = (uint64_t)per_side * (si.pieces_u ? si.pieces_u : 1);
     uint64_t nv = (uint64_t)per_side * (si.pieces_v ? si.pieces_v : 1);
+    if (nu * nv > SAMPLES_PER_TRIANGLE * (uint64_t)M->ntri) {
+        /* many pieces, few triangles each: the grid thinned to
+         * SAMPLES_PER_TRIANGLE samples per triangle, per_side a side at
+         * least */
+        uint64_t cap = SAMPLES_PER_TRIANGLE * (uint64_t)M->ntri;
+        double f = sqrt((double)cap / ((double)nu * (double)nv));
+        uint64_t tu = (uint64_t)ceil((double)nu * f), tv = (uint64_t)ceil((double)nv * f);
+        if (tv < per_side) /* (a side at the floor: the other takes the rest) */
+            tv = per_side, tu = (cap + per_side - 1) / per_side;
+        else if (tu < per_side)
+            tu = per_side, tv = (cap + per_side - 1) / per_side;
+        nu = tu > per_side ? tu : per_side;
+        nv = tv > per_side ? tv : per_side;
+    }
     for (uint64_t j = 0; j < nv; j++) {
         double v = j + 1 == nv ? M->dom[3] : M->dom[2] + (M->dom[3] - M->dom[2]) * ((double)j / (double)(nv - 1));
         for (uint64_t i = 0; i < nu; i++) {

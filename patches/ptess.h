@@ -393,10 +393,10 @@ typedef struct tsr_ptess_measure_result {
 /* Measures r against m at a grid of samples over every source, spread
  * evenly over its (u, v) domain, ends included: (per_side pieces_u) x
  * (per_side pieces_v) points, the density of per_side x per_side per piece
- * (measure.c says why not per piece), plus the midpoint of every triangle
- * edge. The mesh's positions are floats, so expect rounding of a few ulps
- * of the coordinates' magnitude in the figures.
- * camera: NULL for model units. per_source_error: when true, fills
+ * (measure.c says why not per piece), thinned where that is more than 64
+ * per triangle of the source's mesh, but never below per_side x per_side
+ * per source, plus the midpoint of every triangle edge. The mesh's positions are floats, so expect rounding of a few
+ * ulps of the coordinates' magnitude in the figures. camera: NULL for model units. per_source_error: when true, fills
  * out->source_error (allocated with alloc; caller frees with tsr_free).
  * Independent of how r was built: it reads only the mesh, tri_source,
  * tri_uv and tsr_pmodel_eval_points. With some 10^5 samples or more,
