@@ -2603,13 +2603,15 @@ static tsr_status choose_tile(pctx *c, uint32_t tile, uint32_t maxN)
     c->N = tile;
     c->inv_n2 = 1.0 / ((double)tile * tile);
     c->cur_key = 0;
-    if (tile >= maxN)
-        return TSR_OK;
+    uint32_t half = tile / 2;
+    bool try_half = half >= TSR_TILE_MIN && !(half & 1);
+    if (tile >= maxN && !try_half)
+        return TSR_OK; /* (else maxN == tile: the loop below tries tile alone) */
     tsr_status st = tsr_quadtree_select(c->qt, refine, c);
     if (st != TSR_OK)
         return st;
     uint64_t best = UINT64_MAX;
-    uint32_t bestN = tile, deepest = c->surf.levels - 1;
+    uint32_t bestN = tile, deepest = c->surf.levels;
     for (uint32_t N = tile; N <= maxN; N += 2) {
         c->N = N;
         c->inv_n2 = 1.0 / ((double)N * N);
@@ -2624,19 +2626,23 @@ static tsr_status choose_tile(pctx *c, uint32_t tile, uint32_t maxN)
             bestN = N;
         }
     }
-    uint32_t half = tile / 2;
-    if (half >= TSR_TILE_MIN && !(half & 1) && tsr_quadtree_leaf_count(c->qt) <= BEZIER_HALF_TRIAL_LEAVES &&
-        c->surf.levels + 1 < TSR_QUADTREE_MAX_LEVELS) {
+    if (try_half && tsr_quadtree_leaf_count(c->qt) <= BEZIER_HALF_TRIAL_LEAVES) {
+        /* one level more where the quadtree has one (at the deepest
+         * allowed, the same depth: the finest lattice then halves, which
+         * costs nothing where the root passes, the only way half tiles
+         * win on a one-tile piece) */
+        uint32_t levels = c->surf.levels + 1 < TSR_QUADTREE_MAX_LEVELS ? c->surf.levels + 1 : c->surf.levels;
         c->N = half;
         c->inv_n2 = 1.0 / ((double)half * half);
         c->cur_key = 0;
-        uint64_t splits = splits_below(c, (tsr_qnode){0, 0, 0}, c->surf.levels + 1);
+        uint64_t splits = splits_below(c, (tsr_qnode){0, 0, 0}, levels);
         if (c->nomem)
             return TSR_ERR_NOMEM;
         if ((1 + 3 * splits) * half * half < best) {
             tsr_surface surf = c->surf;
             surf.tile_n = half;
-            surf.levels++;
+            surf.levels = levels;
+            surf.extent_x = surf.extent_y = half << levels;
             tsr_quadtree *qt = tsr_quadtree_create(&surf, c->alloc);
             if (!qt)
                 return TSR_ERR_NOMEM;

@@ -67,7 +67,7 @@
  * 4 tile_n - 2 (at most TSR_TILE_MAX) the one whose selection has the
  * fewest quads, so rates N 2^l step by (N + 2) / N rather than by 2, or,
  * where that selection is one tile, tile_n / 2 (when even) with one level
- * more if the piece then needs fewer quads (a plane, or a cut piece of a
+ * more (none at depth 12) if the piece then needs fewer quads (a plane, or a cut piece of a
  * cylinder whose straight direction needs one quad: 2 x 2 quads, not
  * 4 x 4); for
  * a subd piece whose selection at tile_n has at most 16 tiles, tile_n or

@@ -33,8 +33,9 @@ static void help(FILE *f)
             "  --fov DEG             vertical field of view (default 60)\n"
             "  --near D              near plane distance (default 1e-3 of the model's diagonal)\n"
             "  --tile N              quads per tile side, even, 2..128 (default 4); Bezier patches\n"
-            "                        choose theirs in N..4N-2, the one giving the fewest quads; cage\n"
-            "                        faces needing few tiles N or N/2 (when even), likewise\n"
+            "                        choose theirs in N..4N-2 (one-tile ones also N/2, when even), the\n"
+            "                        one giving the fewest quads; cage faces needing few tiles N or N/2\n"
+            "                        (when even), likewise\n"
             "  --max-level L         quadtree depth per patch, 1..12 (default 10)\n"
             "  --scheme S            catmark or bilinear, for a polygon cage (default: bilinear when the\n"
             "                        file name starts with \"bilinear\", else catmark)\n" CLI_WELD_HELP CLI_ORIENT_HELP

@@ -451,20 +451,23 @@ TEST(plane_parallelogram_exact)
         tsr_pmodel_get_info(m, &info);
         CHECK(info.sources == 1 && info.pieces == 1 && info.links == 0 && info.collapsed_edges == 0 &&
               info.mirrored == 0 && info.trimmed_sources == 0);
-        const uint32_t tiles[] = {2, 4, 8, 16};
-        for (int ti = 0; ti < 4; ti++)
+        /* (tile 128 and depth 12: half tiles where no larger tile or no
+         * deeper level is allowed) */
+        const uint32_t tiles[] = {2, 4, 8, 16, 128};
+        for (int ti = 0; ti < 6; ti++)
             for (double E = 1e-1; E >= 1e-6; E /= 100) {
                 tsr_ptess_options o = {0};
                 o.max_error = E;
-                o.tile_n = tiles[ti];
+                o.tile_n = tiles[ti < 5 ? ti : 1];
+                o.max_level = ti < 5 ? 0 : 12;
                 tsr_ptess_result r;
                 if (run_ptess(m, &o, &r)) {
                     check_shape(m, &r, false);
-                    CHECK_MSG(r.leaves == 1, "tile %u E %g: %u leaves for a linear patch", tiles[ti], E, r.leaves);
+                    CHECK_MSG(r.leaves == 1, "tile %u E %g: %u leaves for a linear patch", o.tile_n, E, r.leaves);
                     /* one tile, of half the size where half is even (a
                      * plane passes at any size: choose_tile's half tiles) */
-                    uint32_t t = tiles[ti] / 2 >= 2 && !(tiles[ti] / 2 & 1) ? tiles[ti] / 2 : tiles[ti];
-                    CHECK_MSG(r.mesh.triangle_count == 2 * t * t, "tile %u: %u triangles", tiles[ti],
+                    uint32_t n = o.tile_n, t = n / 2 >= 2 && !(n / 2 & 1) ? n / 2 : n;
+                    CHECK_MSG(r.mesh.triangle_count == 2 * t * t, "tile %u max level %u: %u triangles", n, o.max_level,
                               r.mesh.triangle_count);
                     CHECK_MSG(r.bound <= 1e-12 * 4, "bound %g", r.bound);
                     sampling s = {quad_truth, &q, plane_distance, NULL, NULL, 0, 0, 0, 0, 0, 0, 0, 0, {0, 0}};
