@@ -836,6 +836,44 @@ TEST(crossing_fallbacks_terminate_forwards)
     }
 }
 
+/* From cdt_stress (seed 423): segment (7e20, 1)-(1, 6 - ulp), bent
+ * through the rounded crossing (2, 6) it shares with a near-collinear
+ * segment to (1, 6), went on from there through the input point (1, 6):
+ * within rounding of its line and between the bent piece's ends, but an
+ * ulp beyond the segment's own end along it, so no vertex of it (the
+ * checker found no edge continuing it). */
+TEST(near_vertex_beyond_the_segments_end)
+{
+    static const double xy[16] = {1,
+                                  5.9999999999999991,
+                                  0.99999999999999989,
+                                  1,
+                                  1,
+                                  6,
+                                  7e+20,
+                                  1,
+                                  8796845078.2956314,
+                                  0.013938611683391328,
+                                  2,
+                                  1,
+                                  6.9999999999999991,
+                                  3e+20,
+                                  6.4741889424539858,
+                                  2.7370944712269926e+20};
+    static const uint32_t seg[18] = {1, 4, 4, 2, 2, 1, 2, 4, 0, 2, 2, 3, 7, 5, 0, 5, 3, 0};
+    build b = {0};
+    for (int i = 0; i < 8; i++)
+        pt(&b, xy[2 * i], xy[2 * i + 1]);
+    for (int i = 0; i < 9; i++)
+        sg(&b, seg[2 * i], seg[2 * i + 1]);
+    for (int r = 0; r < 3; r++) {
+        tsr_tri_options o = {.region = every_region[r]};
+        tsr_triangulation t = run(&b, &o, "near vertex beyond the end");
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
 TEST(conforming_delaunay)
 {
     build b = {0};
@@ -970,5 +1008,6 @@ TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T
           T(vertex_ulps_inside_hull_edge), T(segment_ulps_inside_hull_edge), T(vertex_ulps_inside_hull_corner),
           T(reversed_duplicate_segment_crossed), T(crossing_beside_sliver), T(wide_dynamic_range_crossing),
           T(crossing_rounded_beyond_its_triangles), T(crossing_an_ulp_from_an_end), T(crossing_of_a_far_edge),
-          T(crossing_fallbacks_terminate_forwards), T(conforming_delaunay), T(random_crossing_segments),
-          T(bad_input_refused), T(incremental_changes), T(small_angle_beside_short_hull_edge))
+          T(near_vertex_beyond_the_segments_end), T(crossing_fallbacks_terminate_forwards), T(conforming_delaunay),
+          T(random_crossing_segments), T(bad_input_refused), T(incremental_changes),
+          T(small_angle_beside_short_hull_edge))

@@ -3,7 +3,8 @@
  * tool for hunting the constrained-Delaunay kernel's rounding bugs, not a
  * CTest test (tests/fuzz/known/README.md lists what it still finds).
  *
- *   build/bin/cdt_stress [FIRST [COUNT [--dump]]]   seeds FIRST.. (default 1, 1000)
+ *   build/bin/cdt_stress [FIRST [COUNT [--dump]]]   seeds FIRST.. (default 1, 1000);
+ *   --dump prints a failing seed's graph and output
  *   CDT_STRESS_REFINE=1: also conforming / min-angle refinement
  *
  * Each seed makes 4-17 points whose coordinates mix four kinds (a small
@@ -159,8 +160,18 @@ int main(int argc, char **argv)
         tsr_tri_check c;
         if (tsr_triangulation_check(&in, &o, &t, &c) == TSR_OK && !c.ok && t.nt > 0) {
             printf("seed %llu: %s\n", (unsigned long long)seed, c.first_problem);
-            if (verbose)
+            if (verbose) {
                 dump();
+                printf("  output: %u vertices, %u triangles, %u constrained edges\n", t.nv, t.nt, t.nedge);
+                for (uint32_t i = 0; i < t.nv; i++)
+                    printf("  v%u %.17g %.17g\n", i, t.xy[2 * i], t.xy[2 * i + 1]);
+                for (int i = 0; i < nv; i++)
+                    printf("  input %d -> v%u\n", i, t.vertex_of_input[i]);
+                for (uint32_t i = 0; i < t.nt; i++)
+                    printf("  t %u %u %u\n", t.tri[3 * i], t.tri[3 * i + 1], t.tri[3 * i + 2]);
+                for (uint32_t i = 0; i < t.nedge; i++)
+                    printf("  e %u %u (segment %u)\n", t.edge[2 * i], t.edge[2 * i + 1], t.edge_segment[i]);
+            }
             failures++;
         }
         tsr_triangulation_free(&t);
