@@ -325,10 +325,14 @@ static int run(int argc, char **argv)
     }
     double tol = opt.camera ? v.pixel_error : opt.max_error;
     if (rc == CLI_OK && verify && meas.max_error > tol) {
+        uint32_t ml = opt.max_level ? opt.max_level : 10;
         cli_error("patch",
                   "%s: measured error %.6g is above %.6g even after re-tessellating %u patches finer "
-                  "(down to --max-level %u)",
-                  in, meas.max_error, tol, tightened, opt.max_level ? opt.max_level : 10);
+                  "(down to --max-level %u%s)",
+                  in, meas.max_error, tol, tightened, ml,
+                  ml < 12 ? "; --max-level 12 lets each patch's quadtree go deeper, where features narrower than "
+                            "its finest tiles (a weight far above the others) need it"
+                          : "");
         rc = CLI_FAIL;
     } else if (rc == CLI_OK && verify && meas.uncovered) {
         cli_error("patch",
