@@ -36,7 +36,8 @@ static void help(FILE *f)
             "                        choose theirs in N..4N-2 (one-tile ones also N/2, when even), the\n"
             "                        one giving the fewest quads; cage faces needing few tiles N or N/2\n"
             "                        (when even), likewise\n"
-            "  --max-level L         quadtree depth per patch, 1..12 (default 10)\n"
+            "  --max-level L         quadtree depth per patch, 1..12 (default 10; where the measured\n"
+            "                        error stays above the tolerance at 10, once more at 12)\n"
             "  --scheme S            catmark or bilinear, for a polygon cage (default: bilinear when the\n"
             "                        file name starts with \"bilinear\", else catmark)\n" CLI_WELD_HELP CLI_ORIENT_HELP
             "  --normals             per-vertex normals of the true surface; where surfaces meet at an\n"
@@ -129,7 +130,7 @@ static int run(int argc, char **argv)
     double max_error = 0;
     view_options v = {60, 1920, 1080, 0, 0};
     uint32_t tile = 4, max_level = 10;
-    bool normals = false, quiet = false, verify = true;
+    bool normals = false, quiet = false, verify = true, max_level_given = false;
     double crease = -1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -178,6 +179,7 @@ static int run(int argc, char **argv)
                 return CLI_USAGE;
             }
             *(tile_opt ? &tile : &max_level) = u;
+            max_level_given |= !tile_opt;
         } else if (!strcmp(a, "--max-error") && has_value) {
             if (!cli_parse_double(argv[++i], &max_error) || !(max_error > 0)) {
                 cli_error("patch", "%s %s: must be a positive number", a, argv[i]);
@@ -314,6 +316,23 @@ static int run(int argc, char **argv)
         cli_progress_start(&pr, "patch: measuring", !quiet);
         st = cli_patch_tessellate(pm.model, &opt, 64, 6, &r, &meas, &tightened, &pr, &err);
         cli_progress_end(&pr);
+        double tol0 = opt.camera ? v.pixel_error : opt.max_error;
+        if (st == TSR_OK && meas.max_error > tol0 && !max_level_given && opt.max_level < 12) {
+            /* the default depth did not reach the tolerance: once more,
+             * as deep as the quadtree goes (features narrower than the
+             * finest tiles at depth 10, such as a weight far above the
+             * others, need it) */
+            if (!quiet)
+                fprintf(stderr,
+                        "tessera patch: %s: measured error %.6g is above %.6g at --max-level %u: again with "
+                        "--max-level 12\n",
+                        in, meas.max_error, tol0, opt.max_level);
+            tsr_ptess_result_free(&r);
+            opt.max_level = 12;
+            cli_progress_start(&pr, "patch: measuring", !quiet);
+            st = cli_patch_tessellate(pm.model, &opt, 64, 6, &r, &meas, &tightened, &pr, &err);
+            cli_progress_end(&pr);
+        }
     } else {
         memset(&meas, 0, sizeof meas);
         st = tsr_ptess_run(pm.model, &opt, NULL, &r, &err);
@@ -332,7 +351,7 @@ static int run(int argc, char **argv)
                   in, meas.max_error, tol, tightened, ml,
                   ml < 12 ? "; --max-level 12 lets each patch's quadtree go deeper, where features narrower than "
                             "its finest tiles (a weight far above the others) need it"
-                          : "");
+                          : "; the deepest it goes");
         rc = CLI_FAIL;
     } else if (rc == CLI_OK && verify && meas.uncovered) {
         cli_error("patch",

@@ -318,6 +318,26 @@ patch_input_messages)
     "$cap/stderr" || fail "no --no-verify warning: $(cat "$cap/stderr")"
   "$tessera" patch "$dir/wavy.bpt" -o "$dir/w.obj" --max-error 1e-2 --no-verify 2> "$cap/stderr" || fail "no-verify 1e-2"
   grep -q warning "$cap/stderr" && fail "a bound within the tolerance warned: $(cat "$cap/stderr")"
+  # a bicubic NURBS with one weight of 1000 (a spike narrower than the
+  # finest tiles at depth 10): at the default depth the measured error stays
+  # above the tolerance, so patch goes once more to depth 12, where it holds
+  # (the figure the stats give, measured); asked for depth 10, it fails and
+  # says so, writing nothing
+  { for j in 0 1 2 3; do for i in 0 1 2 3; do
+      w=1; [ $i = 1 ] && [ $j = 1 ] && w=1000
+      echo "v $i $j $(( i * j )) $w"; done; done
+    printf 'cstype rat bspline\ndeg 3 3\nsurf 0 1 0 1 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16\nparm u 0 0 0 0 1 1 1 1\nparm v 0 0 0 0 1 1 1 1\nend\n'; } > "$dir/spike.obj"
+  "$tessera" patch "$dir/spike.obj" -o "$dir/spike.ply" --stats "$dir/spike.json" 2> "$cap/stderr" ||
+    fail "spike: $(cat "$cap/stderr")"
+  grep -q "spike\.obj: measured error [0-9.e+-]* is above [0-9.e+-]* at --max-level 10: again with --max-level 12" \
+    "$cap/stderr" || fail "spike: no second round: $(cat "$cap/stderr")"
+  python3 - "$dir/spike.json" <<'PY' || fail "spike: $(cat "$dir/spike.json")"
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert 0 < d["max_error"] <= d["requested_max_error"], d
+PY
+  expect_error 1 "spike\.obj: measured error [0-9.e+-]* is above [0-9.e+-]* even after re-tessellating 1 patches finer \(down to --max-level 10; --max-level 12 lets" -- \
+    "$tessera" patch "$dir/spike.obj" -o "$out" --max-level 10 --quiet
   { printf '\357\273\277'; cat "$dir/wavy.bpt"; } > "$dir/bom.bpt"
   "$tessera" patch "$dir/bom.bpt" -o "$dir/w.obj" --quiet || fail "a byte order mark was refused"
   # a cube cage with one face listed backwards: warned of; with
