@@ -1105,11 +1105,13 @@ static bool near_original(const tsr_cdt *d, uint32_t oa, uint32_t ob, uint32_t a
         fmax(fabs(Q[0]), fabs(Q[1])) + fmin(hypot(Q[0] - OA[0], Q[1] - OA[1]), hypot(Q[0] - OB[0], Q[1] - OB[1]));
     if (fabs(tsr_orient2d(OA, OB, Q)) > 4 * DBL_EPSILON * m * sqrt(lx * lx + ly * ly))
         return false;
-    /* strictly between a and b along the piece, and between the input
-     * segment's ends along the segment (a vertex an ulp beyond its end,
-     * though between the piece's ends, is no vertex of it) */
-    double ux = B[0] - A[0], uy = B[1] - A[1];
-    return (Q[0] - A[0]) * ux + (Q[1] - A[1]) * uy > 0 && (B[0] - Q[0]) * ux + (B[1] - Q[1]) * uy > 0 &&
+    /* between a and b along the piece, farther than that rounding from
+     * either (a vertex an ulp beside an end is at the end, not on the way
+     * to it), and between the input segment's ends along the segment (a
+     * vertex an ulp beyond its end, though between the piece's ends, is no
+     * vertex of it) */
+    double ux = B[0] - A[0], uy = B[1] - A[1], margin = 4 * DBL_EPSILON * m * sqrt(ux * ux + uy * uy);
+    return (Q[0] - A[0]) * ux + (Q[1] - A[1]) * uy > margin && (B[0] - Q[0]) * ux + (B[1] - Q[1]) * uy > margin &&
            (Q[0] - OA[0]) * lx + (Q[1] - OA[1]) * ly > 0 && (OB[0] - Q[0]) * lx + (OB[1] - Q[1]) * ly > 0;
 }
 

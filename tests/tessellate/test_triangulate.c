@@ -874,6 +874,57 @@ TEST(near_vertex_beyond_the_segments_end)
     build_free(&b);
 }
 
+/* From cdt_stress (seed 17969, reduced to 5 of its 9 segments): the
+ * edge (1, 6e20)-(5 - ulp, 4) of a segment, crossed later, was bent
+ * through the rounded crossing (5, 5 + 4 ulp) from its end, and the bend's
+ * first piece took (5, 4), an ulp beside that end, as a vertex on its way
+ * (within rounding of the bend's line and, by a square of an ulp, between
+ * its ends): the chain then ran past the segment's end and back. A vertex
+ * within rounding of a piece's end along it is at the end. */
+TEST(near_vertex_beside_the_pieces_end)
+{
+    static const double xy[28] = {0.99999999999999989,
+                                  6.0000000000000013e+20,
+                                  1,
+                                  6.0000000000000009,
+                                  4.9999999999999991,
+                                  5,
+                                  4.9999999999999991,
+                                  4,
+                                  3.9999999999999993e+20,
+                                  2.0000000000000004,
+                                  10,
+                                  3,
+                                  2,
+                                  4,
+                                  1.748125728839923,
+                                  0.54120413060043404,
+                                  6,
+                                  15,
+                                  4,
+                                  0,
+                                  5,
+                                  2,
+                                  5.5719716364717149,
+                                  9.4356312741322785,
+                                  2.3598633532098698e+20,
+                                  3.6401366467901308,
+                                  2.8427082646557555,
+                                  4};
+    static const uint32_t seg[10] = {0, 10, 1, 12, 0, 3, 6, 12, 2, 11};
+    build b = {0};
+    for (int i = 0; i < 14; i++)
+        pt(&b, xy[2 * i], xy[2 * i + 1]);
+    for (int i = 0; i < 5; i++)
+        sg(&b, seg[2 * i], seg[2 * i + 1]);
+    for (int r = 0; r < 3; r++) {
+        tsr_tri_options o = {.region = every_region[r]};
+        tsr_triangulation t = run(&b, &o, "near vertex beside the piece's end");
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
 TEST(conforming_delaunay)
 {
     build b = {0};
@@ -1008,6 +1059,6 @@ TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T
           T(vertex_ulps_inside_hull_edge), T(segment_ulps_inside_hull_edge), T(vertex_ulps_inside_hull_corner),
           T(reversed_duplicate_segment_crossed), T(crossing_beside_sliver), T(wide_dynamic_range_crossing),
           T(crossing_rounded_beyond_its_triangles), T(crossing_an_ulp_from_an_end), T(crossing_of_a_far_edge),
-          T(near_vertex_beyond_the_segments_end), T(crossing_fallbacks_terminate_forwards), T(conforming_delaunay),
-          T(random_crossing_segments), T(bad_input_refused), T(incremental_changes),
-          T(small_angle_beside_short_hull_edge))
+          T(near_vertex_beyond_the_segments_end), T(near_vertex_beside_the_pieces_end),
+          T(crossing_fallbacks_terminate_forwards), T(conforming_delaunay), T(random_crossing_segments),
+          T(bad_input_refused), T(incremental_changes), T(small_angle_beside_short_hull_edge))
