@@ -112,6 +112,7 @@ typedef struct kdtree {
     uint32_t *idx;
     kdnode *node;
     uint32_t count;
+    uint32_t stack[128], sp; /* the query under way (kd_query, kd_next) */
 } kdtree;
 
 static float kd_coord(const kdtree *t, uint32_t v, int k)
@@ -215,6 +216,28 @@ static bool kd_meets(const kdtree *t, const kdnode *n, const float *a, const flo
             return false;
     }
     return true;
+}
+
+/* Starts a query: kd_next then gives, one by one, the leaves whose box,
+ * widened by r, meets segment ab (a point: a == b). */
+static void kd_query(kdtree *t)
+{
+    t->sp = 0;
+    t->stack[t->sp++] = 0;
+}
+
+static const kdnode *kd_next(kdtree *t, const float *a, const float *b, double r)
+{
+    while (t->sp) {
+        const kdnode *nd = &t->node[t->stack[--t->sp]];
+        if (!kd_meets(t, nd, a, b, r))
+            continue;
+        if (!nd->kid[0])
+            return nd;
+        t->stack[t->sp++] = nd->kid[0];
+        t->stack[t->sp++] = nd->kid[1];
+    }
+    return NULL;
 }
 
 /* tsr_point_on_open_segment in the first dims coordinates */
@@ -508,12 +531,11 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
      * vertices (queries inflated by 2 eps: rounding cannot drop a vertex
      * within eps). */
     if (st == TSR_OK && v->vertices > 0) {
-        kdtree t = {m->positions, dims, NULL, NULL, 0};
+        kdtree t = {.pos = m->positions, .dims = dims};
         uint32_t cap = v->vertices / 4 + 2;
         t.idx = tsr_alloc(al, (size_t)v->vertices * sizeof *t.idx);
         t.node = tsr_alloc(al, (size_t)cap * sizeof *t.node);
-        uint32_t *stack = tsr_alloc(al, 128 * sizeof *stack);
-        if (!t.idx || !t.node || !stack) {
+        if (!t.idx || !t.node) {
             st = TSR_ERR_NOMEM;
         } else {
             uint32_t n = 0;
@@ -528,17 +550,9 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                 if (!used[i])
                     continue;
                 const float *p = m->positions + 3 * i;
-                uint32_t sp = 0, first = UINT32_MAX;
-                stack[sp++] = 0;
-                while (sp) {
-                    const kdnode *nd = &t.node[stack[--sp]];
-                    if (!kd_meets(&t, nd, p, p, r))
-                        continue;
-                    if (nd->kid[0]) {
-                        stack[sp++] = nd->kid[0];
-                        stack[sp++] = nd->kid[1];
-                        continue;
-                    }
+                uint32_t first = UINT32_MAX;
+                kd_query(&t);
+                for (const kdnode *nd; (nd = kd_next(&t, p, p, r)) != NULL;)
                     for (uint32_t k = nd->begin; k < nd->end; k++) {
                         uint32_t j = t.idx[k];
                         if (j <= i)
@@ -552,7 +566,6 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                             first = j < first ? j : first;
                         }
                     }
-                }
                 if (first != UINT32_MAX && v->first_coincident[0] == UINT32_MAX) {
                     v->first_coincident[0] = (uint32_t)i;
                     v->first_coincident[1] = first;
@@ -572,17 +585,9 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                 if (tw != TSR_NO_TWIN && tw != TSR_NONMANIFOLD)
                     continue;
                 const float *pa = m->positions + 3 * (size_t)a, *pb = m->positions + 3 * (size_t)b;
-                uint32_t sp = 0, first = UINT32_MAX;
-                stack[sp++] = 0;
-                while (sp) {
-                    const kdnode *nd = &t.node[stack[--sp]];
-                    if (!kd_meets(&t, nd, pa, pb, r))
-                        continue;
-                    if (nd->kid[0]) {
-                        stack[sp++] = nd->kid[0];
-                        stack[sp++] = nd->kid[1];
-                        continue;
-                    }
+                uint32_t first = UINT32_MAX;
+                kd_query(&t);
+                for (const kdnode *nd; (nd = kd_next(&t, pa, pb, r)) != NULL;)
                     for (uint32_t k = nd->begin; k < nd->end; k++) {
                         uint32_t j = t.idx[k];
                         if (j != a && j != b && on_open_segment(m->positions + 3 * (size_t)j, pa, pb, eps, dims)) {
@@ -590,7 +595,6 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                             first = j < first ? j : first;
                         }
                     }
-                }
                 if (first != UINT32_MAX && v->first_t_junction[0] == UINT32_MAX) {
                     v->first_t_junction[0] = first;
                     v->first_t_junction[1] = a;
@@ -600,7 +604,6 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
         }
         tsr_free(al, t.idx);
         tsr_free(al, t.node);
-        tsr_free(al, stack);
     }
     tsr_halfedges_free(&he);
     tsr_free(al, sub_idx);

@@ -311,13 +311,13 @@ static int run(int argc, char **argv)
     uint32_t tightened = 0;
     tsr_error err = {0};
     tsr_status st;
+    double tol = opt.camera ? v.pixel_error : opt.max_error;
     if (verify) {
         cli_progress pr;
         cli_progress_start(&pr, "patch: measuring", !quiet);
         st = cli_patch_tessellate(pm.model, &opt, 64, 6, &r, &meas, &tightened, &pr, &err);
         cli_progress_end(&pr);
-        double tol0 = opt.camera ? v.pixel_error : opt.max_error;
-        if (st == TSR_OK && meas.max_error > tol0 && !max_level_given && opt.max_level < 12) {
+        if (st == TSR_OK && meas.max_error > tol && !max_level_given && opt.max_level < 12) {
             /* the default depth did not reach the tolerance: once more,
              * as deep as the quadtree goes (features narrower than the
              * finest tiles at depth 10, such as a weight far above the
@@ -326,7 +326,7 @@ static int run(int argc, char **argv)
                 fprintf(stderr,
                         "tessera patch: %s: measured error %.6g is above %.6g at --max-level %u: again with "
                         "--max-level 12\n",
-                        in, meas.max_error, tol0, opt.max_level);
+                        in, meas.max_error, tol, opt.max_level);
             tsr_ptess_result_free(&r);
             opt.max_level = 12;
             cli_progress_start(&pr, "patch: measuring", !quiet);
@@ -342,7 +342,6 @@ static int run(int argc, char **argv)
         cli_error("patch", "%s: %s", in, err.message);
         rc = CLI_FAIL;
     }
-    double tol = opt.camera ? v.pixel_error : opt.max_error;
     if (rc == CLI_OK && verify && meas.max_error > tol) {
         uint32_t ml = opt.max_level ? opt.max_level : 10;
         cli_error("patch",
