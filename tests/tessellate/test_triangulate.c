@@ -101,6 +101,23 @@ static tsr_triangulation run(const build *b, const tsr_tri_options *o, const cha
 
 static const tsr_region every_region[3] = {TSR_REGION_HULL, TSR_REGION_ENCLOSED, TSR_REGION_EVEN_ODD};
 
+/* The graph of np points xy and ns segments seg, triangulated under every
+ * region rule and checked (run). */
+static void run_every_region(const double *xy, uint32_t np, const uint32_t *seg, uint32_t ns, const char *what)
+{
+    build b = {0};
+    for (uint32_t i = 0; i < np; i++)
+        pt(&b, xy[2 * i], xy[2 * i + 1]);
+    for (uint32_t i = 0; i < ns; i++)
+        sg(&b, seg[2 * i], seg[2 * i + 1]);
+    for (int r = 0; r < 3; r++) {
+        tsr_tri_options o = {.region = every_region[r]};
+        tsr_triangulation t = run(&b, &o, what);
+        tsr_triangulation_free(&t);
+    }
+    build_free(&b);
+}
+
 /* Every vertex of the constrained edges listed under segment seg lies on
  * the line y = y0 + slope (x - x0), within 1e-12. */
 static void check_chain_on_line(const tsr_triangulation *t, uint32_t seg, double x0, double y0, double slope)
@@ -821,19 +838,9 @@ TEST(crossing_fallbacks_terminate_forwards)
     static const uint32_t cycle_seg[10] = {6, 5, 2, 0, 1, 3, 4, 6, 5, 3};
     const double *pts[2] = {behind, cycle};
     const uint32_t *segs[2] = {behind_seg, cycle_seg}, np[2] = {4, 7}, ns[2] = {2, 5};
-    for (int c = 0; c < 2; c++) {
-        build b = {0};
-        for (uint32_t i = 0; i < np[c]; i++)
-            pt(&b, pts[c][2 * i], pts[c][2 * i + 1]);
-        for (uint32_t i = 0; i < ns[c]; i++)
-            sg(&b, segs[c][2 * i], segs[c][2 * i + 1]);
-        for (int r = 0; r < 3; r++) {
-            tsr_tri_options o = {.region = every_region[r]};
-            tsr_triangulation t = run(&b, &o, c ? "crossings bending each other" : "fallback behind the start");
-            tsr_triangulation_free(&t);
-        }
-        build_free(&b);
-    }
+    for (int c = 0; c < 2; c++)
+        run_every_region(pts[c], np[c], segs[c], ns[c],
+                         c ? "crossings bending each other" : "fallback behind the start");
 }
 
 /* From cdt_stress (seed 423): segment (7e20, 1)-(1, 6 - ulp), bent
@@ -861,17 +868,7 @@ TEST(near_vertex_beyond_the_segments_end)
                                   6.4741889424539858,
                                   2.7370944712269926e+20};
     static const uint32_t seg[18] = {1, 4, 4, 2, 2, 1, 2, 4, 0, 2, 2, 3, 7, 5, 0, 5, 3, 0};
-    build b = {0};
-    for (int i = 0; i < 8; i++)
-        pt(&b, xy[2 * i], xy[2 * i + 1]);
-    for (int i = 0; i < 9; i++)
-        sg(&b, seg[2 * i], seg[2 * i + 1]);
-    for (int r = 0; r < 3; r++) {
-        tsr_tri_options o = {.region = every_region[r]};
-        tsr_triangulation t = run(&b, &o, "near vertex beyond the end");
-        tsr_triangulation_free(&t);
-    }
-    build_free(&b);
+    run_every_region(xy, 8, seg, 9, "near vertex beyond the end");
 }
 
 /* From cdt_stress (seed 17969, reduced to 5 of its 9 segments): the
@@ -912,17 +909,7 @@ TEST(near_vertex_beside_the_pieces_end)
                                   2.8427082646557555,
                                   4};
     static const uint32_t seg[10] = {0, 10, 1, 12, 0, 3, 6, 12, 2, 11};
-    build b = {0};
-    for (int i = 0; i < 14; i++)
-        pt(&b, xy[2 * i], xy[2 * i + 1]);
-    for (int i = 0; i < 5; i++)
-        sg(&b, seg[2 * i], seg[2 * i + 1]);
-    for (int r = 0; r < 3; r++) {
-        tsr_tri_options o = {.region = every_region[r]};
-        tsr_triangulation t = run(&b, &o, "near vertex beside the piece's end");
-        tsr_triangulation_free(&t);
-    }
-    build_free(&b);
+    run_every_region(xy, 14, seg, 5, "near vertex beside the piece's end");
 }
 
 TEST(conforming_delaunay)
