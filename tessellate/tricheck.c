@@ -648,6 +648,10 @@ typedef struct ck {
     uint32_t *corr;           /* kept triangles near the segment searched */
     size_t ncorr, corr_cap;
     uint32_t corr_stamp;      /* the search corr was gathered for (0: none) */
+    /* the used vertex and the kept triangle (index in corr) that last
+     * refused a gap of this search, tried first on the next candidate;
+     * UINT32_MAX: none */
+    uint32_t block_v, block_t;
     bool *boundary;           /* vertex on an edge of one triangle */
     uint32_t *hull_memo;      /* HULL_MEMO per vertex: hull edges through it */
     double maxabs;            /* largest output coordinate magnitude */
@@ -819,6 +823,7 @@ static bool corridor(ck *c, const line *l)
         return true;
     c->corr_stamp = c->stamp;
     c->ncorr = 0;
+    c->block_v = c->block_t = UINT32_MAX;
     double x0 = fmin(l->a[0], l->b[0]) - l->tol, x1 = fmax(l->a[0], l->b[0]) + l->tol;
     double y0 = fmin(l->a[1], l->b[1]) - l->tol, y1 = fmax(l->a[1], l->b[1]) + l->tol;
     double far = 2 * l->tol * l->len; /* in units of the cross product */
@@ -866,25 +871,39 @@ static bool gap_clear(ck *c, const line *l, uint32_t p, size_t k)
     const double *pp = vxy(c, p), *qq = vxy(c, q);
     if (covers(c, p, qq) || (c->used[q] && covers(c, q, pp)))
         return false;
+    /* the tests below are a conjunction, so their order is free: the last
+     * refusal's vertex and triangle first (the candidates come in order of
+     * progress, and what refused one usually refuses the next: trying
+     * them first keeps a long run of refused candidates linear), then the
+     * vertices between, then the triangles */
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t i = 0; i < (pass ? c->ncand : c->block_v != UINT32_MAX); i++) {
+            uint32_t r = pass ? c->cand[i].v : c->block_v;
+            const double *rr = vxy(c, r);
+            if (r == q || r == p || !c->used[r] || !forward(l, pp, rr) || !forward(l, rr, qq))
+                continue;
+            if (tsr_orient2d(l->a, l->b, rr) != 0 && tsr_orient2d(pp, qq, rr) != 0)
+                continue;
+            if (covers(c, r, pp) || covers(c, r, qq)) {
+                c->block_v = r;
+                return false;
+            }
+        }
     double x0 = fmin(pp[0], qq[0]), x1 = fmax(pp[0], qq[0]), y0 = fmin(pp[1], qq[1]), y1 = fmax(pp[1], qq[1]);
-    for (size_t i = 0; i < c->ncorr; i++) {
+    for (size_t n = 0; n <= c->ncorr; n++) {
+        /* n = 0: the last refusal's triangle (when any); then corr[n - 1] */
+        size_t i = n ? n - 1 : c->block_t;
+        if (i >= c->ncorr)
+            continue;
         const uint32_t *v = c->out->tri + 3 * (size_t)c->corr[i];
         const double *a = vxy(c, v[0]), *b = vxy(c, v[1]), *d = vxy(c, v[2]);
         if (fmax(fmax(a[0], b[0]), d[0]) < x0 || fmin(fmin(a[0], b[0]), d[0]) > x1 ||
             fmax(fmax(a[1], b[1]), d[1]) < y0 || fmin(fmin(a[1], b[1]), d[1]) > y1)
             continue;
-        if (meets_interior(c, c->corr[i], pp, qq))
+        if (meets_interior(c, c->corr[i], pp, qq)) {
+            c->block_t = (uint32_t)i;
             return false;
-    }
-    for (size_t i = 0; i < c->ncand; i++) {
-        uint32_t r = c->cand[i].v;
-        const double *rr = vxy(c, r);
-        if (r == q || r == p || !c->used[r] || !forward(l, pp, rr) || !forward(l, rr, qq))
-            continue;
-        if (tsr_orient2d(l->a, l->b, rr) != 0 && tsr_orient2d(pp, qq, rr) != 0)
-            continue;
-        if (covers(c, r, pp) || covers(c, r, qq))
-            return false;
+        }
     }
     return true;
 }
