@@ -27,6 +27,48 @@ static int kv_cmp(const void *a, const void *b)
     return x->val < y->val ? -1 : x->val > y->val;
 }
 
+/* Sorts e by (key, val) for input whose vals ascend (as every caller
+ * builds it): a stable sort by key alone then gives the same order.
+ * Least significant digit first, 16 bits a digit, all four histograms in
+ * one pass, and a digit that every key shares skipped (edge keys of a
+ * mesh below 2^16 vertices need two passes). qsort of 3.2 million
+ * half-edges took most of a validation; this is several times faster.
+ * Falls back to qsort when the buffer cannot be had. */
+static void kv_sort(kv *e, size_t n, const tsr_allocator *al)
+{
+    kv *tmp = n >= 1024 && n <= UINT32_MAX ? tsr_alloc(al, n * sizeof *tmp) : NULL;
+    uint32_t(*cnt)[65536] = tmp ? tsr_alloc(al, 4 * sizeof *cnt) : NULL;
+    if (!cnt) {
+        tsr_free(al, tmp);
+        qsort(e, n, sizeof *e, kv_cmp);
+        return;
+    }
+    memset(cnt, 0, 4 * sizeof *cnt);
+    for (size_t i = 0; i < n; i++)
+        for (int d = 0; d < 4; d++)
+            cnt[d][(e[i].key >> (16 * d)) & 0xffff]++;
+    kv *src = e, *dst = tmp;
+    for (int d = 0; d < 4; d++) {
+        if (cnt[d][(e[0].key >> (16 * d)) & 0xffff] == n)
+            continue; /* every key has this digit */
+        uint32_t sum = 0;
+        for (uint32_t b = 0; b < 65536; b++) {
+            uint32_t c = cnt[d][b];
+            cnt[d][b] = sum;
+            sum += c;
+        }
+        for (size_t i = 0; i < n; i++)
+            dst[cnt[d][(src[i].key >> (16 * d)) & 0xffff]++] = src[i];
+        kv *t = src;
+        src = dst;
+        dst = t;
+    }
+    if (src != e)
+        memcpy(e, src, n * sizeof *e);
+    tsr_free(al, cnt);
+    tsr_free(al, tmp);
+}
+
 static uint64_t edge_key(uint32_t a, uint32_t b)
 {
     return a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
@@ -57,7 +99,7 @@ tsr_status tsr_halfedges_build(tsr_halfedges *he, const tsr_mesh *m, const tsr_a
         e[ne].val = (uint32_t)h;
         ne++;
     }
-    qsort(e, ne, sizeof *e, kv_cmp);
+    kv_sort(e, ne, alloc);
     uint32_t edges = 0;
     for (size_t i = 0; i < ne;) {
         size_t j = i + 1;
@@ -377,7 +419,7 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
         tri_keys[nkeys].val = (uint32_t)t;
         nkeys++;
     }
-    qsort(tri_keys, nkeys, sizeof *tri_keys, kv_cmp);
+    kv_sort(tri_keys, nkeys, al);
     for (size_t i = 0; i + 1 < nkeys; i++) {
         for (size_t j = i + 1; j < nkeys && tri_keys[j].key == tri_keys[i].key; j++) {
             const uint32_t *a = m->indices + 3 * (size_t)tri_keys[i].val;
@@ -463,7 +505,7 @@ tsr_status tsr_mesh_validate(const tsr_mesh *m, const tsr_validate_options *opts
                         e[k].key = edge_key(he_from(&sub, h), he_to(&sub, h));
                         e[k++].val = h;
                     }
-                qsort(e, nn, sizeof *e, kv_cmp);
+                kv_sort(e, nn, al);
                 for (size_t i = 0; i < nn; i++)
                     if (i == 0 || e[i].key != e[i - 1].key) {
                         v->nonmanifold_edges++;

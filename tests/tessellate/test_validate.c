@@ -579,8 +579,108 @@ TEST(clustered_vertices_against_brute_force)
     }
 }
 
+/* Edge and triangle counts of a big random soup (indices above 2^16, so
+ * every digit of the sorted keys matters; more than a thousand
+ * non-manifold half-edges) against counts made here by sorting plain
+ * pairs and triples. */
+typedef struct soup_edge {
+    uint32_t lo, hi, from;
+} soup_edge;
+
+static int cmp_soup_edge(const void *a, const void *b)
+{
+    const soup_edge *x = a, *y = b;
+    if (x->lo != y->lo)
+        return x->lo < y->lo ? -1 : 1;
+    return (x->hi > y->hi) - (x->hi < y->hi);
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+static int cmp_triple(const void *a, const void *b)
+{
+    const uint32_t *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k])
+            return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+TEST(edge_counts_of_a_random_soup)
+{
+    const uint32_t NV = 70000, NT = 30000;
+    tsr_mesh m;
+    tsr_mesh_init(&m, 0, NULL);
+    srand(7);
+    for (uint32_t v = 0; v < NV; v++) {
+        float p[3] = {(float)rand() / RAND_MAX, (float)rand() / RAND_MAX, (float)rand() / RAND_MAX};
+        tsr_mesh_add_vertex(&m, p, NULL, NULL);
+    }
+    for (uint32_t t = 0; t < NT; t++) {
+        uint32_t a = (uint32_t)rand() % NV, b = (uint32_t)rand() % NV, c = (uint32_t)rand() % NV;
+        int kind = rand() % 20;
+        uint32_t made = m.triangle_count;
+        if (made > 0 && kind < 8) { /* an edge of an earlier triangle, either way */
+            const uint32_t *o = m.indices + 3 * (size_t)((uint32_t)rand() % made);
+            int e = rand() % 3;
+            a = o[e], b = o[(e + 1) % 3];
+            if (kind < 3) {
+                uint32_t s = a;
+                a = b, b = s;
+            }
+        } else if (made > 0 && kind == 8) { /* an earlier triangle again, turned */
+            const uint32_t *o = m.indices + 3 * (size_t)((uint32_t)rand() % made);
+            a = o[1], b = o[2], c = o[0];
+        }
+        if (a == b || b == c || a == c)
+            continue;
+        tsr_mesh_add_triangle(&m, a, b, c);
+    }
+    uint32_t T = m.triangle_count;
+    soup_edge *e = malloc(3 * (size_t)T * sizeof *e);
+    uint32_t *tri = malloc(3 * (size_t)T * sizeof *tri);
+    CHECK(e && tri);
+    for (uint32_t t = 0; t < T; t++) {
+        const uint32_t *ix = m.indices + 3 * (size_t)t;
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = ix[k], b = ix[(k + 1) % 3];
+            e[3 * t + k] = (soup_edge){a < b ? a : b, a < b ? b : a, a};
+        }
+        uint32_t s[3] = {ix[0], ix[1], ix[2]};
+        qsort(s, 3, sizeof *s, cmp_u32);
+        memcpy(tri + 3 * t, s, sizeof s);
+    }
+    qsort(e, 3 * (size_t)T, sizeof *e, cmp_soup_edge);
+    qsort(tri, T, 3 * sizeof *tri, cmp_triple);
+    uint32_t edges = 0, boundary = 0, nonmanifold = 0, misoriented = 0, duplicates = 0;
+    for (size_t i = 0, j; i < 3 * (size_t)T; i = j) {
+        for (j = i + 1; j < 3 * (size_t)T && e[j].lo == e[i].lo && e[j].hi == e[i].hi;)
+            j++;
+        edges++;
+        boundary += j - i == 1;
+        nonmanifold += j - i > 2;
+        misoriented += j - i == 2 && e[i].from == e[i + 1].from;
+    }
+    for (uint32_t t = 1; t < T; t++)
+        duplicates += cmp_triple(tri + 3 * t, tri + 3 * (t - 1)) == 0;
+    tsr_validation v = validate(&m, false);
+    CHECK_MSG(v.edges == edges && v.boundary_edges == boundary && v.nonmanifold_edges == nonmanifold &&
+                  v.misoriented_edges == misoriented && v.duplicate_triangles == duplicates,
+              "edges %u/%u boundary %u/%u non-manifold %u/%u misoriented %u/%u duplicates %u/%u", v.edges, edges,
+              v.boundary_edges, boundary, v.nonmanifold_edges, nonmanifold, v.misoriented_edges, misoriented,
+              v.duplicate_triangles, duplicates);
+    CHECK(nonmanifold > 1000 && misoriented > 1000 && duplicates > 1000 && boundary > 30000);
+    free(e);
+    free(tri);
+    tsr_mesh_free(&m);
+}
+
 TEST_MAIN(T(grid_is_valid), T(flipped_triangle), T(nonmanifold_edge), T(coincident_sheets_no_t_junction), T(t_junction),
           T(t_junction_in_3d_long_edge), T(height_field_junctions_in_xy), T(inward_shells_found_and_turned),
           T(degenerate_and_duplicate), T(closed_tetrahedron), T(holes_count_loops), T(coincident_vertices_make_a_crack),
           T(gaps_between_open_edges), T(bad_index_and_nan_position), T(random_grids_with_one_defect),
-          T(clustered_vertices_against_brute_force))
+          T(clustered_vertices_against_brute_force), T(edge_counts_of_a_random_soup))
