@@ -130,6 +130,11 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
     bool exists = stat(target, &old) == 0;
     if (exists && S_ISDIR(old.st_mode))
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path names a folder, not a file", path);
+    /* a device, pipe or socket (also behind a link) would be replaced by
+     * the rename, not written into: refused, left as it is */
+    if (exists && !S_ISREG(old.st_mode))
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: not a regular file (a device, pipe or socket)",
+                             path);
     if (exists && !(old.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)))
         return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: the file is read-only", path);
     int fd = mkstemps(tmp, (int)strlen(ext));

@@ -150,6 +150,11 @@ unwritable_output)
   [ "$(stat -c %a "$dir/real.obj")" = 640 ] || fail "permissions $(stat -c %a "$dir/real.obj"), not 640"
   ln -s loop_b.obj "$dir/loop_a.obj" && ln -s loop_a.obj "$dir/loop_b.obj"
   expect_error 1 "loop_a\.obj: cannot write: a symbolic link that loops" -- "$tessera" mesh "$dir/g.png" -o "$dir/loop_a.obj"
+  # a pipe (so a device too), named or behind a link, is not replaced by a file
+  mkfifo "$dir/pipe.obj" && ln -s pipe.obj "$dir/to_pipe.obj"
+  expect_error 1 "pipe\.obj: cannot write: not a regular file" -- "$tessera" mesh "$dir/g.png" -o "$dir/pipe.obj"
+  expect_error 1 "to_pipe\.obj: cannot write: not a regular file" -- "$tessera" mesh "$dir/g.png" -o "$dir/to_pipe.obj"
+  [ -p "$dir/pipe.obj" ] || fail "the pipe was replaced"
   rm -f "$dir"/*.obj "$dir/s.json" ;;
 outputs_checked_first)
   # Every output is checked before the work: an unwritable --stats (or
