@@ -898,6 +898,74 @@ static tsr_status obj_parm(lexer *L, obj_state *o)
     return TSR_OK;
 }
 
+/* A loop's segments put end to start where the file lists them out of
+ * order or some of them backwards (a CAD exporter's loop given as a set
+ * of edges): from the first, each next segment is the only one left with
+ * an end within 1e-6 of the loop's extent of where the chain has got to
+ * (turned when that is its end). Left as listed when they already meet in
+ * order, or when some step finds no such segment or more than one (then
+ * straight edges join them, as tsr_trim_loop_sample says). True when
+ * reordered. No allocation: at most 64 segments are looked at. */
+#define CHAIN_MAX 64u
+static bool chain_segments(const builder *b, tsr_trim_segment *g, uint32_t n)
+{
+    if (n < 2 || n > CHAIN_MAX)
+        return false;
+    double ends[CHAIN_MAX][2][2], lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (uint32_t i = 0; i < n; i++) {
+        tsr_curve2 c = view_curve(b, &((const curve_rec *)b->curves.data)[g[i].curve]);
+        if (tsr_curve2_eval(&c, g[i].t0, ends[i][0], NULL) != TSR_OK ||
+            tsr_curve2_eval(&c, g[i].t1, ends[i][1], NULL) != TSR_OK)
+            return false;
+        for (int e = 0; e < 2; e++)
+            for (int k = 0; k < 2; k++) {
+                lo[k] = fmin(lo[k], ends[i][e][k]);
+                hi[k] = fmax(hi[k], ends[i][e][k]);
+            }
+    }
+    double tol = 1e-6 * fmax(hi[0] - lo[0], hi[1] - lo[1]);
+#define NEAR(p, q) (fabs((p)[0] - (q)[0]) <= tol && fabs((p)[1] - (q)[1]) <= tol)
+    bool in_order = true;
+    for (uint32_t i = 0; i + 1 < n && in_order; i++)
+        in_order = NEAR(ends[i][1], ends[i + 1][0]);
+    if (in_order || !(tol > 0))
+        return false;
+    uint32_t order[CHAIN_MAX];
+    bool turned[CHAIN_MAX] = {false}, used[CHAIN_MAX] = {false};
+    order[0] = 0;
+    used[0] = true;
+    const double *at = ends[0][1];
+    for (uint32_t k = 1; k < n; k++) {
+        uint32_t found = 0, pick = 0;
+        bool turn = false;
+        for (uint32_t j = 0; j < n; j++)
+            for (int e = 0; e < 2 && !used[j]; e++)
+                if (NEAR(ends[j][e], at)) {
+                    found++;
+                    pick = j;
+                    turn = e == 1;
+                }
+        if (found != 1)
+            return false;
+        order[k] = pick;
+        turned[pick] = turn;
+        used[pick] = true;
+        at = ends[pick][turn ? 0 : 1];
+    }
+#undef NEAR
+    tsr_trim_segment copy[CHAIN_MAX];
+    memcpy(copy, g, n * sizeof *g);
+    for (uint32_t k = 0; k < n; k++) {
+        g[k] = copy[order[k]];
+        if (turned[order[k]]) {
+            double t = g[k].t0;
+            g[k].t0 = g[k].t1;
+            g[k].t1 = t;
+        }
+    }
+    return true;
+}
+
 /* trim / hole u0 u1 curv2 ... inside a surf: one loop. */
 static tsr_status obj_loop(lexer *L, obj_state *o, bool hole)
 {
@@ -906,7 +974,7 @@ static tsr_status obj_loop(lexer *L, obj_state *o, bool hole)
     const char *kw = hole ? "hole" : "trim";
     if (e->kind != EL_SURF)
         return fail(L, L->stmt_line, TSR_ERR_FORMAT, "%s outside a surf element", kw);
-    tsr_trim_loop loop = {(uint32_t)b->patches.n, hole, (uint32_t)b->segments.n, 0, L->stmt_line};
+    tsr_trim_loop loop = {(uint32_t)b->patches.n, hole, (uint32_t)b->segments.n, 0, L->stmt_line, false};
     token t;
     tsr_status s;
     for (;;) {
@@ -935,6 +1003,7 @@ static tsr_status obj_loop(lexer *L, obj_state *o, bool hole)
             return nomem(L);
         loop.num_segments++;
     }
+    loop.reordered = chain_segments(b, (tsr_trim_segment *)b->segments.data + loop.first_segment, loop.num_segments);
     if (!push_any(b->a, &b->loops, sizeof loop, &loop))
         return nomem(L);
     return TSR_OK;

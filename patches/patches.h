@@ -263,13 +263,17 @@ typedef struct tsr_trim_segment {
 } tsr_trim_segment;
 
 /* A closed loop in a patch's (u, v) domain, its segments in order, each
- * ending where the next begins. Outer loops (OBJ `trim`) keep the part of
+ * ending where the next begins (else a straight edge joins them). Outer loops (OBJ `trim`) keep the part of
  * the domain inside them, holes (OBJ `hole`) remove the part inside. */
 typedef struct tsr_trim_loop {
     uint32_t patch; /* the patch it trims */
     bool hole;
     uint32_t first_segment, num_segments; /* into the set's segments */
     uint32_t line;                        /* the file's line of its statement (0: unknown) */
+    /* the file listed its segments out of order or some backwards; the
+     * loader put them end to start (the OBJ loader, up to 64 segments,
+     * when each step has one segment to go on with) */
+    bool reordered;
 } tsr_trim_loop;
 
 /* ---- Patch sets (loaded files) ---------------------------------------------- */

@@ -232,8 +232,33 @@ uint32_t cli_patch_trim_warnings(const char *cmd, const char *path, const cli_pa
         if (tsr_trim_loop_check(s, l, 1e-6 * ext, NULL, &in) != TSR_OK)
             continue;
         const char *what = L->hole ? "hole" : "trim";
-        char msg[3][256];
+        char msg[4][256];
         int nm = 0;
+        if (L->reordered)
+            snprintf(msg[nm++], sizeof msg[0],
+                     "lists its curves out of order or backwards: they were joined end to start");
+        /* the first place where a segment does not go on where the one
+         * before it ended */
+        double prev[2] = {0, 0}, worst = 0;
+        uint32_t at = 0;
+        for (uint32_t k = 0; k < L->num_segments; k++) {
+            const tsr_trim_segment *g = &s->segments[L->first_segment + k];
+            double a[2], z[2];
+            if (tsr_curve2_eval(&s->curves[g->curve], g->t0, a, NULL) != TSR_OK ||
+                tsr_curve2_eval(&s->curves[g->curve], g->t1, z, NULL) != TSR_OK)
+                break;
+            double d = k ? hypot(a[0] - prev[0], a[1] - prev[1]) : 0;
+            if (d > 1e-6 * ext && !at) {
+                worst = d;
+                at = k;
+            }
+            prev[0] = z[0], prev[1] = z[1];
+        }
+        if (at)
+            snprintf(msg[nm++], sizeof msg[0],
+                     "has a gap between its curves #%u and #%u (of %u, as listed; %.3g apart in (u, v)): joined by a "
+                     "straight edge",
+                     at, at + 1, L->num_segments, worst);
         if (in.gap > 0)
             snprintf(msg[nm++], sizeof msg[0], "is open (ends %.3g apart in (u, v)): closed by a straight edge",
                      in.gap);

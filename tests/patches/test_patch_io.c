@@ -804,6 +804,56 @@ TEST(missing_and_odd_paths)
     tsr_cage_free(NULL);
 }
 
+/* A square hole's four edges listed out of order, one backwards: the
+ * loader chains them end to start, and the loop encloses the square (0.64
+ * of the unit domain: the oracle is the square's own area); listed in
+ * order, nothing moves; with a real gap, nothing moves either. */
+static void square_loop(const char *trim, bool gap, double *area, bool *reordered, double *gap_out)
+{
+    char text[2048];
+    snprintf(text, sizeof text,
+             "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+             "vp 0.1 0.1\nvp 0.9 0.1\nvp 0.9 0.1\nvp 0.9 0.9\nvp 0.9 0.9\nvp %s\nvp 0.1 0.9\nvp 0.1 0.1\n"
+             "cstype bspline\ndeg 1\ncurv2 1 2\nparm u 0 0 1 1\nend\n"
+             "curv2 3 4\nparm u 0 0 1 1\nend\ncurv2 5 6\nparm u 0 0 1 1\nend\ncurv2 7 8\nparm u 0 0 1 1\nend\n"
+             "cstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\n%s\nend\n",
+             gap ? "0.2 0.8" : "0.1 0.9", trim);
+    tsr_patch_set s;
+    tsr_error e = {0};
+    CHECK_MSG(tsr_patch_set_parse(text, strlen(text), "sq.obj", TSR_PATCH_FORMAT_OBJ, NULL, &s, &e) == TSR_OK, "%s",
+              e.message);
+    tsr_trim_loop_info in;
+    CHECK(s.num_loops == 1 && tsr_trim_loop_check(&s, 0, 1e-9, NULL, &in) == TSR_OK);
+    *area = in.area;
+    *gap_out = in.gap;
+    *reordered = s.loops[0].reordered;
+    for (uint32_t k = 0; *reordered && k + 1 < s.loops[0].num_segments; k++) {
+        const tsr_trim_segment *a = &s.segments[s.loops[0].first_segment + k], *b = a + 1;
+        double p[2], q[2];
+        CHECK(tsr_curve2_eval(&s.curves[a->curve], a->t1, p, NULL) == TSR_OK &&
+              tsr_curve2_eval(&s.curves[b->curve], b->t0, q, NULL) == TSR_OK);
+        CHECK_MSG(hypot(p[0] - q[0], p[1] - q[1]) < 1e-12, "segments %u and %u do not meet", k, k + 1);
+    }
+    tsr_patch_set_free(&s);
+}
+
+TEST(obj_trim_curves_out_of_order_chained)
+{
+    double area, gap;
+    bool re;
+    square_loop("trim 0 1 1 0 1 2 0 1 3 0 1 4", false, &area, &re, &gap);
+    CHECK(!re && fabs(area - 0.64) < 1e-12 && gap == 0);
+    square_loop("trim 0 1 1 0 1 3 0 1 2 0 1 4", false, &area, &re, &gap);
+    CHECK_MSG(re && fabs(area - 0.64) < 1e-12 && gap == 0, "shuffled: reordered %d area %g gap %g", re, area, gap);
+    square_loop("trim 0 1 1 1 0 3 0 1 4 1 0 2", false, &area, &re, &gap);
+    CHECK_MSG(re && fabs(area - 0.64) < 1e-12 && gap == 0, "shuffled and turned: reordered %d area %g", re, area);
+    square_loop("hole 0 1 4 0 1 3 0 1 2 0 1 1", false, &area, &re, &gap);
+    CHECK_MSG(re && fabs(area - 0.64) < 1e-12 && gap == 0, "reversed list: reordered %d area %g", re, area);
+    square_loop("trim 0 1 1 0 1 3 0 1 2 0 1 4", true, &area, &re, &gap); /* curve 3 starts off curve 2's end */
+    CHECK(!re);
+}
+
 TEST_MAIN(T(data_teapot_loads), T(data_teapot_degenerate_normals), T(bpt_small_and_memory_parse), T(cage_orient),
           T(obj_repeated_knot_continuous), T(obj_freeform_trimmed), T(obj_bezier_surfaces), T(data_osd_cages_load),
-          T(cage_small_forms), T(bad_files_name_the_line), T(missing_and_odd_paths))
+          T(cage_small_forms), T(bad_files_name_the_line), T(missing_and_odd_paths),
+          T(obj_trim_curves_out_of_order_chained))
