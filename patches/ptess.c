@@ -3847,9 +3847,77 @@ static bool trim_keeps(const tloop *loops, uint32_t n, bool outer, const double 
     return best ? !best->hole : !outer;
 }
 
+static int cmp_u64_asc(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* keep[t] for every triangle of tr: trim_keeps at one centroid per
+ * region, a region being the triangles reached from one another across
+ * edges that are no constraint (no loop's edge: a loop's polyline lies on
+ * constrained edges and the domain's border, so no loop separates two
+ * triangles of one region). A centroid test per triangle costs every
+ * loop point each: dense loops (CAD exports of 10^5 points) made that
+ * quadratic. False when out of memory. */
+static bool trim_regions(const tsr_triangulation *tr, const tloop *loops, uint32_t nloops, bool outer, uint8_t *keep,
+                         const tsr_allocator *a)
+{
+    tsr_mesh view = {0};
+    view.indices = tr->tri;
+    view.triangle_count = tr->nt;
+    view.vertex_count = tr->nv;
+    tsr_halfedges he;
+    uint64_t *cons = tsr_alloc(a, ((size_t)tr->nedge + 1) * sizeof *cons);
+    uint32_t *region = tsr_alloc(a, ((size_t)tr->nt + 1) * sizeof *region);
+    uint32_t *stack = tsr_alloc(a, ((size_t)tr->nt + 1) * sizeof *stack);
+    bool ok = cons && region && stack && tsr_halfedges_build(&he, &view, a) == TSR_OK;
+    if (ok) {
+        for (uint32_t e = 0; e < tr->nedge; e++) {
+            uint32_t u = tr->edge[2 * e], v = tr->edge[2 * e + 1];
+            cons[e] = u < v ? (uint64_t)u << 32 | v : (uint64_t)v << 32 | u;
+        }
+        qsort(cons, tr->nedge, sizeof *cons, cmp_u64_asc);
+        for (uint32_t t = 0; t < tr->nt; t++)
+            region[t] = UINT32_MAX;
+        for (uint32_t seed = 0; seed < tr->nt; seed++) {
+            if (region[seed] != UINT32_MAX)
+                continue;
+            const uint32_t *tv = tr->tri + 3 * (size_t)seed;
+            double cen[2] = {(tr->xy[2 * tv[0]] + tr->xy[2 * tv[1]] + tr->xy[2 * tv[2]]) / 3,
+                             (tr->xy[2 * tv[0] + 1] + tr->xy[2 * tv[1] + 1] + tr->xy[2 * tv[2] + 1]) / 3};
+            uint8_t k0 = trim_keeps(loops, nloops, outer, cen);
+            uint32_t n = 0;
+            stack[n++] = seed;
+            region[seed] = seed;
+            while (n) {
+                uint32_t t = stack[--n];
+                keep[t] = k0;
+                for (int k = 0; k < 3; k++) {
+                    uint32_t h = 3 * t + (uint32_t)k, tw = he.twin[h];
+                    if (tw == TSR_NO_TWIN || tw == TSR_NONMANIFOLD || region[tw / 3] != UINT32_MAX)
+                        continue;
+                    uint32_t u = tr->tri[h], v = tr->tri[3 * t + (uint32_t)(k + 1) % 3];
+                    uint64_t key = u < v ? (uint64_t)u << 32 | v : (uint64_t)v << 32 | u;
+                    if (bsearch(&key, cons, tr->nedge, sizeof *cons, cmp_u64_asc))
+                        continue;
+                    region[tw / 3] = seed;
+                    stack[n++] = tw / 3;
+                }
+            }
+        }
+        tsr_halfedges_free(&he);
+    }
+    tsr_free(a, cons);
+    tsr_free(a, region);
+    tsr_free(a, stack);
+    return ok;
+}
+
 /* Trimmed source: lattice points of its pieces' leaves plus the sampled
  * trim loops, triangulated in (u, v) with the loops as constraints, the
- * triangles the loops keep (trim_keeps) lifted. */
+ * triangles the loops keep (trim_keeps, once per region: trim_regions)
+ * lifted. */
 static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr_error *err)
 {
     const tsr_pmodel *m = b->m;
@@ -4064,13 +4132,13 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
         for (size_t i = 0; inv_key && i < np; i++)
             if (key[i])
                 inv_key[tr.vertex_of_input[i]] = (uint32_t)i;
+        uint8_t *keep = st == TSR_OK ? tsr_alloc(a, (size_t)tr.nt + 1) : NULL;
+        if (st == TSR_OK && (!keep || !trim_regions(&tr, loops, nkept, has_outer, keep, a)))
+            st = TSR_ERR_NOMEM;
         for (uint32_t t = 0; t < tr.nt && st == TSR_OK; t++) {
             uint32_t v[3];
             double uv[6];
-            const uint32_t *tv = tr.tri + 3 * t;
-            double cen[2] = {(tr.xy[2 * tv[0]] + tr.xy[2 * tv[1]] + tr.xy[2 * tv[2]]) / 3,
-                             (tr.xy[2 * tv[0] + 1] + tr.xy[2 * tv[1] + 1] + tr.xy[2 * tv[2] + 1]) / 3};
-            if (!trim_keeps(loops, nkept, has_outer, cen))
+            if (!keep[t])
                 continue;
             for (int k = 0; k < 3 && st == TSR_OK; k++) {
                 uint32_t o = tr.tri[3 * t + (mirrored && k ? 3 - k : k)];
@@ -4101,6 +4169,7 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
             if (st == TSR_OK && !add_tri(b, src, v, uv))
                 st = TSR_ERR_NOMEM;
         }
+        tsr_free(a, keep);
         tsr_free(a, inv_key);
     }
     tsr_free(a, mv);

@@ -849,7 +849,13 @@ static uint32_t triangle_at(tsr_cdt *d, uint32_t a, int *ia)
 {
     int kind;
     uint32_t t = tsr__cdt_locate(d, P(d, a), &kind, ia);
-    return kind == ON_VERTEX ? t : NONE;
+    if (kind != ON_VERTEX)
+        return NONE;
+    /* the next walk starts here: a chain's next segment begins at this
+     * one's end, an edge or so away (a loop of 10^5 points had each of its
+     * walks start where the last point was inserted) */
+    d->last = t;
+    return t;
 }
 
 /* STEP_GIVE_UP: a nested insertion passed its step limit (TSR_ERR_VALUE) */
