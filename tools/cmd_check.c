@@ -356,7 +356,8 @@ static void help_patches(FILE *f)
         "                        choose theirs in N..4N-2 (one-tile ones also N/2, when even), the\n"
         "                        one giving the fewest quads; cage faces needing few tiles N or N/2\n"
         "                        (when even), likewise\n"
-        "  --max-level L         quadtree depth per piece, 1..12 (default 10)\n"
+        "  --max-level L         quadtree depth per piece, 1..12 (default 10; a run measured beyond its\n"
+        "                        tolerance is run again at 12, as tessera patch does, unless given)\n"
         "  --samples N           measurement samples per piece side (default 64)\n"
         "  --retries N           re-tessellate the pieces of patches whose error is estimated, not bounded\n"
         "                        (subdivision and trimmed patches) and measured beyond the tolerance, with at\n"
@@ -606,6 +607,7 @@ typedef struct patch_run {
     uint32_t gaps;                   /* open edges facing another within the tolerance (tsr_mesh_find_gaps): failures */
     uint32_t gaps_open;              /* the same along unlinked patch edges or on trimmed patches: no failure */
     bool watertight, conforming, ok;
+    bool deeper;       /* run again at max level 12 (the default depth measured beyond the tolerance) */
     char failed[600];  /* why the tessellation itself failed, or "" */
     char invalid[300]; /* tsr_validation_describe of the mesh */
 } patch_run;
@@ -769,6 +771,7 @@ static void patch_run_reasons(const patch_run *pr, char *buf, size_t cap)
 static cJSON *patch_run_json(const patch_run *pr)
 {
     cJSON *c = cJSON_CreateObject();
+    cJSON_AddBoolToObject(c, "max_level_12", pr->deeper);
     if (pr->has_camera) {
         cJSON_AddItemToObject(c, "eye", cJSON_CreateDoubleArray(pr->cam.eye, 3));
         cJSON_AddItemToObject(c, "target", cJSON_CreateDoubleArray(pr->cam.target, 3));
@@ -919,7 +922,26 @@ static int run_patches(int argc, char **argv)
         free(cam_args);
         return CLI_FAIL;
     }
+    /* the float32 mesh's floor, as tessera patch has it: a bound below it
+     * refused, the default raised to it */
+    double maxabs, step, floor_err = cli_patch_float_floor(p.model, &maxabs, &step);
+    if (max_error > 0 && max_error < floor_err) {
+        cli_error("check",
+                  "%s: --max-error %g is below what the float32 mesh can hold: coordinates up to %g are "
+                  "stored in steps of %.3g; give at least %.3g",
+                  in, max_error, maxabs, step, floor_err);
+        cli_patch_model_free(&p);
+        free(cam_args);
+        return CLI_USAGE;
+    }
     double tol = max_error > 0 ? max_error : 1e-3 * diag;
+    if (tol < floor_err) {
+        if (!json)
+            printf("note: the default tolerance %.3g is below what the float32 mesh holds this far from the origin "
+                   "(coordinates up to %g); using %.3g\n",
+                   tol, maxabs, floor_err);
+        tol = floor_err;
+    }
     if (!(v.near_dist > 0))
         v.near_dist = 1e-3 * diag;
     int n = ncam_args ? ncam_args : (int)ncams;
@@ -991,6 +1013,20 @@ static int run_patches(int argc, char **argv)
             r->tol = tol;
         rc = patch_run_do(k == 0 && vi_model ? vi_model : p.model, k == 0 ? &vi_info : &info, p.subd, &base, per_side,
                           retries, 1e-6 * diag, assume_linked, r);
+        if (rc == CLI_OK && !max_level && !r->failed[0] && !(r->meas.max_error <= r->tol * (1 + 1e-9))) {
+            /* as tessera patch does: the default depth did not reach the
+             * tolerance, so once more as deep as the quadtree goes */
+            patch_run deep = {0};
+            deep.has_camera = r->has_camera;
+            deep.cam = r->cam;
+            deep.tol = r->tol;
+            tsr_ptess_options b12 = base;
+            b12.max_level = 12;
+            rc = patch_run_do(k == 0 && vi_model ? vi_model : p.model, k == 0 ? &vi_info : &info, p.subd, &b12,
+                              per_side, retries, 1e-6 * diag, assume_linked, &deep);
+            deep.deeper = true;
+            *r = deep;
+        }
         if (rc != CLI_OK)
             break;
         failures += !r->ok;
@@ -1002,6 +1038,8 @@ static int run_patches(int argc, char **argv)
         char retried[192] = "";
         if (r->rounds > 1)
             snprintf(retried, sizeof retried, "  rounds %u (%u pieces rescaled)", r->rounds, r->rescaled);
+        if (r->deeper)
+            snprintf(retried + strlen(retried), sizeof retried - strlen(retried), "  max-level 12");
         if (r->bnd.seams)
             snprintf(retried + strlen(retried), sizeof retried - strlen(retried), "  nonmanifold-seam-edges %u",
                      r->bnd.seams);

@@ -256,13 +256,7 @@ static int run(int argc, char **argv)
     /* The mesh is float32: a bound below a few of its steps at the
      * model's largest coordinate can be neither written nor measured, and
      * chasing it only grows the mesh until memory runs out. */
-    tsr_pmodel_info minfo;
-    tsr_pmodel_get_info(pm.model, &minfo);
-    double maxabs = 0;
-    for (int k = 0; k < 3; k++)
-        maxabs = fmax(maxabs, fmax(fabs(minfo.lo[k]), fabs(minfo.hi[k])));
-    float fmax_abs = (float)maxabs;
-    double step = (double)nextafterf(fmax_abs, INFINITY) - (double)fmax_abs, floor_err = 4 * step;
+    double maxabs, step, floor_err = cli_patch_float_floor(pm.model, &maxabs, &step);
     if (max_error > 0 && max_error < floor_err) {
         cli_error("patch", "%s: --max-error %g is below what the float32 mesh can hold: coordinates up to %g are "
                   "stored in steps of %.3g; give at least %.3g",

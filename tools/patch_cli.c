@@ -94,6 +94,22 @@ bool cli_patch_model_split(const char *cmd, const char *path, cli_patch_model *p
     return true;
 }
 
+double cli_patch_float_floor(const tsr_pmodel *m, double *maxabs, double *step)
+{
+    tsr_pmodel_info info;
+    tsr_pmodel_get_info(m, &info);
+    double mx = 0;
+    for (int k = 0; k < 3; k++)
+        mx = fmax(mx, fmax(fabs(info.lo[k]), fabs(info.hi[k])));
+    float f = (float)mx;
+    double st = (double)nextafterf(f, INFINITY) - (double)f;
+    if (maxabs)
+        *maxabs = mx;
+    if (step)
+        *step = st;
+    return 4 * st;
+}
+
 void cli_patch_model_free(cli_patch_model *m)
 {
     tsr_pmodel_destroy(m->model);

@@ -82,6 +82,11 @@ bool cli_patch_gaps(const tsr_pmodel *m, const tsr_ptess_result *r, double eps, 
  * (tsr_pmodel_info.partial_unlinked). */
 void cli_patch_partial_warning(const char *cmd, const char *path, const tsr_pmodel *m);
 
+/* The smallest error the float32 mesh of m can hold: 4 steps of a float at
+ * the model's largest coordinate (*maxabs), one step being *step. A bound
+ * below it can be neither written nor measured. */
+double cli_patch_float_floor(const tsr_pmodel *m, double *maxabs, double *step);
+
 bool cli_patch_model_split(const char *cmd, const char *path, cli_patch_model *pm, double weld, double max_error,
                            uint32_t tile);
 

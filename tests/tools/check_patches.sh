@@ -108,11 +108,17 @@ for k in input pixel_error max_error cameras eye target max_pixel_error watertig
 done
 echo "ok json keys"
 
-# the check can fail: a tolerance far below what float positions can hold
-"$tessera" check patches "$dir/octant.obj" --cameras 0 --max-error 1e-12 --max-level 3 > "$dir/tight.txt" 2>&1
-[ $? -eq 1 ] || fail "an impossible tolerance passed: $(tail -1 "$dir/tight.txt")"
+# the check can fail: a tolerance the depth given cannot reach (the
+# default depth would be retried at 12, as tessera patch does)
+"$tessera" check patches "$dir/octant.obj" --cameras 0 --max-error 1e-6 --max-level 3 > "$dir/tight.txt" 2>&1
+[ $? -eq 1 ] || fail "an unreachable tolerance passed: $(tail -1 "$dir/tight.txt")"
 grep -q "FAIL beyond-tolerance" "$dir/tight.txt" || fail "no beyond-tolerance failure: $(cat "$dir/tight.txt")"
-echo "ok an impossible tolerance fails"
+echo "ok an unreachable tolerance fails"
+# and one below what float positions can hold is refused, as by tessera patch
+"$tessera" check patches "$dir/octant.obj" --cameras 0 --max-error 1e-12 > "$dir/tight.txt" 2>&1
+[ $? -eq 2 ] && grep -q "below what the float32 mesh can hold" "$dir/tight.txt" ||
+  fail "an impossible tolerance not refused: $(cat "$dir/tight.txt")"
+echo "ok an impossible tolerance refused"
 
 # T-junctions along patch edges without neighbour are no failure, and only
 # those. Two coplanar cage triangles on one edge, 3 4 1 and 3 4 2, overlap

@@ -343,6 +343,10 @@ assert 0 < d["max_error"] <= d["requested_max_error"], d
 PY
   expect_error 1 "spike\.obj: measured error [0-9.e+-]* is above [0-9.e+-]* even after re-tessellating 1 patches finer \(down to --max-level 10; --max-level 12 lets" -- \
     "$tessera" patch "$dir/spike.obj" -o "$out" --max-level 10 --quiet
+  # check patches agrees with patch: its run goes to depth 12 too, and passes
+  "$tessera" check patches "$dir/spike.obj" --cameras 0 > "$cap/stdout" 2>&1 ||
+    fail "check of the spike: $(cat "$cap/stdout")"
+  grep -q "^view-independent .* max-level 12  ok" "$cap/stdout" || fail "check of the spike: $(cat "$cap/stdout")"
   { printf '\357\273\277'; cat "$dir/wavy.bpt"; } > "$dir/bom.bpt"
   "$tessera" patch "$dir/bom.bpt" -o "$dir/w.obj" --quiet || fail "a byte order mark was refused"
   # a cube cage with one face listed backwards: warned of; with
