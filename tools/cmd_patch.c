@@ -339,9 +339,9 @@ static int run(int argc, char **argv)
     if (rc == CLI_OK && verify && meas.max_error > tol) {
         uint32_t ml = opt.max_level ? opt.max_level : 10;
         cli_error("patch",
-                  "%s: measured error %.6g is above %.6g even after re-tessellating %u patches finer "
+                  "%s: measured error %.6g is above %.6g even after re-tessellating %u patch%s finer "
                   "(down to --max-level %u%s)",
-                  in, meas.max_error, tol, tightened, ml,
+                  in, meas.max_error, tol, tightened, tightened == 1 ? "" : "es", ml,
                   ml < 12 ? "; --max-level 12 lets each patch's quadtree go deeper, where features narrower than "
                             "its finest tiles (a weight far above the others) need it"
                           : "; the deepest it goes");
@@ -350,8 +350,9 @@ static int run(int argc, char **argv)
         cli_error("patch",
                   "%s: %llu of %llu measured samples of untrimmed patches fall on no triangle of the mesh "
                   "(a gap, or triangles with no area: coordinates as large as %g leave float32 no room for small "
-                  "features), even after re-tessellating %u patches finer",
-                  in, (unsigned long long)meas.uncovered, (unsigned long long)meas.samples, maxabs, tightened);
+                  "features), even after re-tessellating %u patch%s finer",
+                  in, (unsigned long long)meas.uncovered, (unsigned long long)meas.samples, maxabs, tightened,
+                  tightened == 1 ? "" : "es");
         rc = CLI_FAIL;
     }
     if (rc == CLI_OK && r.mesh.triangle_count == 0) {
@@ -418,14 +419,15 @@ static int run(int argc, char **argv)
             snprintf(crease_note, sizeof crease_note, " (%u more written at creases)", crease_added);
         if (verify)
             fprintf(stderr,
-                    "tessera patch: %s: %u patches, %u triangles, %u vertices%s; max error %.4g %s (asked %.4g, "
+                    "tessera patch: %s: %u patch%s, %u triangles, %u vertices%s; max error %.4g %s (asked %.4g, "
                     "measured at %llu samples%s), %.2f s\n",
-                    in, info.sources, r.mesh.triangle_count, r.mesh.vertex_count, crease_note, meas.max_error,
-                    opt.camera ? "px" : "units", tol, (unsigned long long)meas.samples,
+                    in, info.sources, info.sources == 1 ? "" : "es", r.mesh.triangle_count, r.mesh.vertex_count,
+                    crease_note, meas.max_error, opt.camera ? "px" : "units", tol, (unsigned long long)meas.samples,
                     tightened ? ", some patches re-tessellated" : "", secs);
         else
-            fprintf(stderr, "tessera patch: %s: %u patches, %u triangles, %u vertices%s, not measured, %.2f s\n", in,
-                    info.sources, r.mesh.triangle_count, r.mesh.vertex_count, crease_note, secs);
+            fprintf(stderr, "tessera patch: %s: %u patch%s, %u triangles, %u vertices%s, not measured, %.2f s\n", in,
+                    info.sources, info.sources == 1 ? "" : "es", r.mesh.triangle_count, r.mesh.vertex_count,
+                    crease_note, secs);
         if (!verify && !opt.camera && !(r.bound <= tol))
             fprintf(stderr,
                     "tessera patch: %s: warning: the a-priori bound %.4g of the Bezier patches is above the "

@@ -73,6 +73,25 @@ bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *sc
     for (int c = 0; c < 3; c++)
         d += (info.hi[c] - info.lo[c]) * (info.hi[c] - info.lo[c]);
     out->diag = sqrt(d);
+    /* a weld as wide as half a patch joins the patch's own edges: it
+     * collapses, and what is left to measure makes no sense */
+    for (uint32_t i = 0; weld > 0 && !out->is_subd && i < out->set.num_patches; i++) {
+        double lo[3], hi[3], pd = 0;
+        if (tsr_patch_bounds(&out->set.patches[i], lo, hi) != TSR_OK)
+            continue;
+        for (int c = 0; c < 3; c++)
+            pd += (hi[c] - lo[c]) * (hi[c] - lo[c]);
+        pd = sqrt(pd);
+        if (pd > 0 && weld >= 0.5 * pd) {
+            cli_error(cmd,
+                      "%s: --weld %g is half the size of patch %u or more (its control points' box has a "
+                      "diagonal of %g): the patch's own edges would be welded together; give less (the default is "
+                      "1e-6 of the model's diagonal, %g)",
+                      path, weld, i + 1, pd, 1e-6 * out->diag);
+            cli_patch_model_free(out);
+            return false;
+        }
+    }
     return true;
 }
 

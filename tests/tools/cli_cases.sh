@@ -341,7 +341,7 @@ import json, sys
 d = json.load(open(sys.argv[1]))
 assert 0 < d["max_error"] <= d["requested_max_error"], d
 PY
-  expect_error 1 "spike\.obj: measured error [0-9.e+-]* is above [0-9.e+-]* even after re-tessellating 1 patches finer \(down to --max-level 10; --max-level 12 lets" -- \
+  expect_error 1 "spike\.obj: measured error [0-9.e+-]* is above [0-9.e+-]* even after re-tessellating 1 patch finer \(down to --max-level 10; --max-level 12 lets" -- \
     "$tessera" patch "$dir/spike.obj" -o "$out" --max-level 10 --quiet
   # check patches agrees with patch: its run goes to depth 12 too, and passes
   "$tessera" check patches "$dir/spike.obj" --cameras 0 > "$cap/stdout" 2>&1 ||
