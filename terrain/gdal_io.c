@@ -22,9 +22,12 @@ static pthread_once_t registered = PTHREAD_ONCE_INIT;
 
 static void register_drivers(void)
 {
-    /* no .aux.xml written beside an input, a bounded block cache (the
-     * whole raster is read once, straight into the samples) */
-    CPLSetConfigOption("GDAL_PAM_ENABLED", "NO");
+    /* a scale, offset, no-data value or CRS kept in a .aux.xml beside an
+     * input applies (GDAL writes one only for what a program changes or
+     * computes there, and nothing here does: no sidecar appears beside an
+     * input that had none); a bounded block cache (the whole raster is
+     * read once, straight into the samples) */
+    CPLSetConfigOption("GDAL_PAM_ENABLED", "YES");
     GDALSetCacheMax64((GIntBig)64 << 20);
     GDALRegister_GTiff();
     GDALRegister_SRTMHGT();

@@ -208,6 +208,16 @@ gis_grids)
   "$tessera" mesh "$dir/dem.asc" -o "$dir/dem.obj" --method grid --dx 2 --quiet || fail "mesh --dx failed"
   [ "$(awk '/^v /{if ($2 > m) m = $2} END {print m}' "$dir/dem.obj")" = 8 ] || fail "x extent with --dx 2"
   rm "$dir/dem.obj" "$dir/s.json" "$dir/info.txt"
+  # a scale and offset kept in GDAL's sidecar (.aux.xml) apply, and reading
+  # writes no sidecar beside an input without one
+  printf '<PAMDataset><PAMRasterBand band="1"><Offset>-100</Offset><Scale>0.1</Scale></PAMRasterBand></PAMDataset>\n' \
+    > "$dir/dem.asc.aux.xml"
+  "$tessera" info "$dir/dem.asc" > "$dir/info.txt" || fail "info with a sidecar failed"
+  grep -q '^min: *-99.9' "$dir/info.txt" && grep -q '^max: *-98' "$dir/info.txt" ||
+    fail "the sidecar's scale and offset: $(cat "$dir/info.txt")"
+  rm "$dir/dem.asc.aux.xml" "$dir/info.txt"
+  "$tessera" info "$dir/dem.asc" > /dev/null || fail "info failed"
+  [ ! -e "$dir/dem.asc.aux.xml" ] || fail "reading wrote a sidecar"
   printf 'ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value 5\n5 5\n5 5\n' > "$dir/void.asc"
   expect_error 1 "void\.asc: every sample is no-data \(NaN or the file's no-data value\)" -- "$tessera" info "$dir/void.asc"
   printf 'ncols 5\nnrows 4\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n' > "$dir/short.asc"
