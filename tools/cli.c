@@ -301,6 +301,16 @@ void cli_georef_warnings(const char *cmd, const char *path, const tsr_heightfiel
     if (feet && o->dz <= 0 && cli_spacing(hf, o, &dx, &dy) && !g->spacing_unitless)
         fprintf(stderr, "tessera %s: %s: warning: the heights are in %s while x and y are in metres: the relief is "
                 "3.28 times too high unless --dz 0.3048 (US survey feet: 0.3048006) is given\n", cmd, path, u);
+    /* no CRS, a cell far below a metre at a place that could be a
+     * longitude and latitude: most likely degrees (an Esri grid in lon/lat
+     * without its .prj), and the relief then some 10^5 times too steep */
+    if (g->spacing_unitless && g->has_transform && o->dx <= 0 && o->dy <= 0 &&
+        fmax(fabs(g->pixel[0]), fabs(g->pixel[1])) <= 0.01 && fabs(g->origin[0]) <= 180 && fabs(g->origin[1]) <= 90)
+        fprintf(stderr,
+                "tessera %s: %s: warning: the file names no CRS and its cells are %g x %g at (%g, %g): "
+                "likely degrees of longitude and latitude, so x and y come out about 10^5 times too small against "
+                "the heights; give --dx and --dy in the heights' unit (a degree of latitude is 111,320 m)\n",
+                cmd, path, fabs(g->pixel[0]), fabs(g->pixel[1]), g->origin[0], g->origin[1]);
 }
 
 static void add_pair(cJSON *o, const char *key, double a, double b)

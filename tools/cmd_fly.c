@@ -642,8 +642,7 @@ static int run(int argc, char **argv)
     tsr_heightfield *hf = cli_load_heightfield("fly", a.in, &ho);
     if (!hf)
         return CLI_FAIL;
-    if (!a.quiet)
-        cli_georef_warnings("fly", a.in, hf, &ho);
+    cli_georef_warnings("fly", a.in, hf, &ho); /* warnings: also with --quiet */
     int rc = a.headless ? run_headless(&a, hf) : run_window(&a, hf);
     tsr_heightfield_destroy(hf);
     return rc;

@@ -80,8 +80,8 @@ static void help(FILE *f)
                "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
                "                        peak_bytes, method, the input's size, range, no-data count and\n"
                "                        dz (with --nodata, its value), and the window's own range\n"
-               "  --quiet               print nothing on success (no summary, no progress bar)\n" CLI_HEIGHTFIELD_HELP
-               "  -h, --help            this help\n\n"
+               "  --quiet               no summary, notes or progress bar (warnings about the input still\n"
+               "                        go to stderr)\n" CLI_HEIGHTFIELD_HELP "  -h, --help            this help\n\n"
                "exit status: 0 written, 1 bad input or failed output, 2 bad usage, 3 nothing to mesh\n"
                "(the heightfield or window all no-data, or no triangle of valid samples; nothing written)\n");
 }
@@ -502,8 +502,7 @@ static int run(int argc, char **argv)
     tsr_heightfield *hf = cli_load_heightfield("mesh", in, &o);
     if (!hf)
         return CLI_FAIL;
-    if (!quiet)
-        cli_georef_warnings("mesh", in, hf, &o);
+    cli_georef_warnings("mesh", in, hf, &o); /* warnings: also with --quiet */
     uint32_t W = tsr_heightfield_width(hf), H = tsr_heightfield_height(hf);
     if (has_window) {
         if (win[0] >= W || win[1] >= H || win[2] > W - win[0] || win[3] > H - win[1]) {
@@ -541,6 +540,13 @@ static int run(int argc, char **argv)
     /* The bottom of a solid: DEPTH below the whole heightfield's lowest
      * sample, the same plane for every method and every window. */
     double base_z = fmin(st.min * sdz, st.max * sdz) - base;
+    if (has_base && !(fabs(base_z) <= FLT_MAX)) { /* the vertices are float, as for --dz */
+        cli_error("mesh", "%s: --base %g: the bottom at z = %g would lie past the largest float (%g)", in, base, base_z,
+                  (double)FLT_MAX);
+        cli_progress_end(&pr);
+        tsr_heightfield_destroy(hf);
+        return CLI_FAIL;
+    }
     /* with normals (not in .stl: facet normals), the walls and the bottom
      * shade flat, their vertices apart from the top's; turns of the
      * outline under 30 degrees stay smooth */

@@ -68,7 +68,10 @@ height_overflow)
     # shellcheck disable=SC2086
     expect_error 1 "big\.f32: the heights times --dz 1e\+15 reach 1e\+45, past the largest float" -- \
       "$tessera" $cmd "$dir/big.f32" --raw 4 4 f32 --dz 1e15 $([ "$cmd" = mesh ] && echo -o "$out")
-  done ;;
+  done
+  # --base likewise: heights of 1e30 and a base 4e38 deeper would write -inf
+  expect_error 1 "big\.f32: --base 4e\+38: the bottom at z = -4e\+38 would lie past the largest float" -- \
+    "$tessera" mesh "$dir/big.f32" --raw 4 4 f32 --base 4e38 -o "$out" ;;
 one_by_one_image)
   oiiotool --create 1x1 1 -d uint16 -o "$dir/one.png" || fail "oiiotool failed"
   expect_error 1 "one\.png: image is 1x1; a heightfield needs at least 2x2" -- "$tessera" mesh "$dir/one.png" -o "$out" ;;
@@ -377,7 +380,8 @@ PY
 gis_warnings)
   # georeferencing the mesh does not follow is said, not silently dropped:
   # a rotated grid (spacing 1 unless --dx/--dy), heights in feet over
-  # ground metres (unless --dz); --quiet and the options silence them
+  # ground metres (unless --dz); the options silence them, --quiet does not
+  # (a batch job is where a relief 3.28 times too high goes unseen)
   python3 "$(dirname "$0")/geotiff_fixture.py" rot "$dir/rot.tif" || fail "fixture"
   python3 "$(dirname "$0")/geotiff_fixture.py" ft "$dir/ft.tif" || fail "fixture"
   "$tessera" info "$dir/rot.tif" | grep -q "^spacing: 1 x 1 (default: the file's grid is rotated or sheared" ||
@@ -389,11 +393,19 @@ gis_warnings)
   "$tessera" mesh "$dir/ft.tif" -o "$dir/f.obj" 2> "$cap/stderr" || fail "mesh ft"
   grep -q "ft\.tif: warning: the heights are in US survey foot while x and y are in metres" "$cap/stderr" ||
     fail "ft: $(cat "$cap/stderr")"
-  for extra in "--dz 0.3048006" --quiet; do
-    # shellcheck disable=SC2086
-    "$tessera" mesh "$dir/ft.tif" -o "$dir/f.obj" $extra 2> "$cap/stderr" || fail "mesh ft $extra"
-    grep -q warning "$cap/stderr" && fail "ft $extra: $(cat "$cap/stderr")"
-  done
+  "$tessera" mesh "$dir/ft.tif" -o "$dir/f.obj" --dz 0.3048006 2> "$cap/stderr" || fail "mesh ft --dz"
+  grep -q warning "$cap/stderr" && fail "ft --dz: $(cat "$cap/stderr")"
+  "$tessera" mesh "$dir/ft.tif" -o "$dir/f.obj" --quiet 2> "$cap/stderr" || fail "mesh ft --quiet"
+  [ "$(grep -c . "$cap/stderr")" -eq 1 ] && grep -q "ft\.tif: warning: the heights are in US survey foot" "$cap/stderr" ||
+    fail "ft --quiet: not the warning alone: $(cat "$cap/stderr")"
+  # no CRS and cells of 1/3600 at a longitude and latitude: degrees, said
+  printf 'ncols 4\nnrows 3\nxllcorner -122.5\nyllcorner 37.5\ncellsize 0.000277777778\n' > "$dir/geo.asc"
+  printf '100 110 120 130\n140 150 160 170\n180 190 200 200\n' >> "$dir/geo.asc"
+  "$tessera" mesh "$dir/geo.asc" -o "$dir/f.obj" --quiet 2> "$cap/stderr" || fail "mesh geo.asc"
+  grep -q "geo\.asc: warning: the file names no CRS and its cells are 0.000277778 x 0.000277778 .*likely degrees" \
+    "$cap/stderr" || fail "geo.asc: $(cat "$cap/stderr")"
+  "$tessera" mesh "$dir/geo.asc" -o "$dir/f.obj" --dx 30 --dy 30 2> "$cap/stderr" || fail "mesh geo.asc --dx"
+  grep -q warning "$cap/stderr" && fail "geo.asc --dx: $(cat "$cap/stderr")"
   # --base over a valid region that pinches at one sample (two blocks
   # meeting at a corner): the STL gets a warning, the PLY does not need one
   python3 - "$dir/pinch.f32" <<'PY' || fail "python3 could not write pinch.f32"
