@@ -9,8 +9,10 @@
 static void help(FILE *f)
 {
     fprintf(f, "usage: tessera info FILE [options]\n\n"
-               "Prints a heightfield's format, size, minimum, maximum, mean height and no-data count.\n"
-               "Heights are in the file's units (8/16-bit images give their integer values); with --dz, the\n"
+               "Prints a heightfield's format, size, minimum, maximum, mean height and no-data count (a file\n"
+               "whose every sample is no-data is described too: min, max and mean none, null in --json).\n"
+               "Heights are in the file's units (8/16-bit images give their integer values, unless the file\n"
+               "stores a height scale, as tessera generate's PNGs do); with --dz, the\n"
                "range scaled as meshes get it is printed too (z, JSON z_min and z_max).\n\n"
                "options:\n"
                "  --json                print the same as a JSON object\n" CLI_HEIGHTFIELD_HELP
@@ -47,12 +49,14 @@ static int run(int argc, char **argv)
         cli_error("info", "no input file (see tessera info --help)");
         return CLI_USAGE;
     }
+    o.load.all_nodata_ok = true; /* a tile of sea is a file to describe, not a bad one */
     tsr_heightfield *hf = cli_load_heightfield("info", path, &o);
     if (!hf)
         return CLI_FAIL;
     tsr_heightfield_stats st;
     tsr_heightfield_stats_compute(hf, &st);
     uint32_t w = tsr_heightfield_width(hf), h = tsr_heightfield_height(hf);
+    bool none = st.nodata >= (uint64_t)w * h; /* no valid sample: no heights to give */
     const tsr_georef *g = tsr_heightfield_georef(hf);
     char spacing[256];
     cli_georef_describe(hf, &o, spacing, sizeof spacing);
@@ -63,11 +67,17 @@ static int run(int argc, char **argv)
         cJSON_AddNumberToObject(j, "width", w);
         cJSON_AddNumberToObject(j, "height", h);
         cJSON_AddNumberToObject(j, "samples", (double)w * h);
-        cJSON_AddNumberToObject(j, "min", st.min);
-        cJSON_AddNumberToObject(j, "max", st.max);
-        cJSON_AddNumberToObject(j, "mean", st.mean);
+        if (none) {
+            cJSON_AddNullToObject(j, "min");
+            cJSON_AddNullToObject(j, "max");
+            cJSON_AddNullToObject(j, "mean");
+        } else {
+            cJSON_AddNumberToObject(j, "min", st.min);
+            cJSON_AddNumberToObject(j, "max", st.max);
+            cJSON_AddNumberToObject(j, "mean", st.mean);
+        }
         cJSON_AddNumberToObject(j, "nodata", (double)st.nodata);
-        if (o.dz > 0) { /* what the meshes get: z = h * dz */
+        if (o.dz > 0 && !none) { /* what the meshes get: z = h * dz */
             cJSON_AddNumberToObject(j, "dz", o.dz);
             cJSON_AddNumberToObject(j, "z_min", st.min * o.dz);
             cJSON_AddNumberToObject(j, "z_max", st.max * o.dz);
@@ -78,14 +88,18 @@ static int run(int argc, char **argv)
         free(s);
         cJSON_Delete(j);
     } else {
-        printf("file:    %s\nformat:  %s\nsize:    %u x %u (%llu samples)\nmin:     %.9g\nmax:     %.9g\n"
-               "mean:    %.9g\nnodata:  %llu",
-               path, tsr_heightfield_source_format(hf), w, h, (unsigned long long)w * h, st.min, st.max, st.mean,
-               (unsigned long long)st.nodata);
+        printf("file:    %s\nformat:  %s\nsize:    %u x %u (%llu samples)\n", path, tsr_heightfield_source_format(hf),
+               w, h, (unsigned long long)w * h);
+        if (none)
+            printf("min:     none\nmax:     none\nmean:    none\nnodata:  %llu (every sample)",
+                   (unsigned long long)st.nodata);
+        else
+            printf("min:     %.9g\nmax:     %.9g\nmean:    %.9g\nnodata:  %llu", st.min, st.max, st.mean,
+                   (unsigned long long)st.nodata);
         if (g && g->has_nodata)
             printf(" (the file's no-data value: %.9g%s)", g->nodata, o.load.has_nodata ? ", replaced by --nodata" : "");
         printf("\nspacing: %s\n", spacing);
-        if (o.dz > 0)
+        if (o.dz > 0 && !none)
             printf("z:       %.9g to %.9g (heights * %.9g, --dz: what meshes get)\n", st.min * o.dz, st.max * o.dz,
                    o.dz);
         if (g && g->has_transform)

@@ -96,11 +96,13 @@ nan_height)
   echo "ok [$case]" ;;
 all_nan_height)
   # mesh: nothing to mesh is exit 3 (a tile over the sea), not a bad file;
-  # other commands refuse the file
+  # info describes it; the commands that need heights (fly, check terrain)
+  # refuse it
   expect_error 3 "allnan\.f32: nothing to mesh: no valid sample in the heightfield" -- \
     "$tessera" mesh "$dir/allnan.f32" --raw 4 4 f32 -o "$out" --stats "$dir/a.json" --hillshade "$dir/a.png"
   [ ! -e "$dir/a.json" ] && [ ! -e "$dir/a.png" ] || fail "all no-data: an output was written"
-  expect_error 1 "allnan\.f32: every sample is no-data" -- "$tessera" info "$dir/allnan.f32" --raw 4 4 f32
+  "$tessera" info "$dir/allnan.f32" --raw 4 4 f32 | grep -q '^nodata:  16 (every sample)' || fail "info of no-data only"
+  expect_error 1 "allnan\.f32: every sample is no-data" -- "$tessera" check terrain "$dir/allnan.f32" --raw 4 4 f32
   # a window of no-data only, and one whose valid samples form no triangle
   # (8 x 8 f32: 1.0 where (row + column) % 3 == 0, else NaN: no two valid
   # samples side by side)
@@ -222,7 +224,14 @@ gis_grids)
   "$tessera" info "$dir/dem.asc" > /dev/null || fail "info failed"
   [ ! -e "$dir/dem.asc.aux.xml" ] || fail "reading wrote a sidecar"
   printf 'ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value 5\n5 5\n5 5\n' > "$dir/void.asc"
-  expect_error 1 "void\.asc: every sample is no-data \(NaN or the file's no-data value\)" -- "$tessera" info "$dir/void.asc"
+  # every sample no-data: info describes the file (a tile of sea), mesh
+  # has nothing to mesh (exit 3)
+  "$tessera" info "$dir/void.asc" > "$dir/info.txt" || fail "info of an all no-data grid: $(cat "$dir/info.txt")"
+  grep -q '^nodata:  4 (every sample)' "$dir/info.txt" && grep -q '^min:     none' "$dir/info.txt" ||
+    fail "info of an all no-data grid: $(cat "$dir/info.txt")"
+  "$tessera" info "$dir/void.asc" --json | python3 -c 'import json,sys; d=json.load(sys.stdin); assert d["min"] is None and d["nodata"] == 4, d' ||
+    fail "info --json of an all no-data grid"
+  rm "$dir/info.txt"
   printf 'ncols 5\nnrows 4\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n' > "$dir/short.asc"
   expect_error 1 "short\.asc: " -- "$tessera" mesh "$dir/short.asc" -o "$out"
   cp "$dir/random.png" "$dir/N45E007.hgt"
