@@ -1693,8 +1693,9 @@ tsr_status tsr__budget_tolerance(double lo, double hi, uint64_t budget,
     if (!count(user, hi, &n))
         return tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
     if (n > budget)
-        return tsr_error_set(err, TSR_ERR_ARGUMENT, "the budget is below the coarsest quadtree mesh (%llu triangles)",
-                             (unsigned long long)n);
+        return tsr_error_set(err, TSR_ERR_ARGUMENT,
+                             "the budget is below the coarsest quadtree mesh (%llu triangles, about %llu vertices)",
+                             (unsigned long long)n, (unsigned long long)(n / 2 + 2));
     for (int it = 0; it < 40; it++) {
         double mid = sqrt(lo * hi);
         if (!count(user, mid, &n))
@@ -1816,7 +1817,8 @@ static tsr_status mesh_grid(const tsr_heightfield *hf, uint32_t step, uint32_t m
             if ((!max_tri || 2 * nc * nr <= max_tri) && (!max_vert || (nc + 1) * (nr + 1) <= max_vert))
                 break;
             if (nc == 1 && nr == 1)
-                return tsr_error_set(err, TSR_ERR_ARGUMENT, "the budget is below the coarsest grid (2 triangles)");
+                return tsr_error_set(err, TSR_ERR_ARGUMENT,
+                                     "the budget is below the coarsest grid (2 triangles, 4 vertices)");
             rep->budget_reached = true;
         }
     }
