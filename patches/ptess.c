@@ -988,13 +988,29 @@ static tsr_status share_breaks(const tsr_patch_set *set, const double *doms, con
 
 static void bezier_second(int du, int dv, const double *P, const double *W, double M[3]);
 
+/* The fewest quads a piece of tile size N can be drawn with when it needs
+ * `need` (about (1 / h)^2 at spacing h): the tile sizes choose_tile tries
+ * (N / 2 when even, N, N + 2, ..., 4 N - 2), each times the powers of 4
+ * its levels add. */
+static double tile_quads(double need, double N)
+{
+    int n = (int)N, half = n / 2, tmax = (int)TSR_TILE_MAX, top = 4 * n - 2 < tmax ? 4 * n - 2 : tmax;
+    double best = INFINITY;
+    for (int t = half >= (int)TSR_TILE_MIN && !(half & 1) ? half : n; t <= (top > n ? top : n); t = t < n ? n : t + 2) {
+        double q = (double)t * t;
+        for (int l = 0; q < need && l < 20; l++)
+            q *= 4;
+        best = dmin(best, q);
+    }
+    return best;
+}
+
 /* Quads a piece of second-derivative bounds M needs at max_error E, cut
  * into k along `axis` (tsr_pmodel_set_options.split_error). */
 static double split_cost(const double M[3], double E, double N, int axis, double k)
 {
     double m = axis == 0 ? M[0] / (k * k) + 2 * M[1] / k + M[2] : M[0] + 2 * M[1] / k + M[2] / (k * k);
-    double n2 = m / (8 * E);
-    return k * (n2 > N * N ? n2 : N * N);
+    return k * tile_quads(m / (8 * E), N);
 }
 
 /* Second-derivative bounds M of patch p over [ua, ub] x [va, vb] (a
@@ -1023,10 +1039,7 @@ static double cut_cost(const tsr_patch *p, double u0, double u1, double v0, doub
                             : span_second(p, u0, u1, v0 + (v1 - v0) * q / k, v0 + (v1 - v0) * (q + 1) / k, M);
         if (!ok)
             return INFINITY;
-        double need = (M[0] + 2 * M[1] + M[2]) / (8 * E), quads = N * N;
-        for (int l = 0; quads < need && l < 20; l++)
-            quads *= 4;
-        total += quads;
+        total += tile_quads((M[0] + 2 * M[1] + M[2]) / (8 * E), N);
     }
     return total;
 }
@@ -1821,6 +1834,128 @@ static double rational_curve_second(int n, const double *P, int ps, const double
     return (fnn * qss + 2 * fn * dw * Bs + fnn * dww * A) / wmin;
 }
 
+/* Bernstein coefficients of the product of two polynomials in Bernstein
+ * form, degrees p and q: out has p + q + 1. */
+static void bern_mul(const double *a, int p, const double *b, int q, double *out)
+{
+    double cp = 1, row[3 * TSR_BEZIER_MAX_DEGREE + 1];
+    for (int k = 0; k <= p + q; k++)
+        out[k] = 0;
+    /* C(p, i) C(q, j) / C(p + q, i + j), from running products */
+    for (int i = 0; i <= p; i++) {
+        double cq = 1;
+        for (int j = 0; j <= q; j++) {
+            row[j] = cp * cq;
+            cq = cq * (q - j) / (j + 1);
+        }
+        for (int j = 0; j <= q; j++)
+            out[i + j] += row[j] * a[i] * b[j];
+        cp = cp * (p - i) / (i + 1);
+    }
+    double cpq = 1;
+    for (int k = 0; k <= p + q; k++) {
+        out[k] /= cpq;
+        cpq = cpq * (p + q - k) / (k + 1);
+    }
+}
+
+/* The coefficients of a polynomial of degree n in Bernstein form over
+ * [t0, t1] of its interval (de Casteljau twice), in place. */
+static void bern_restrict(double *c, int n, double t0, double t1)
+{
+    for (int r = 1; r <= n; r++) /* left part [0, t1] */
+        for (int i = n; i >= r; i--)
+            c[i] = (1 - t1) * c[i - 1] + t1 * c[i];
+    double u = t1 > 0 ? t0 / t1 : 0;
+    for (int r = 1; r <= n; r++) /* right part [u, 1] of that */
+        for (int i = 0; i <= n - r; i++)
+            c[i] = (1 - u) * c[i] + u * c[i + 1];
+}
+
+#define CURVE_PIECES 4 /* a rational curve's bound is the largest of that many parts' */
+
+/* A tighter bound of |C''| for the rational Bézier curve of degree n with
+ * points P and weights W over [0, 1] (strides as rational_curve_second),
+ * or INFINITY: C'' = N / w^3 with N = w^2 Q'' - 2 w w' Q' - w w'' Q + 2 w'^2
+ * Q, Q = w (P - c), a polynomial of degree 3n - 2 whose Bernstein
+ * coefficients bound it (convex hull), and w^3 >= the least of its own; on
+ * each of CURVE_PIECES parts, where the coefficients are close to the
+ * values. The quotient rule's bound above takes the largest |Q''| and the
+ * smallest w together, twice a circle's |C''|; this is within a few
+ * percent of it. */
+static double rational_curve_second_tight(int n, const double *P, int ps, const double *W, int wst)
+{
+    enum { MAXC = 3 * TSR_BEZIER_MAX_DEGREE + 1 };
+    if (n < 2 || n > TSR_BEZIER_MAX_DEGREE)
+        return INFINITY;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, c[3];
+    for (int k = 0; k <= n; k++)
+        for (int q = 0; q < 3; q++) {
+            lo[q] = dmin(lo[q], P[k * ps + q]);
+            hi[q] = dmax(hi[q], P[k * ps + q]);
+        }
+    for (int q = 0; q < 3; q++)
+        c[q] = 0.5 * (lo[q] + hi[q]);
+    double w[MAXC], w1[MAXC], w2[MAXC], Q[3][MAXC], Q1[3][MAXC], Q2[3][MAXC];
+    for (int k = 0; k <= n; k++) {
+        w[k] = W[k * wst];
+        if (!(w[k] > 0))
+            return INFINITY;
+        for (int q = 0; q < 3; q++)
+            Q[q][k] = w[k] * (P[k * ps + q] - c[q]);
+    }
+    for (int k = 0; k < n; k++) {
+        w1[k] = n * (w[k + 1] - w[k]);
+        for (int q = 0; q < 3; q++)
+            Q1[q][k] = n * (Q[q][k + 1] - Q[q][k]);
+    }
+    for (int k = 0; k + 1 < n; k++) {
+        w2[k] = (n - 1) * (w1[k + 1] - w1[k]);
+        for (int q = 0; q < 3; q++)
+            Q2[q][k] = (n - 1) * (Q1[q][k + 1] - Q1[q][k]);
+    }
+    /* the weights' products, then N's terms, all of degree 3n - 2 */
+    double ww[MAXC], wwd[MAXC], wwdd[MAXC], wdwd[MAXC], D[MAXC], N[3][MAXC], t[MAXC];
+    bern_mul(w, n, w, n, ww);             /* 2n */
+    bern_mul(w, n, w1, n - 1, wwd);       /* 2n - 1 */
+    bern_mul(w, n, w2, n - 2, wwdd);      /* 2n - 2 */
+    bern_mul(w1, n - 1, w1, n - 1, wdwd); /* 2n - 2 */
+    bern_mul(ww, 2 * n, w, n, D);         /* 3n */
+    int dn = 3 * n - 2;
+    for (int q = 0; q < 3; q++) {
+        bern_mul(ww, 2 * n, Q2[q], n - 2, N[q]);
+        bern_mul(wwd, 2 * n - 1, Q1[q], n - 1, t);
+        for (int k = 0; k <= dn; k++)
+            N[q][k] -= 2 * t[k];
+        bern_mul(wwdd, 2 * n - 2, Q[q], n, t);
+        for (int k = 0; k <= dn; k++)
+            N[q][k] -= t[k];
+        bern_mul(wdwd, 2 * n - 2, Q[q], n, t);
+        for (int k = 0; k <= dn; k++)
+            N[q][k] += 2 * t[k];
+    }
+    double bound = 0;
+    for (int piece = 0; piece < CURVE_PIECES; piece++) {
+        double t0 = (double)piece / CURVE_PIECES, t1 = (double)(piece + 1) / CURVE_PIECES, d[MAXC], m[3][MAXC];
+        memcpy(d, D, (size_t)(3 * n + 1) * sizeof *d);
+        bern_restrict(d, 3 * n, t0, t1);
+        double dmin_ = INFINITY, nmax = 0;
+        for (int k = 0; k <= 3 * n; k++)
+            dmin_ = dmin(dmin_, d[k]);
+        for (int q = 0; q < 3; q++) {
+            memcpy(m[q], N[q], (size_t)(dn + 1) * sizeof *m[q]);
+            bern_restrict(m[q], dn, t0, t1);
+        }
+        for (int k = 0; k <= dn; k++)
+            nmax = dmax(nmax, norm3(m[0][k], m[1][k], m[2][k]));
+        if (!(dmin_ > 0))
+            return INFINITY;
+        bound = dmax(bound, nmax / dmin_);
+    }
+    /* the arithmetic's rounding, generously */
+    return bound * (1 + 1e-9) + 1e-300;
+}
+
 /* The largest squared mixed difference |p_{i+1,j+1} - p_{i+1,j} - p_{i,j+1}
  * + p_ij|^2 of a net of nu x nv points. */
 static double max_mixed_sq(int nu, int nv, const double *P)
@@ -1858,9 +1993,11 @@ static bool separable_second(int du, int dv, const double *P, const double *W, d
     M[1] = sqrt(max_mixed_sq(nu, nv, P)) * rational_basis_slope(du, W, 1) * rational_basis_slope(dv, W, nu);
     M[0] = M[2] = 0;
     for (int j = 0; j < nv; j++)
-        M[0] = dmax(M[0], rational_curve_second(du, P + 3 * j * nu, 3, W + j * nu, 1));
+        M[0] = dmax(M[0], dmin(rational_curve_second(du, P + 3 * j * nu, 3, W + j * nu, 1),
+                               rational_curve_second_tight(du, P + 3 * j * nu, 3, W + j * nu, 1)));
     for (int i = 0; i < nu; i++)
-        M[2] = dmax(M[2], rational_curve_second(dv, P + 3 * i, 3 * nu, W + i, nu));
+        M[2] = dmax(M[2], dmin(rational_curve_second(dv, P + 3 * i, 3 * nu, W + i, nu),
+                               rational_curve_second_tight(dv, P + 3 * i, 3 * nu, W + i, nu)));
     return true;
 }
 
