@@ -451,6 +451,14 @@ tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts, 
      * module (some 0.4 s of shared libraries) is opened */
     if (access(path, R_OK) != 0)
         return tsr_error_set(err, TSR_ERR_IO, "%s: %s", path, strerror(errno));
+    /* a pipe or device is read by no format here (they seek, or ask the
+     * size first): said, rather than "empty file" */
+    struct stat ps;
+    if (stat(path, &ps) == 0 && !S_ISREG(ps.st_mode) && !S_ISDIR(ps.st_mode))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT,
+                             "%s: not a regular file (a pipe or device): inputs are read from files; save it to one "
+                             "first",
+                             path);
     if (o->raw_type != TSR_RAW_NONE)
         s = load_raw(path, o, &hf, alloc, err);
     else if (o->decode == TSR_DECODE_NONE && tsr_pnm_is_grey(path))

@@ -215,6 +215,11 @@ tsr_status tsr_read_file(const char *path, uint64_t max_bytes, const tsr_allocat
         return tsr_error_set(err, errno == ENOENT ? TSR_ERR_NOT_FOUND : TSR_ERR_IO, "%s: %s", path, strerror(errno));
     if (S_ISDIR(st.st_mode))
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: is a folder, not a file", path);
+    if (!S_ISREG(st.st_mode))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT,
+                             "%s: not a regular file (a pipe or device): inputs are read from files; save it to one "
+                             "first",
+                             path);
     if (st.st_size == 0)
         return tsr_error_set(err, TSR_ERR_EMPTY, "%s: empty file (0 bytes)", path);
     if ((uint64_t)st.st_size > max_bytes || (uint64_t)st.st_size >= SIZE_MAX)

@@ -14,7 +14,12 @@ missing_file)
   expect_error 1 "nope\.png: No such file" -- "$tessera" info "$dir/nope.png"
   expect_error 1 "nope\.png: No such file" -- "$tessera" mesh "$dir/nope.png" -o "$out" ;;
 empty_file)
-  expect_error 1 "empty\.png: empty file" -- "$tessera" mesh "$dir/empty.png" -o "$out" ;;
+  expect_error 1 "empty\.png: empty file" -- "$tessera" mesh "$dir/empty.png" -o "$out"
+  # a pipe is said to be one (no format here reads one), without blocking on it
+  mkfifo "$dir/pipe.png" "$dir/pipe.obj"
+  expect_error 1 "pipe\.png: not a regular file \(a pipe or device\)" -- timeout 20 "$tessera" mesh "$dir/pipe.png" -o "$out"
+  expect_error 1 "pipe\.obj: not a regular file \(a pipe or device\)" -- timeout 20 "$tessera" patch "$dir/pipe.obj" -o "$out"
+  rm -f "$dir/pipe.png" "$dir/pipe.obj" ;;
 truncated_png)
   "$tessera" generate --size 64 -o "$dir/good.png" 2>/dev/null || fail "generate failed"
   head -c 600 "$dir/good.png" > "$dir/truncated.png"; rm "$dir/good.png"
