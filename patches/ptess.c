@@ -4124,6 +4124,15 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
     /* the trim loops, meeting the lattice points where they pass within
      * a hair of them (lat_grid) */
     double hair_u = 1e-9 * (s->domain[1] - s->domain[0]), hair_v = 1e-9 * (s->domain[3] - s->domain[2]);
+    /* loop points this near the domain's border go onto it: a CAD file's
+     * loop along a face's own boundary is accurate to 1e-6 to 1e-4 of it,
+     * and a loop 1e-6 inside left a sliver of the face out, a crack beside
+     * its neighbour. Moving a point by trim_tol_uv at most moves the
+     * surface by half the bound (trim_tol_uv's own derivation), within what
+     * the trimmed boundary may deviate anyway; and 1e-3 of the domain at
+     * most */
+    double snap_u = fmax(hair_u, fmin(trim_tol_uv, 1e-3 * (s->domain[1] - s->domain[0]))),
+           snap_v = fmax(hair_v, fmin(trim_tol_uv, 1e-3 * (s->domain[3] - s->domain[2])));
     lat_grid lg;
     if (!lat_build(&lg, xy, (uint32_t)np, s->domain, hu, hv, a) && st == TSR_OK)
         st = TSR_ERR_NOMEM;
@@ -4185,8 +4194,8 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
          * polyline still decides which triangles are kept (trim_keeps). */
         for (uint32_t k = 0; k < cnt; k++) {
             double *u = pts + 2 * k, *v = u + 1;
-            *u = *u < s->domain[0] + hair_u ? s->domain[0] : *u > s->domain[1] - hair_u ? s->domain[1] : *u;
-            *v = *v < s->domain[2] + hair_v ? s->domain[2] : *v > s->domain[3] - hair_v ? s->domain[3] : *v;
+            *u = *u < s->domain[0] + snap_u ? s->domain[0] : *u > s->domain[1] - snap_u ? s->domain[1] : *u;
+            *v = *v < s->domain[2] + snap_v ? s->domain[2] : *v > s->domain[3] - snap_v ? s->domain[3] : *v;
         }
         uint8_t *side = NULL;
         if (!lat_meet(&lg, &pts, &cnt, hair_u, hair_v, a) || !(side = tsr_alloc(a, cnt ? cnt : 1))) {

@@ -211,6 +211,41 @@ echo "ok T-configuration linked: one disc, no gap"
 grep -q "^view-independent .* FAIL.* gaps [1-9]" "$dir/tcrack.txt" || fail "tcrack: no gaps: $(grep ^view "$dir/tcrack.txt")"
 echo "ok a crack narrower than the tolerance fails:$(grep -o ' FAIL.*' "$dir/tcrack.txt" | head -1)"
 
+# two unit squares side by side, each trimmed by its own border given to
+# 1e-6 (as CAD files give it): the loops' points that near the border go
+# onto it, so the faces meet without a sliver between them
+cat > "$dir/trimmed_pair.obj" <<'OBJ'
+v 0 0 0
+v 1 0 0
+v 0 1 0
+v 1 1 0
+v 1 0 0
+v 2 0 0
+v 1 1 0
+v 2 1 0
+vp 0.000001 -0.000001
+vp 1.000001 0.000001
+vp 0.999999 1.000001
+vp -0.000001 0.999999
+vp 0.000001 -0.000001
+cstype bspline
+deg 1
+curv2 1 2 3 4 5
+parm u 0 0 0.25 0.5 0.75 1 1
+end
+cstype bezier
+deg 1 1
+surf 0 1 0 1 1 2 3 4
+trim 0 1 1
+end
+surf 0 1 0 1 5 6 7 8
+trim 0 1 1
+end
+OBJ
+"$tessera" check patches "$dir/trimmed_pair.obj" --cameras 0 > "$dir/tp.txt" 2>&1 ||
+  fail "faces trimmed by their own borders to 1e-6: $(cat "$dir/tp.txt")"
+echo "ok faces trimmed by their own borders to 1e-6 meet"
+
 # bad input fails cleanly, naming the file
 expect_bad "missing file" "$dir/missing.bpt"
 : > "$dir/empty.obj"
