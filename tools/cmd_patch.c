@@ -373,9 +373,9 @@ static int run(int argc, char **argv)
      * other way (a crack narrower than the tolerance where surfaces meet
      * with different vertices); on untrimmed patches of a set only (a
      * cage's open edges are open by contract, trim curves are not joined) */
-    uint32_t gaps = 0;
+    uint32_t gaps = 0, trim_seams = 0;
     if (validated && !pm.is_subd && !opt.camera)
-        cli_patch_gaps(pm.model, &r, opt.max_error, NULL, &gaps, NULL);
+        cli_patch_gaps(pm.model, &r, opt.max_error, NULL, &gaps, &trim_seams);
     /* normals: a vertex where surfaces meet at an angle is written once
      * per side (the welded mesh above is what was validated and measured) */
     tsr_mesh split;
@@ -434,6 +434,12 @@ static int run(int argc, char **argv)
                     "tolerance %.4g (--max-level %u stops their refinement): run without --no-verify to measure "
                     "and re-tessellate, or raise --max-level\n",
                     in, r.bound, tol, opt.max_level ? opt.max_level : 10);
+        if (trim_seams)
+            fprintf(stderr,
+                    "tessera patch: %s: note: %u open edges lie along a trimmed patch's boundary within the "
+                    "tolerance: trim curves are not joined to the patches they meet, so the mesh is open there "
+                    "(tessera check patches counts them as unjoined-gaps)\n",
+                    in, trim_seams);
         if (tj || zero || gaps)
             fprintf(stderr,
                     "tessera patch: %s: warning: %u T-junctions, %u open edges along another within the tolerance "

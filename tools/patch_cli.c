@@ -363,16 +363,53 @@ bool cli_patch_gaps(const tsr_pmodel *m, const tsr_ptess_result *r, double eps, 
         free(gap);
         return false;
     }
-    for (uint32_t h = 0; h < 3 * r->mesh.triangle_count; h++) {
+    /* an untrimmed patch's open edge whose gap faces only trimmed
+     * patches' edges (a cylinder's rim against a cap's trim circle) is a
+     * trim-curve seam too, which ptess.h does not join: found as the gaps
+     * that go away with the trimmed patches' triangles left out */
+    uint32_t nt = r->mesh.triangle_count, nkeep = 0;
+    uint32_t *slot = NULL, *idx = NULL;
+    bool *gap2 = NULL, any_trimmed = false;
+    for (uint32_t t = 0; t < nt && !any_trimmed; t++) {
+        tsr_psource_info si;
+        any_trimmed = tsr_pmodel_source_info(m, r->tri_source[t], &si) && si.trimmed;
+    }
+    if (any_trimmed) {
+        slot = malloc(((size_t)nt + 1) * sizeof *slot);
+        idx = malloc((3 * (size_t)nt + 1) * sizeof *idx);
+        gap2 = malloc((3 * (size_t)nt + 1) * sizeof *gap2);
+        if (!slot || !idx || !gap2) {
+            free(slot), free(idx), free(gap2), free(gap);
+            return false;
+        }
+        for (uint32_t t = 0; t < nt; t++) {
+            tsr_psource_info si;
+            slot[t] = UINT32_MAX;
+            if (tsr_pmodel_source_info(m, r->tri_source[t], &si) && si.trimmed)
+                continue;
+            memcpy(idx + 3 * (size_t)nkeep, r->mesh.indices + 3 * (size_t)t, 3 * sizeof *idx);
+            slot[t] = nkeep++;
+        }
+        tsr_mesh view = r->mesh;
+        view.indices = idx;
+        view.triangle_count = nkeep;
+        if (tsr_mesh_find_gaps(&view, eps, gap2, NULL) != TSR_OK) {
+            free(slot), free(idx), free(gap2), free(gap);
+            return false;
+        }
+    }
+    for (uint32_t h = 0; h < 3 * nt; h++) {
         if (!gap[h])
             continue;
         tsr_psource_info si;
-        bool unjoined =
-            (unlinked && unlinked[h]) || (tsr_pmodel_source_info(m, r->tri_source[h / 3], &si) && si.trimmed);
+        bool trimmed = tsr_pmodel_source_info(m, r->tri_source[h / 3], &si) && si.trimmed;
+        bool faces_trim = any_trimmed && !trimmed && !gap2[3 * (size_t)slot[h / 3] + h % 3];
+        bool unjoined = (unlinked && unlinked[h]) || trimmed || faces_trim;
         *gaps += !unjoined;
         if (open)
             *open += unjoined;
     }
+    free(slot), free(idx), free(gap2);
     free(gap);
     return true;
 }
