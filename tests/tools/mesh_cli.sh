@@ -166,7 +166,9 @@ echo "ok --base: one bottom plane at z = $bottoms for every method and window"
 if [ -n "$data" ] && [ -f "$data/terrain/bayhills-14-2625-6369-terrainrgb.png" ]; then
   in=$data/terrain/bayhills-14-2625-6369-terrainrgb.png dec="--decode terrain-rgb" W=512 H=512
 else
-  in=$dir/t.png dec="" W=130 H=97
+  # (the generated PNG stores its 30 m spacing: placed 1 apart, as the
+  # seams below are found by column and row)
+  in=$dir/t.png dec="--dx 1 --dy 1" W=130 H=97
   echo "note: no shared data; seams on a generated heightfield"
 fi
 sx=$((W / 2 + 7)) sy=$((H / 2 - 3))
