@@ -1935,6 +1935,37 @@ static double rational_curve_second_tight(int n, const double *P, int ps, const 
         for (int k = 0; k <= dn; k++)
             N[q][k] += 2 * t[k];
     }
+    /* the rounding of N's coefficients is absolute, up to some eps times
+     * the sizes of the terms that cancel in them: bounded from the same
+     * products of absolute values, and added whole */
+    double aw1[MAXC], aw2[MAXC], aQ[MAXC], aQ1[MAXC], aQ2[MAXC], awwd[MAXC], awwdd[MAXC], awdwd[MAXC], big = 0;
+    for (int k = 0; k < n; k++)
+        aw1[k] = fabs(w1[k]);
+    for (int k = 0; k + 1 < n; k++)
+        aw2[k] = fabs(w2[k]);
+    bern_mul(w, n, aw1, n - 1, awwd);
+    bern_mul(w, n, aw2, n - 2, awwdd);
+    bern_mul(aw1, n - 1, aw1, n - 1, awdwd);
+    for (int q = 0; q < 3; q++) {
+        double acc[MAXC];
+        for (int k = 0; k <= n; k++)
+            aQ[k] = fabs(Q[q][k]);
+        for (int k = 0; k < n; k++)
+            aQ1[k] = fabs(Q1[q][k]);
+        for (int k = 0; k + 1 < n; k++)
+            aQ2[k] = fabs(Q2[q][k]);
+        bern_mul(ww, 2 * n, aQ2, n - 2, acc);
+        bern_mul(awwd, 2 * n - 1, aQ1, n - 1, t);
+        for (int k = 0; k <= dn; k++)
+            acc[k] += 2 * t[k];
+        bern_mul(awwdd, 2 * n - 2, aQ, n, t);
+        for (int k = 0; k <= dn; k++)
+            acc[k] += t[k];
+        bern_mul(awdwd, 2 * n - 2, aQ, n, t);
+        for (int k = 0; k <= dn; k++)
+            big = dmax(big, acc[k] + 2 * t[k]);
+    }
+    double slack = 64.0 * (3 * n + 4) * DBL_EPSILON * sqrt(3.0) * big;
     double bound = 0;
     for (int piece = 0; piece < CURVE_PIECES; piece++) {
         double t0 = (double)piece / CURVE_PIECES, t1 = (double)(piece + 1) / CURVE_PIECES, d[MAXC], m[3][MAXC];
@@ -1951,9 +1982,9 @@ static double rational_curve_second_tight(int n, const double *P, int ps, const 
             nmax = dmax(nmax, norm3(m[0][k], m[1][k], m[2][k]));
         if (!(dmin_ > 0))
             return INFINITY;
-        bound = dmax(bound, nmax / dmin_);
+        bound = dmax(bound, (nmax + slack) / dmin_);
     }
-    /* the arithmetic's rounding, generously */
+    /* the rest of the arithmetic's rounding, generously */
     return bound * (1 + 1e-9) + 1e-300;
 }
 
@@ -3991,8 +4022,8 @@ static int cmp_u64_asc(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* keep[t] for every triangle of tr: trim_keeps at one centroid per
- * region, a region being the triangles reached from one another across
+/* keep[t] for every triangle of tr: trim_keeps at the centroid of each
+ * region's largest triangle, a region being the triangles reached from one another across
  * edges that are no constraint (no loop's edge: a loop's polyline lies on
  * constrained edges and the domain's border, so no loop separates two
  * triangles of one region). A centroid test per triangle costs every
@@ -4021,16 +4052,23 @@ static bool trim_regions(const tsr_triangulation *tr, const tloop *loops, uint32
         for (uint32_t seed = 0; seed < tr->nt; seed++) {
             if (region[seed] != UINT32_MAX)
                 continue;
-            const uint32_t *tv = tr->tri + 3 * (size_t)seed;
-            double cen[2] = {(tr->xy[2 * tv[0]] + tr->xy[2 * tv[1]] + tr->xy[2 * tv[2]]) / 3,
-                             (tr->xy[2 * tv[0] + 1] + tr->xy[2 * tv[1] + 1] + tr->xy[2 * tv[2] + 1]) / 3};
-            uint8_t k0 = trim_keeps(loops, nloops, outer, cen);
-            uint32_t n = 0;
+            /* the region's largest triangle decides: a sliver's centroid
+             * beside a rounded crossing may fall on the other side of a
+             * loop than the constraint edges put it */
+            uint32_t n = 0, m = 0, best = seed;
+            double best_area = -1;
             stack[n++] = seed;
             region[seed] = seed;
-            while (n) {
-                uint32_t t = stack[--n];
-                keep[t] = k0;
+            while (m < n) {
+                uint32_t t = stack[m++];
+                const uint32_t *tv = tr->tri + 3 * (size_t)t;
+                const double *p0 = tr->xy + 2 * (size_t)tv[0], *p1 = tr->xy + 2 * (size_t)tv[1],
+                             *p2 = tr->xy + 2 * (size_t)tv[2];
+                double area = fabs((p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1]));
+                if (area > best_area) {
+                    best_area = area;
+                    best = t;
+                }
                 for (int k = 0; k < 3; k++) {
                     uint32_t h = 3 * t + (uint32_t)k, tw = he.twin[h];
                     if (tw == TSR_NO_TWIN || tw == TSR_NONMANIFOLD || region[tw / 3] != UINT32_MAX)
@@ -4043,6 +4081,12 @@ static bool trim_regions(const tsr_triangulation *tr, const tloop *loops, uint32
                     stack[n++] = tw / 3;
                 }
             }
+            const uint32_t *tv = tr->tri + 3 * (size_t)best;
+            double cen[2] = {(tr->xy[2 * tv[0]] + tr->xy[2 * tv[1]] + tr->xy[2 * tv[2]]) / 3,
+                             (tr->xy[2 * tv[0] + 1] + tr->xy[2 * tv[1] + 1] + tr->xy[2 * tv[2] + 1]) / 3};
+            uint8_t k0 = trim_keeps(loops, nloops, outer, cen);
+            for (uint32_t i = 0; i < n; i++)
+                keep[stack[i]] = k0;
         }
         tsr_halfedges_free(&he);
     }
@@ -4192,11 +4236,29 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
          * the lattice and the linked neighbours' points, and extra points
          * there would open T-junctions with the neighbour. The loop's whole
          * polyline still decides which triangles are kept (trim_keeps). */
+        /* the wider snap only for runs: a point with a neighbour along the
+         * loop near the same side (a lone point near the border, a bolt
+         * hole's or a tangent curve's, put onto it would be a vertex there
+         * that the linked neighbour lacks) */
+        uint8_t *near = tsr_alloc(a, cnt ? cnt : 1);
+        if (!near) {
+            tsr_free(a, pts);
+            st = TSR_ERR_NOMEM;
+            break;
+        }
+        for (uint32_t k = 0; k < cnt; k++) {
+            const double *q = pts + 2 * k;
+            near[k] = (uint8_t)((q[0] < s->domain[0] + snap_u) | (q[0] > s->domain[1] - snap_u) << 1 |
+                                (q[1] < s->domain[2] + snap_v) << 2 | (q[1] > s->domain[3] - snap_v) << 3);
+        }
         for (uint32_t k = 0; k < cnt; k++) {
             double *u = pts + 2 * k, *v = u + 1;
-            *u = *u < s->domain[0] + snap_u ? s->domain[0] : *u > s->domain[1] - snap_u ? s->domain[1] : *u;
-            *v = *v < s->domain[2] + snap_v ? s->domain[2] : *v > s->domain[3] - snap_v ? s->domain[3] : *v;
+            unsigned run = near[k] & (near[(k + cnt - 1) % cnt] | near[(k + 1) % cnt]);
+            double su = run & 3 ? snap_u : hair_u, sv = run & 12 ? snap_v : hair_v;
+            *u = *u < s->domain[0] + su ? s->domain[0] : *u > s->domain[1] - su ? s->domain[1] : *u;
+            *v = *v < s->domain[2] + sv ? s->domain[2] : *v > s->domain[3] - sv ? s->domain[3] : *v;
         }
+        tsr_free(a, near);
         uint8_t *side = NULL;
         if (!lat_meet(&lg, &pts, &cnt, hair_u, hair_v, a) || !(side = tsr_alloc(a, cnt ? cnt : 1))) {
             tsr_free(a, pts);

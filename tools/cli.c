@@ -305,7 +305,8 @@ void cli_georef_warnings(const char *cmd, const char *path, const tsr_heightfiel
      * longitude and latitude: most likely degrees (an Esri grid in lon/lat
      * without its .prj), and the relief then some 10^5 times too steep */
     if (g->spacing_unitless && g->has_transform && o->dx <= 0 && o->dy <= 0 &&
-        fmax(fabs(g->pixel[0]), fabs(g->pixel[1])) <= 0.01 && fabs(g->origin[0]) <= 180 && fabs(g->origin[1]) <= 90)
+        fmax(fabs(g->pixel[0]), fabs(g->pixel[1])) <= 0.01 && fabs(g->origin[0]) <= 180 && fabs(g->origin[1]) <= 90 &&
+        fmax(fabs(g->origin[0]), fabs(g->origin[1])) >= 1) /* (not a lab scan's grid at 0, 0) */
         fprintf(stderr,
                 "tessera %s: %s: warning: the file names no CRS and its cells are %g x %g at (%g, %g): "
                 "likely degrees of longitude and latitude, so x and y come out about 10^5 times too small against "

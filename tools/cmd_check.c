@@ -1013,7 +1013,7 @@ static int run_patches(int argc, char **argv)
             r->tol = tol;
         rc = patch_run_do(k == 0 && vi_model ? vi_model : p.model, k == 0 ? &vi_info : &info, p.subd, &base, per_side,
                           retries, 1e-6 * diag, assume_linked, r);
-        if (rc == CLI_OK && !max_level && !r->failed[0] && !(r->meas.max_error <= r->tol * (1 + 1e-9))) {
+        if (rc == CLI_OK && !max_level && !r->failed[0] && r->meas.max_error > r->tol * (1 + 1e-9)) {
             /* as tessera patch does: the default depth did not reach the
              * tolerance, so once more as deep as the quadtree goes */
             patch_run deep = {0};

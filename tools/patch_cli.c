@@ -73,25 +73,33 @@ bool cli_patch_model_load_weld(const char *cmd, const char *path, const char *sc
     for (int c = 0; c < 3; c++)
         d += (info.hi[c] - info.lo[c]) * (info.hi[c] - info.lo[c]);
     out->diag = sqrt(d);
-    /* a weld as wide as half a patch joins the patch's own edges: it
-     * collapses, and what is left to measure makes no sense */
+    /* a weld as wide as half the model joins its patches' own edges: they
+     * collapse, and what is left to measure makes no sense; patches that
+     * small beside a reasonable weld (a CAD file's sliver fillet) are
+     * warned of */
+    if (weld > 0 && !out->is_subd && weld >= 0.5 * out->diag) {
+        cli_error(cmd,
+                  "%s: --weld %g is half the model's size or more (its box has a diagonal of %g): patches' "
+                  "own edges would be welded together; give less (the default is 1e-6 of the diagonal, %g)",
+                  path, weld, out->diag, 1e-6 * out->diag);
+        cli_patch_model_free(out);
+        return false;
+    }
+    uint32_t small = 0, first_small = 0;
     for (uint32_t i = 0; weld > 0 && !out->is_subd && i < out->set.num_patches; i++) {
         double lo[3], hi[3], pd = 0;
         if (tsr_patch_bounds(&out->set.patches[i], lo, hi) != TSR_OK)
             continue;
         for (int c = 0; c < 3; c++)
             pd += (hi[c] - lo[c]) * (hi[c] - lo[c]);
-        pd = sqrt(pd);
-        if (pd > 0 && weld >= 0.5 * pd) {
-            cli_error(cmd,
-                      "%s: --weld %g is half the size of patch %u or more (its control points' box has a "
-                      "diagonal of %g): the patch's own edges would be welded together; give less (the default is "
-                      "1e-6 of the model's diagonal, %g)",
-                      path, weld, i + 1, pd, 1e-6 * out->diag);
-            cli_patch_model_free(out);
-            return false;
-        }
+        if (sqrt(pd) > 0 && weld >= 0.5 * sqrt(pd) && small++ == 0)
+            first_small = i;
     }
+    if (small)
+        fprintf(stderr,
+                "tessera %s: %s: warning: %u patch%s no more than twice --weld %g across (the first: patch %u): "
+                "their own edges may be welded together\n",
+                cmd, path, small, small == 1 ? " is" : "es are", weld, first_small + 1);
     return true;
 }
 
@@ -289,7 +297,7 @@ uint32_t cli_patch_trim_warnings(const char *cmd, const char *path, const cli_pa
             }
             prev[0] = z[0], prev[1] = z[1];
         }
-        if (at)
+        if (at && !L->reordered) /* (reordered: chained within its own tolerance) */
             snprintf(msg[nm++], sizeof msg[0],
                      "has a gap between its curves #%u and #%u (of %u, as listed; %.3g apart in (u, v)): joined by a "
                      "straight edge",

@@ -370,6 +370,16 @@ assert 0 < d["max_error"] <= d["requested_max_error"], d
 PY
   expect_error 1 "spike\.obj: measured error [0-9.e+-]* is above [0-9.e+-]* even after re-tessellating 1 patch finer \(down to --max-level 10; --max-level 12 lets" -- \
     "$tessera" patch "$dir/spike.obj" -o "$out" --max-level 10 --quiet
+  # a --weld of half the model is refused; one of half a small patch is
+  # warned of (a 10 x 10 plate beside a 0.01 x 0.01 one)
+  printf 'v 0 0 0\nv 10 0 0\nv 0 10 0\nv 10 10 0\nv 20 0 0\nv 20.01 0 0\nv 20 0.01 0\nv 20.01 0.01 0\n' > "$dir/plates.obj"
+  printf 'cstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nend\nsurf 0 1 0 1 5 6 7 8\nend\n' >> "$dir/plates.obj"
+  expect_error 1 "plates\.obj: --weld 20 is half the model's size or more" -- \
+    "$tessera" patch "$dir/plates.obj" -o "$out" --weld 20
+  "$tessera" patch "$dir/plates.obj" -o "$dir/plates.ply" --weld 0.01 2> "$cap/stderr" || fail "plates: $(cat "$cap/stderr")"
+  grep -q "plates\.obj: warning: 1 patch is no more than twice --weld 0.01 across (the first: patch 2)" "$cap/stderr" ||
+    fail "plates --weld 0.01: $(cat "$cap/stderr")"
+  rm -f "$dir/plates.obj" "$dir/plates.ply"
   # check patches agrees with patch: its run goes to depth 12 too, and passes
   "$tessera" check patches "$dir/spike.obj" --cameras 0 > "$cap/stdout" 2>&1 ||
     fail "check of the spike: $(cat "$cap/stdout")"
