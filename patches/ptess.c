@@ -1787,6 +1787,19 @@ static double rational_basis_slope(int n, const double *a, int stride)
     return n * (amax + n * da) / amin;
 }
 
+/* The centre of the box of points P[0..n] (stride ps doubles). */
+static void box_centre(int n, const double *P, int ps, double c[3])
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int k = 0; k <= n; k++)
+        for (int q = 0; q < 3; q++) {
+            lo[q] = dmin(lo[q], P[k * ps + q]);
+            hi[q] = dmax(hi[q], P[k * ps + q]);
+        }
+    for (int q = 0; q < 3; q++)
+        c[q] = 0.5 * (lo[q] + hi[q]);
+}
+
 /* A bound of the second derivative's length of the rational Bézier
  * curve of degree n with points P (stride ps doubles) and weights W
  * (stride ws), over [0,1]: the quotient rule about the centre c of the
@@ -1798,14 +1811,8 @@ static double rational_curve_second(int n, const double *P, int ps, const double
 {
     if (n < 2 && W[0] == W[wst])
         return 0;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, c[3];
-    for (int k = 0; k <= n; k++)
-        for (int q = 0; q < 3; q++) {
-            lo[q] = dmin(lo[q], P[k * ps + q]);
-            hi[q] = dmax(hi[q], P[k * ps + q]);
-        }
-    for (int q = 0; q < 3; q++)
-        c[q] = 0.5 * (lo[q] + hi[q]);
+    double c[3];
+    box_centre(n, P, ps, c);
     double A = 0, wmin = INFINITY, qs = 0, qss = 0, ps1 = 0, dw = 0, dww = 0;
     for (int k = 0; k <= n; k++) {
         const double *p0 = P + k * ps;
@@ -1889,14 +1896,8 @@ static double rational_curve_second_tight(int n, const double *P, int ps, const 
     enum { MAXC = 3 * TSR_BEZIER_MAX_DEGREE + 1 };
     if (n < 2 || n > TSR_BEZIER_MAX_DEGREE)
         return INFINITY;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, c[3];
-    for (int k = 0; k <= n; k++)
-        for (int q = 0; q < 3; q++) {
-            lo[q] = dmin(lo[q], P[k * ps + q]);
-            hi[q] = dmax(hi[q], P[k * ps + q]);
-        }
-    for (int q = 0; q < 3; q++)
-        c[q] = 0.5 * (lo[q] + hi[q]);
+    double c[3];
+    box_centre(n, P, ps, c);
     double w[MAXC], w1[MAXC], w2[MAXC], Q[3][MAXC], Q1[3][MAXC], Q2[3][MAXC];
     for (int k = 0; k <= n; k++) {
         w[k] = W[k * wst];
