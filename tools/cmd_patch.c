@@ -338,13 +338,32 @@ static int run(int argc, char **argv)
     }
     if (rc == CLI_OK && verify && meas.max_error > tol) {
         uint32_t ml = opt.max_level ? opt.max_level : 10;
+        /* with a camera, float32 positions may be what fails: a step of
+         * them at the model's nearest point, in pixels */
+        char why[256] = "";
+        if (opt.camera) {
+            tsr_pmodel_info bi;
+            tsr_pmodel_get_info(pm.model, &bi);
+            double d2 = 0;
+            for (int k = 0; k < 3; k++) {
+                double e = opt.camera->eye[k], dd = e < bi.lo[k] ? bi.lo[k] - e : e > bi.hi[k] ? e - bi.hi[k] : 0;
+                d2 += dd * dd;
+            }
+            double px = step * opt.camera->K / fmax(sqrt(d2), opt.camera->near_dist);
+            if (px >= 0.25 * tol)
+                snprintf(why, sizeof why,
+                         "; coordinates as large as %g are stored in float32 steps of %.3g, about %.3g px from this "
+                         "camera: move the model nearer the origin",
+                         maxabs, step, px);
+        }
         cli_error("patch",
                   "%s: measured error %.6g is above %.6g even after re-tessellating %u patch%s finer "
-                  "(down to --max-level %u%s)",
+                  "(down to --max-level %u%s)%s",
                   in, meas.max_error, tol, tightened, tightened == 1 ? "" : "es", ml,
                   ml < 12 ? "; --max-level 12 lets each patch's quadtree go deeper, where features narrower than "
                             "its finest tiles (a weight far above the others) need it"
-                          : "; the deepest it goes");
+                          : "; the deepest it goes",
+                  why);
         rc = CLI_FAIL;
     } else if (rc == CLI_OK && verify && meas.uncovered) {
         cli_error("patch",

@@ -380,6 +380,15 @@ PY
   grep -q "plates\.obj: warning: 1 patch is no more than twice --weld 0.01 across (the first: patch 2)" "$cap/stderr" ||
     fail "plates --weld 0.01: $(cat "$cap/stderr")"
   rm -f "$dir/plates.obj" "$dir/plates.ply"
+  # a unit octant a million units out, seen from 2 units: float32 steps of
+  # 0.0625 are tens of pixels there, which the failure says
+  h=0.70710678118654757
+  { for r in "1 0 0 1" "1 1 0 $h" "0 1 0 1" "1 0 1 $h" "1 1 1 0.5" "0 1 1 $h" "0 0 1 1" "0 0 1 $h" "0 0 1 1"; do
+      set -- $r; echo "v $(( $1 + 1000000 )) $(( $2 + 1000000 )) $3 $4"; done
+    printf 'cstype rat bezier\ndeg 2 2\nsurf 0 1 0 1 1 2 3 4 5 6 7 8 9\nend\n'; } > "$dir/far_octant.obj"
+  expect_error 1 "far_octant\.obj: measured error .* float32 steps of 0.0625, about [0-9.]* px from this camera" -- \
+    "$tessera" patch "$dir/far_octant.obj" -o "$out" --pixel-error 1 --camera 1000003,1000002,0.5,1000000,1000000,0.5 --quiet
+  rm -f "$dir/far_octant.obj"
   # check patches agrees with patch: its run goes to depth 12 too, and passes
   "$tessera" check patches "$dir/spike.obj" --cameras 0 > "$cap/stdout" 2>&1 ||
     fail "check of the spike: $(cat "$cap/stdout")"
