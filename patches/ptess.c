@@ -1879,6 +1879,27 @@ static void bern_restrict(double *c, int n, double t0, double t1)
             c[i] = (1 - u) * c[i] + u * c[i + 1];
 }
 
+/* N = ww Q2 + s (2 wwd Q1 + wwdd Q) + 2 wdwd Q of degree 3n - 2 (the
+ * weights' products given): s = -1 gives C'''s numerator below; with the
+ * absolute values of every factor and s = 1, a bound of the sizes that
+ * cancel in it. */
+static void curve_numerator(int n, const double *ww, const double *wwd, const double *wwdd, const double *wdwd,
+                            const double *Q, const double *Q1, const double *Q2, double s, double *out)
+{
+    double t[3 * TSR_BEZIER_MAX_DEGREE + 1];
+    int dn = 3 * n - 2;
+    bern_mul(ww, 2 * n, Q2, n - 2, out);
+    bern_mul(wwd, 2 * n - 1, Q1, n - 1, t);
+    for (int k = 0; k <= dn; k++)
+        out[k] += 2 * s * t[k];
+    bern_mul(wwdd, 2 * n - 2, Q, n, t);
+    for (int k = 0; k <= dn; k++)
+        out[k] += s * t[k];
+    bern_mul(wdwd, 2 * n - 2, Q, n, t);
+    for (int k = 0; k <= dn; k++)
+        out[k] += 2 * t[k];
+}
+
 #define CURVE_PIECES 4 /* a rational curve's bound is the largest of that many parts' */
 
 /* A tighter bound of |C''| for the rational Bézier curve of degree n with
@@ -1917,54 +1938,37 @@ static double rational_curve_second_tight(int n, const double *P, int ps, const 
             Q2[q][k] = (n - 1) * (Q1[q][k + 1] - Q1[q][k]);
     }
     /* the weights' products, then N's terms, all of degree 3n - 2 */
-    double ww[MAXC], wwd[MAXC], wwdd[MAXC], wdwd[MAXC], D[MAXC], N[3][MAXC], t[MAXC];
+    double ww[MAXC], wwd[MAXC], wwdd[MAXC], wdwd[MAXC], D[MAXC], N[3][MAXC];
     bern_mul(w, n, w, n, ww);             /* 2n */
     bern_mul(w, n, w1, n - 1, wwd);       /* 2n - 1 */
     bern_mul(w, n, w2, n - 2, wwdd);      /* 2n - 2 */
     bern_mul(w1, n - 1, w1, n - 1, wdwd); /* 2n - 2 */
     bern_mul(ww, 2 * n, w, n, D);         /* 3n */
     int dn = 3 * n - 2;
-    for (int q = 0; q < 3; q++) {
-        bern_mul(ww, 2 * n, Q2[q], n - 2, N[q]);
-        bern_mul(wwd, 2 * n - 1, Q1[q], n - 1, t);
-        for (int k = 0; k <= dn; k++)
-            N[q][k] -= 2 * t[k];
-        bern_mul(wwdd, 2 * n - 2, Q[q], n, t);
-        for (int k = 0; k <= dn; k++)
-            N[q][k] -= t[k];
-        bern_mul(wdwd, 2 * n - 2, Q[q], n, t);
-        for (int k = 0; k <= dn; k++)
-            N[q][k] += 2 * t[k];
-    }
+    for (int q = 0; q < 3; q++)
+        curve_numerator(n, ww, wwd, wwdd, wdwd, Q[q], Q1[q], Q2[q], -1, N[q]);
     /* the rounding of N's coefficients is absolute, up to some eps times
      * the sizes of the terms that cancel in them: bounded from the same
      * products of absolute values, and added whole */
-    double aw1[MAXC], aw2[MAXC], aQ[MAXC], aQ1[MAXC], aQ2[MAXC], awwd[MAXC], awwdd[MAXC], awdwd[MAXC], big = 0;
+    double aw1[MAXC], aw2[MAXC], aQ[3][MAXC], aQ1[3][MAXC], aQ2[3][MAXC], awwd[MAXC], awwdd[MAXC], awdwd[MAXC], big = 0;
     for (int k = 0; k < n; k++)
         aw1[k] = fabs(w1[k]);
     for (int k = 0; k + 1 < n; k++)
         aw2[k] = fabs(w2[k]);
+    for (int q = 0; q < 3; q++)
+        for (int k = 0; k <= n; k++) {
+            aQ[q][k] = fabs(Q[q][k]);
+            aQ1[q][k] = k < n ? fabs(Q1[q][k]) : 0;
+            aQ2[q][k] = k + 1 < n ? fabs(Q2[q][k]) : 0;
+        }
     bern_mul(w, n, aw1, n - 1, awwd);
     bern_mul(w, n, aw2, n - 2, awwdd);
     bern_mul(aw1, n - 1, aw1, n - 1, awdwd);
     for (int q = 0; q < 3; q++) {
         double acc[MAXC];
-        for (int k = 0; k <= n; k++)
-            aQ[k] = fabs(Q[q][k]);
-        for (int k = 0; k < n; k++)
-            aQ1[k] = fabs(Q1[q][k]);
-        for (int k = 0; k + 1 < n; k++)
-            aQ2[k] = fabs(Q2[q][k]);
-        bern_mul(ww, 2 * n, aQ2, n - 2, acc);
-        bern_mul(awwd, 2 * n - 1, aQ1, n - 1, t);
+        curve_numerator(n, ww, awwd, awwdd, awdwd, aQ[q], aQ1[q], aQ2[q], 1, acc);
         for (int k = 0; k <= dn; k++)
-            acc[k] += 2 * t[k];
-        bern_mul(awwdd, 2 * n - 2, aQ, n, t);
-        for (int k = 0; k <= dn; k++)
-            acc[k] += t[k];
-        bern_mul(awdwd, 2 * n - 2, aQ, n, t);
-        for (int k = 0; k <= dn; k++)
-            big = dmax(big, acc[k] + 2 * t[k]);
+            big = dmax(big, acc[k]);
     }
     double slack = 64.0 * (3 * n + 4) * DBL_EPSILON * sqrt(3.0) * big;
     double bound = 0;
@@ -2059,14 +2063,8 @@ static void bezier_second(int du, int dv, const double *P, const double *W, doub
         M[2] = fvv * sqrt(qtt);
         return;
     }
-    double c[3], lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int k = 0; W && k < nu * nv; k++)
-        for (int q = 0; q < 3; q++) {
-            lo[q] = dmin(lo[q], P[3 * k + q]);
-            hi[q] = dmax(hi[q], P[3 * k + q]);
-        }
-    for (int q = 0; q < 3; q++)
-        c[q] = W ? 0.5 * (lo[q] + hi[q]) : 0;
+    double c[3];
+    box_centre(nu * nv - 1, P, 3, c);
     double Q[3 * TSR_BEZIER_MAX_POINTS], A = 0, wmin = INFINITY;
     for (int k = 0; k < nu * nv; k++) {
         double w = W ? W[k] : 1;
@@ -4039,19 +4037,18 @@ static bool trim_regions(const tsr_triangulation *tr, const tloop *loops, uint32
     view.vertex_count = tr->nv;
     tsr_halfedges he;
     uint64_t *cons = tsr_alloc(a, ((size_t)tr->nedge + 1) * sizeof *cons);
-    uint32_t *region = tsr_alloc(a, ((size_t)tr->nt + 1) * sizeof *region);
+    uint8_t *seen = tsr_alloc(a, (size_t)tr->nt + 1); /* reached by some region's flood */
     uint32_t *stack = tsr_alloc(a, ((size_t)tr->nt + 1) * sizeof *stack);
-    bool ok = cons && region && stack && tsr_halfedges_build(&he, &view, a) == TSR_OK;
+    bool ok = cons && seen && stack && tsr_halfedges_build(&he, &view, a) == TSR_OK;
     if (ok) {
         for (uint32_t e = 0; e < tr->nedge; e++) {
             uint32_t u = tr->edge[2 * e], v = tr->edge[2 * e + 1];
             cons[e] = u < v ? (uint64_t)u << 32 | v : (uint64_t)v << 32 | u;
         }
         qsort(cons, tr->nedge, sizeof *cons, cmp_u64_asc);
-        for (uint32_t t = 0; t < tr->nt; t++)
-            region[t] = UINT32_MAX;
+        memset(seen, 0, tr->nt);
         for (uint32_t seed = 0; seed < tr->nt; seed++) {
-            if (region[seed] != UINT32_MAX)
+            if (seen[seed])
                 continue;
             /* the region's largest triangle decides: a sliver's centroid
              * beside a rounded crossing may fall on the other side of a
@@ -4059,7 +4056,7 @@ static bool trim_regions(const tsr_triangulation *tr, const tloop *loops, uint32
             uint32_t n = 0, m = 0, best = seed;
             double best_area = -1;
             stack[n++] = seed;
-            region[seed] = seed;
+            seen[seed] = 1;
             while (m < n) {
                 uint32_t t = stack[m++];
                 const uint32_t *tv = tr->tri + 3 * (size_t)t;
@@ -4072,13 +4069,13 @@ static bool trim_regions(const tsr_triangulation *tr, const tloop *loops, uint32
                 }
                 for (int k = 0; k < 3; k++) {
                     uint32_t h = 3 * t + (uint32_t)k, tw = he.twin[h];
-                    if (tw == TSR_NO_TWIN || tw == TSR_NONMANIFOLD || region[tw / 3] != UINT32_MAX)
+                    if (tw == TSR_NO_TWIN || tw == TSR_NONMANIFOLD || seen[tw / 3])
                         continue;
                     uint32_t u = tr->tri[h], v = tr->tri[3 * t + (uint32_t)(k + 1) % 3];
                     uint64_t key = u < v ? (uint64_t)u << 32 | v : (uint64_t)v << 32 | u;
                     if (bsearch(&key, cons, tr->nedge, sizeof *cons, cmp_u64_asc))
                         continue;
-                    region[tw / 3] = seed;
+                    seen[tw / 3] = 1;
                     stack[n++] = tw / 3;
                 }
             }
@@ -4092,7 +4089,7 @@ static bool trim_regions(const tsr_triangulation *tr, const tloop *loops, uint32
         tsr_halfedges_free(&he);
     }
     tsr_free(a, cons);
-    tsr_free(a, region);
+    tsr_free(a, seen);
     tsr_free(a, stack);
     return ok;
 }
@@ -4241,25 +4238,20 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
          * loop near the same side (a lone point near the border, a bolt
          * hole's or a tangent curve's, put onto it would be a vertex there
          * that the linked neighbour lacks) */
-        uint8_t *near = tsr_alloc(a, cnt ? cnt : 1);
-        if (!near) {
-            tsr_free(a, pts);
-            st = TSR_ERR_NOMEM;
-            break;
-        }
-        for (uint32_t k = 0; k < cnt; k++) {
-            const double *q = pts + 2 * k;
-            near[k] = (uint8_t)((q[0] < s->domain[0] + snap_u) | (q[0] > s->domain[1] - snap_u) << 1 |
-                                (q[1] < s->domain[2] + snap_v) << 2 | (q[1] > s->domain[3] - snap_v) << 3);
-        }
+        /* (the neighbour before may be snapped already: onto the side it
+         * was near, so it is near the same sides) */
+#define NEAR_SIDES(q)                                                                                                  \
+    ((unsigned)((q)[0] < s->domain[0] + snap_u) | (unsigned)((q)[0] > s->domain[1] - snap_u) << 1 |                    \
+     (unsigned)((q)[1] < s->domain[2] + snap_v) << 2 | (unsigned)((q)[1] > s->domain[3] - snap_v) << 3)
         for (uint32_t k = 0; k < cnt; k++) {
             double *u = pts + 2 * k, *v = u + 1;
-            unsigned run = near[k] & (near[(k + cnt - 1) % cnt] | near[(k + 1) % cnt]);
+            unsigned run =
+                NEAR_SIDES(u) & (NEAR_SIDES(pts + 2 * ((k + cnt - 1) % cnt)) | NEAR_SIDES(pts + 2 * ((k + 1) % cnt)));
             double su = run & 3 ? snap_u : hair_u, sv = run & 12 ? snap_v : hair_v;
             *u = *u < s->domain[0] + su ? s->domain[0] : *u > s->domain[1] - su ? s->domain[1] : *u;
             *v = *v < s->domain[2] + sv ? s->domain[2] : *v > s->domain[3] - sv ? s->domain[3] : *v;
         }
-        tsr_free(a, near);
+#undef NEAR_SIDES
         uint8_t *side = NULL;
         if (!lat_meet(&lg, &pts, &cnt, hair_u, hair_v, a) || !(side = tsr_alloc(a, cnt ? cnt : 1))) {
             tsr_free(a, pts);
