@@ -1011,8 +1011,9 @@ static int run_patches(int argc, char **argv)
         patch_run *r = &runs[k];
         if (k == 0)
             r->tol = tol;
-        rc = patch_run_do(k == 0 && vi_model ? vi_model : p.model, k == 0 ? &vi_info : &info, p.subd, &base, per_side,
-                          retries, 1e-6 * diag, assume_linked, r);
+        const tsr_pmodel *rm = k == 0 && vi_model ? vi_model : p.model;
+        const tsr_pmodel_info *ri = k == 0 ? &vi_info : &info;
+        rc = patch_run_do(rm, ri, p.subd, &base, per_side, retries, 1e-6 * diag, assume_linked, r);
         if (rc == CLI_OK && !max_level && !r->failed[0] && r->meas.max_error > r->tol * (1 + 1e-9)) {
             /* as tessera patch does: the default depth did not reach the
              * tolerance, so once more as deep as the quadtree goes */
@@ -1022,8 +1023,7 @@ static int run_patches(int argc, char **argv)
             deep.tol = r->tol;
             tsr_ptess_options b12 = base;
             b12.max_level = 12;
-            rc = patch_run_do(k == 0 && vi_model ? vi_model : p.model, k == 0 ? &vi_info : &info, p.subd, &b12,
-                              per_side, retries, 1e-6 * diag, assume_linked, &deep);
+            rc = patch_run_do(rm, ri, p.subd, &b12, per_side, retries, 1e-6 * diag, assume_linked, &deep);
             deep.deeper = true;
             *r = deep;
         }

@@ -374,26 +374,34 @@ bool cli_patch_gaps(const tsr_pmodel *m, const tsr_ptess_result *r, double eps, 
     /* an untrimmed patch's open edge whose gap faces only trimmed
      * patches' edges (a cylinder's rim against a cap's trim circle) is a
      * trim-curve seam too, which ptess.h does not join: found as the gaps
-     * that go away with the trimmed patches' triangles left out */
+     * that go away with the trimmed patches' triangles left out (a second
+     * search, only where an untrimmed patch has a gap at all) */
     uint32_t nt = r->mesh.triangle_count, nkeep = 0;
+    tsr_pmodel_info info;
+    tsr_pmodel_get_info(m, &info);
+    bool *trimmed = malloc(((size_t)info.sources + 1) * sizeof *trimmed), any_trimmed = false, untrimmed_gap = false;
     uint32_t *slot = NULL, *idx = NULL;
-    bool *gap2 = NULL, any_trimmed = false;
-    for (uint32_t t = 0; t < nt && !any_trimmed; t++) {
-        tsr_psource_info si;
-        any_trimmed = tsr_pmodel_source_info(m, r->tri_source[t], &si) && si.trimmed;
+    bool *gap2 = NULL;
+    if (!trimmed) {
+        free(gap);
+        return false;
     }
-    if (any_trimmed) {
+    for (uint32_t k = 0; k < info.sources; k++) {
+        tsr_psource_info si;
+        trimmed[k] = tsr_pmodel_source_info(m, k, &si) && si.trimmed;
+        any_trimmed |= trimmed[k];
+    }
+#define TRIMMED(t) (r->tri_source[t] < info.sources && trimmed[r->tri_source[t]])
+    for (uint32_t h = 0; any_trimmed && !untrimmed_gap && h < 3 * nt; h++)
+        untrimmed_gap = gap[h] && !TRIMMED(h / 3);
+    if (untrimmed_gap) {
         slot = malloc(((size_t)nt + 1) * sizeof *slot);
         idx = malloc((3 * (size_t)nt + 1) * sizeof *idx);
         gap2 = malloc((3 * (size_t)nt + 1) * sizeof *gap2);
-        if (!slot || !idx || !gap2) {
-            free(slot), free(idx), free(gap2), free(gap);
-            return false;
-        }
-        for (uint32_t t = 0; t < nt; t++) {
-            tsr_psource_info si;
+        bool ok = slot && idx && gap2;
+        for (uint32_t t = 0; ok && t < nt; t++) {
             slot[t] = UINT32_MAX;
-            if (tsr_pmodel_source_info(m, r->tri_source[t], &si) && si.trimmed)
+            if (TRIMMED(t))
                 continue;
             memcpy(idx + 3 * (size_t)nkeep, r->mesh.indices + 3 * (size_t)t, 3 * sizeof *idx);
             slot[t] = nkeep++;
@@ -401,22 +409,22 @@ bool cli_patch_gaps(const tsr_pmodel *m, const tsr_ptess_result *r, double eps, 
         tsr_mesh view = r->mesh;
         view.indices = idx;
         view.triangle_count = nkeep;
-        if (tsr_mesh_find_gaps(&view, eps, gap2, NULL) != TSR_OK) {
-            free(slot), free(idx), free(gap2), free(gap);
+        if (!ok || tsr_mesh_find_gaps(&view, eps, gap2, NULL) != TSR_OK) {
+            free(slot), free(idx), free(gap2), free(gap), free(trimmed);
             return false;
         }
     }
     for (uint32_t h = 0; h < 3 * nt; h++) {
         if (!gap[h])
             continue;
-        tsr_psource_info si;
-        bool trimmed = tsr_pmodel_source_info(m, r->tri_source[h / 3], &si) && si.trimmed;
-        bool faces_trim = any_trimmed && !trimmed && !gap2[3 * (size_t)slot[h / 3] + h % 3];
-        bool unjoined = (unlinked && unlinked[h]) || trimmed || faces_trim;
+        bool tr = TRIMMED(h / 3), faces_trim = untrimmed_gap && !tr && !gap2[3 * (size_t)slot[h / 3] + h % 3];
+        bool unjoined = (unlinked && unlinked[h]) || tr || faces_trim;
         *gaps += !unjoined;
         if (open)
             *open += unjoined;
     }
+#undef TRIMMED
+    free(trimmed);
     free(slot), free(idx), free(gap2);
     free(gap);
     return true;
