@@ -865,6 +865,32 @@ static bool corridor(ck *c, const line *l)
  * covering the direction to p or to q (the segment would run along a kept
  * edge, or into the region, there). Vertices the piece only passes near,
  * within the tolerance, need not refuse it: the piece itself is tested. */
+/* Does used vertex r, strictly between p and q along the segment and on
+ * its line or on the piece p-q, have a kept triangle covering the
+ * direction to p or to q (gap_clear)? */
+static bool vertex_refuses(const ck *c, const line *l, uint32_t p, uint32_t q, uint32_t r)
+{
+    const double *pp = vxy(c, p), *qq = vxy(c, q), *rr = vxy(c, r);
+    if (r == q || r == p || !c->used[r] || !forward(l, pp, rr) || !forward(l, rr, qq))
+        return false;
+    if (tsr_orient2d(l->a, l->b, rr) != 0 && tsr_orient2d(pp, qq, rr) != 0)
+        return false;
+    return covers(c, r, pp) || covers(c, r, qq);
+}
+
+/* Does the interior of kept triangle corr[i] meet the piece p-q, whose
+ * box is x0..x1, y0..y1 (gap_clear)? */
+static bool triangle_refuses(const ck *c, size_t i, const double *pp, const double *qq, double x0, double x1, double y0,
+                             double y1)
+{
+    const uint32_t *v = c->out->tri + 3 * (size_t)c->corr[i];
+    const double *a = vxy(c, v[0]), *b = vxy(c, v[1]), *d = vxy(c, v[2]);
+    if (fmax(fmax(a[0], b[0]), d[0]) < x0 || fmin(fmin(a[0], b[0]), d[0]) > x1 || fmax(fmax(a[1], b[1]), d[1]) < y0 ||
+        fmin(fmin(a[1], b[1]), d[1]) > y1)
+        return false;
+    return meets_interior(c, c->corr[i], pp, qq);
+}
+
 static bool gap_clear(ck *c, const line *l, uint32_t p, size_t k)
 {
     uint32_t q = c->cand[k].v;
@@ -876,35 +902,21 @@ static bool gap_clear(ck *c, const line *l, uint32_t p, size_t k)
      * progress, and what refused one usually refuses the next: trying
      * them first keeps a long run of refused candidates linear), then the
      * vertices between, then the triangles */
-    for (int pass = 0; pass < 2; pass++)
-        for (size_t i = 0; i < (pass ? c->ncand : c->block_v != UINT32_MAX); i++) {
-            uint32_t r = pass ? c->cand[i].v : c->block_v;
-            const double *rr = vxy(c, r);
-            if (r == q || r == p || !c->used[r] || !forward(l, pp, rr) || !forward(l, rr, qq))
-                continue;
-            if (tsr_orient2d(l->a, l->b, rr) != 0 && tsr_orient2d(pp, qq, rr) != 0)
-                continue;
-            if (covers(c, r, pp) || covers(c, r, qq)) {
-                c->block_v = r;
-                return false;
-            }
+    if (c->block_v != UINT32_MAX && vertex_refuses(c, l, p, q, c->block_v))
+        return false;
+    for (size_t i = 0; i < c->ncand; i++)
+        if (vertex_refuses(c, l, p, q, c->cand[i].v)) {
+            c->block_v = c->cand[i].v;
+            return false;
         }
     double x0 = fmin(pp[0], qq[0]), x1 = fmax(pp[0], qq[0]), y0 = fmin(pp[1], qq[1]), y1 = fmax(pp[1], qq[1]);
-    for (size_t n = 0; n <= c->ncorr; n++) {
-        /* n = 0: the last refusal's triangle (when any); then corr[n - 1] */
-        size_t i = n ? n - 1 : c->block_t;
-        if (i >= c->ncorr)
-            continue;
-        const uint32_t *v = c->out->tri + 3 * (size_t)c->corr[i];
-        const double *a = vxy(c, v[0]), *b = vxy(c, v[1]), *d = vxy(c, v[2]);
-        if (fmax(fmax(a[0], b[0]), d[0]) < x0 || fmin(fmin(a[0], b[0]), d[0]) > x1 ||
-            fmax(fmax(a[1], b[1]), d[1]) < y0 || fmin(fmin(a[1], b[1]), d[1]) > y1)
-            continue;
-        if (meets_interior(c, c->corr[i], pp, qq)) {
+    if (c->block_t < c->ncorr && triangle_refuses(c, c->block_t, pp, qq, x0, x1, y0, y1))
+        return false;
+    for (size_t i = 0; i < c->ncorr; i++)
+        if (triangle_refuses(c, i, pp, qq, x0, x1, y0, y1)) {
             c->block_t = (uint32_t)i;
             return false;
         }
-    }
     return true;
 }
 
