@@ -268,12 +268,14 @@ static tsr_status load_raw(const char *path, const tsr_load_options *o, tsr_heig
 }
 
 static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_heightfield **out,
-                               const tsr_allocator *alloc, float *px, const tsr_image_info *ip, tsr_error *err);
+                               const tsr_allocator *alloc, float *px, const tsr_image_info *ip, bool *nodata_done,
+                               tsr_error *err);
 
-void tsr_georef_apply(const tsr_georef *g, bool keep_nodata, float *px, size_t n)
+void tsr_georef_apply(const tsr_georef *g, const double *nodata, float *px, size_t n)
 {
-    bool nd = g->has_nodata && !keep_nodata && !isnan(g->nodata) && fabs(g->nodata) <= FLT_MAX;
-    float ndv = nd ? (float)g->nodata : 0;
+    double v = nodata ? *nodata : g->has_nodata ? g->nodata : NAN;
+    bool nd = !isnan(v) && fabs(v) <= FLT_MAX;
+    float ndv = nd ? (float)v : 0;
     double scale = g->z_scale, offset = g->z_offset;
     if (!nd && scale == 1 && offset == 0)
         return;
@@ -285,8 +287,9 @@ void tsr_georef_apply(const tsr_georef *g, bool keep_nodata, float *px, size_t n
     }
 }
 
-/* A GIS raster OpenImageIO could not open, through GDAL; *nodata_done
- * when the file's no-data samples are NaN already. */
+/* A GIS raster OpenImageIO could not open, through GDAL; *nodata_done:
+ * the no-data samples (the value asked for, else the file's) are NaN
+ * already. */
 static tsr_status load_gis(const char *path, const tsr_load_options *o, tsr_heightfield **out,
                            const tsr_allocator *alloc, bool *nodata_done, tsr_error *err)
 {
@@ -297,7 +300,7 @@ static tsr_status load_gis(const char *path, const tsr_load_options *o, tsr_heig
     tsr_status s = tsr_gdal_read(path, alloc, TSR_HEIGHTFIELD_MAX_SAMPLES, &px, &w, &h, format, &g, err);
     if (s != TSR_OK)
         return s;
-    tsr_georef_apply(&g, o->has_nodata, px, (size_t)w * h);
+    tsr_georef_apply(&g, o->has_nodata ? &o->nodata : NULL, px, (size_t)w * h);
     tsr_heightfield *hf = adopt(w, h, px, alloc);
     if (!hf) {
         tsr_free(alloc, px);
@@ -306,7 +309,7 @@ static tsr_status load_gis(const char *path, const tsr_load_options *o, tsr_heig
     snprintf(hf->source_format, sizeof hf->source_format, "%s", format);
     hf->georef = g;
     hf->has_georef = g.has_transform || g.crs != TSR_CRS_NONE || g.has_nodata || g.z_scale != 1 || g.z_offset != 0;
-    *nodata_done = !o->has_nodata;
+    *nodata_done = true;
     *out = hf;
     return TSR_OK;
 }
@@ -329,7 +332,7 @@ static tsr_status load_image(const char *path, const tsr_load_options *o, tsr_he
     }
     if (s != TSR_OK)
         return s;
-    tsr_status hs = finish_image(path, o, out, alloc, px, &info, err);
+    tsr_status hs = finish_image(path, o, out, alloc, px, &info, nodata_done, err);
     if (hs == TSR_OK && !strcmp(info.format, "tiff") && !info.has_scale && o->decode == TSR_DECODE_NONE) {
         /* a GeoTIFF: its georeferencing, its no-data value and its
          * heights' scale and offset (GDAL's metadata), which OpenImageIO
@@ -337,8 +340,8 @@ static tsr_status load_image(const char *path, const tsr_load_options *o, tsr_he
         tsr_heightfield *hf = *out;
         hf->has_georef = tsr_gdal_georef(path, info.width, info.height, &hf->georef);
         if (hf->has_georef) {
-            tsr_georef_apply(&hf->georef, o->has_nodata, hf->data, (size_t)hf->width * hf->height);
-            *nodata_done = !o->has_nodata;
+            tsr_georef_apply(&hf->georef, o->has_nodata ? &o->nodata : NULL, hf->data, (size_t)hf->width * hf->height);
+            *nodata_done = true;
         }
     }
     if (hs == TSR_OK && info.has_spacing && !(*out)->georef.has_spacing) {
@@ -357,7 +360,8 @@ static tsr_status load_image(const char *path, const tsr_load_options *o, tsr_he
 }
 
 static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_heightfield **out,
-                               const tsr_allocator *alloc, float *px, const tsr_image_info *ip, tsr_error *err)
+                               const tsr_allocator *alloc, float *px, const tsr_image_info *ip, bool *nodata_done,
+                               tsr_error *err)
 {
     tsr_image_info info = *ip;
     if (info.width < TSR_HEIGHTFIELD_MIN_SIDE || info.height < TSR_HEIGHTFIELD_MIN_SIDE) {
@@ -366,6 +370,15 @@ static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_
                              path, info.width, info.height);
     }
     size_t n = (size_t)info.width * info.height, nch = info.channels;
+    if (info.has_scale && o->has_nodata && o->decode == TSR_DECODE_NONE) {
+        /* the no-data value asked for is a stored value, as a GIS file's
+         * is (tsr_georef_apply): compared before the file's scale */
+        if (!isnan(o->nodata) && fabs(o->nodata) <= FLT_MAX)
+            for (size_t i = 0; i < n * nch; i++)
+                if (px[i] == (float)o->nodata)
+                    px[i] = NAN;
+        *nodata_done = true;
+    }
     if (nch == 1 && o->decode != TSR_DECODE_TERRAIN_RGB) {
         /* one channel: the pixels become the samples where they are (a
          * copy would double the peak: 2 GB more for a 16k float TIFF) */
@@ -468,9 +481,10 @@ tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts, 
     if (s != TSR_OK)
         return s;
     /* the no-data value asked for, else the file's own (a GeoTIFF's
-     * GDAL_NODATA), compared as the float32 the samples are */
+     * GDAL_NODATA), compared as the float32 the samples are, where the
+     * loader did not compare it with the stored values already */
     bool file_nd = !o->has_nodata && !nodata_done && hf->has_georef && hf->georef.has_nodata;
-    double ndd = o->has_nodata ? o->nodata : file_nd ? hf->georef.nodata : NAN;
+    double ndd = o->has_nodata && !nodata_done ? o->nodata : file_nd ? hf->georef.nodata : NAN;
     bool has_nd = !isnan(ndd) && fabs(ndd) <= FLT_MAX;
     float nd = has_nd ? (float)ndd : 0;
     size_t n = (size_t)hf->width * hf->height;

@@ -49,7 +49,8 @@ typedef struct tsr_load_options {
     tsr_raw_type raw_type;  /* when set, the file is headerless samples ... */
     uint32_t raw_width;     /* ... of exactly raw_width * raw_height values */
     uint32_t raw_height;
-    bool has_nodata;        /* samples equal to nodata become NaN */
+    bool has_nodata; /* samples storing nodata become NaN (compared
+                        before a scale and offset the file names) */
     double nodata;
     bool all_nodata_ok;     /* accept a file with no valid sample (the caller
                                handles a heightfield of no-data only) */
@@ -67,8 +68,10 @@ tsr_raw_type tsr_raw_type_parse(const char *s);
  * .bt and XYZ grids. A GeoTIFF's georeferencing and no-data value
  * (GDAL_NODATA) are read through GDAL too (tsr_heightfield_georef).
  * Rejects sizes outside the limits above, infinite heights, and files
- * with no valid (non-NaN) sample (unless opts->all_nodata_ok). No-data: samples equal to
- * opts->nodata when given, else to the file's own no-data value; also
+ * with no valid (non-NaN) sample (unless opts->all_nodata_ok). No-data:
+ * samples equal to opts->nodata when given, else to the file's own no-data
+ * value, both compared with the stored values before a scale and offset
+ * the file names (GDAL's, a tessera PNG's), as GDAL does; also
  * +-3.4028235e38 (FLT_MAX, what GIS tools write for no-data when the file
  * names none). Values are compared as float32 (the samples' type). On
  * success *out owns the samples; on failure *out is NULL and err names

@@ -94,9 +94,11 @@ bool tsr_gdal_georef(const char *path, uint32_t w, uint32_t h, tsr_georef *g);
 tsr_status tsr_gdal_read(const char *path, const tsr_allocator *alloc, uint64_t max_samples, float **pixels,
                          uint32_t *w, uint32_t *h, char format[64], tsr_georef *g, tsr_error *err);
 
-/* The file's no-data samples to NaN (unless keep_nodata) and the others
- * scaled by z_scale, z_offset: stored values to heights. */
-void tsr_georef_apply(const tsr_georef *g, bool keep_nodata, float *px, size_t n);
+/* Stored values to heights: the no-data samples to NaN (those equal to
+ * *nodata when given, else to the file's own value: both compared with
+ * the stored values, before the scale, as GDAL does) and the others
+ * scaled by z_scale, z_offset. */
+void tsr_georef_apply(const tsr_georef *g, const double *nodata, float *px, size_t n);
 
 /* The unit normal at sample (c, r) from central differences of the
  * heights (one-sided at borders and next to no-data), in world units. */

@@ -40,14 +40,15 @@ typedef struct cli_heightfield_options {
     double dx, dy, dz; /* 0: not given */
 } cli_heightfield_options;
 
-#define CLI_HEIGHTFIELD_HELP                                                                        \
-    "  --decode terrain-rgb  decode an RGB(A) Terrain-RGB tile:\n"                                 \
-    "                        h = (R*65536 + G*256 + B) * 0.1 - 10000 (alpha 0: no-data)\n"        \
-    "  --raw W H TYPE        headerless little-endian samples, TYPE u16, i16 or f32\n"              \
-    "  --nodata V            samples equal to V are no-data (holes); default: the file's own\n"     \
-    "                        (GeoTIFF GDAL_NODATA, a GIS format's header)\n"                       \
-    "  --dx S, --dy S        sample spacing in x and y (default: a GIS file's own, in metres,\n"   \
-    "                        else 1; --dy defaults to --dx)\n"                                     \
+#define CLI_HEIGHTFIELD_HELP                                                                                           \
+    "  --decode terrain-rgb  decode an RGB(A) Terrain-RGB tile:\n"                                                     \
+    "                        h = (R*65536 + G*256 + B) * 0.1 - 10000 (alpha 0: no-data)\n"                             \
+    "  --raw W H TYPE        headerless little-endian samples, TYPE u16, i16 or f32\n"                                 \
+    "  --nodata V            samples equal to V are no-data (holes); default: the file's own\n"                        \
+    "                        (GeoTIFF GDAL_NODATA, a GIS format's header). V is a stored value,\n"                     \
+    "                        compared before a scale and offset the file names, as GDAL does\n"                        \
+    "  --dx S, --dy S        sample spacing in x and y (default: a GIS file's own, in metres,\n"                       \
+    "                        else 1; --dy defaults to --dx)\n"                                                         \
     "  --dz S                height scale: z = h * S (default 1)\n"
 
 /* If argv[*i] is one of those options, consumes it and its values

@@ -142,6 +142,28 @@ TEST(geotiff_int16_scale_offset_and_nodata)
     const tsr_georef *g = tsr_heightfield_georef(hf);
     CHECK(g && g->z_scale == 0.1 && g->z_offset == -100 && g->has_nodata && !g->has_transform);
     tsr_heightfield_destroy(hf);
+    /* a no-data value asked for is a stored value too, as GDAL takes it:
+     * the file's -32768 given again, and then a value only real samples
+     * store (its height, -190, marks nothing) */
+    const int16_t asked[2] = {-32768, (int16_t)(1 * 37 - 900)};
+    for (int k = 0; k < 2; k++) {
+        tsr_load_options o = {.has_nodata = true, .nodata = asked[k]};
+        CHECK_MSG(tsr_heightfield_load(p, &o, NULL, &hf, &err) == TSR_OK, "%s", err.message);
+        s = tsr_heightfield_cdata(hf);
+        good = 0;
+        for (int i = 0; i < W * H; i++)
+            good += v[i] == asked[k] ? isnan(s[i]) : s[i] == (float)(v[i] * 0.1 - 100);
+        CHECK_MSG(good == (size_t)(W * H), "--nodata %d: %zu of %d samples as expected", asked[k], good, W * H);
+        tsr_heightfield_destroy(hf);
+        o.nodata = asked[k] * 0.1 - 100; /* the height, not the stored value */
+        CHECK_MSG(tsr_heightfield_load(p, &o, NULL, &hf, &err) == TSR_OK, "%s", err.message);
+        s = tsr_heightfield_cdata(hf);
+        size_t holes = 0;
+        for (int i = 0; i < W * H; i++)
+            holes += isnan(s[i]);
+        CHECK_MSG(holes == 0, "--nodata at a height: %zu holes", holes);
+        tsr_heightfield_destroy(hf);
+    }
 }
 
 static void put_be16(unsigned char *b, int16_t v)

@@ -83,6 +83,20 @@ TEST(png16_keeps_scale_and_offset)
     /* quantisation: half a step, plus float rounding of the heights */
     CHECK_MSG(worst <= info.scale * 0.5 + 1e-4, "worst %g, step %g", worst, info.scale);
     CHECK(strstr(tsr_heightfield_source_format(back), "png uint16") != NULL);
+    /* --nodata names a stored value, before the scale: 0 marks the
+     * samples at the lowest height, and only those */
+    tsr_load_options o = {.has_nodata = true, .nodata = 0};
+    tsr_heightfield *holed = NULL;
+    CHECK(tsr_heightfield_load(p, &o, NULL, &holed, &err) == TSR_OK);
+    size_t lowest = 0, agree = 0;
+    for (int i = 0; i < 64 * 48; i++) {
+        bool low = tsr_heightfield_cdata(back)[i] == (float)info.offset;
+        float h = tsr_heightfield_cdata(holed)[i];
+        lowest += low;
+        agree += low ? isnan(h) : h == tsr_heightfield_cdata(back)[i];
+    }
+    CHECK_MSG(lowest >= 1 && agree == 64 * 48, "%zu lowest samples, %zu of %d as expected", lowest, agree, 64 * 48);
+    tsr_heightfield_destroy(holed);
     tsr_heightfield_destroy(back);
 
     /* integer heights 0..65535 are written as they are (scale 1) */
