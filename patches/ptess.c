@@ -15,6 +15,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -1841,60 +1842,74 @@ static double rational_curve_second(int n, const double *P, int ps, const double
     return (fnn * qss + 2 * fn * dw * Bs + fnn * dww * A) / wmin;
 }
 
+#define BERN_MAX (3 * TSR_BEZIER_MAX_DEGREE) /* the largest degree a curve bound's products reach */
+
+static double binomial_table[BERN_MAX + 1][BERN_MAX + 1];
+static pthread_once_t binomial_once = PTHREAD_ONCE_INIT;
+
+static void make_binomials(void)
+{
+    for (int n = 0; n <= BERN_MAX; n++) {
+        double c = 1;
+        for (int k = 0; k <= n; k++) {
+            binomial_table[n][k] = c;
+            c = c * (n - k) / (k + 1);
+        }
+    }
+}
+
+/* C(n, k) for n <= BERN_MAX (rows of BERN_MAX + 1), exact in doubles. */
+static const double *binomials(void)
+{
+    pthread_once(&binomial_once, make_binomials);
+    return &binomial_table[0][0];
+}
+
 /* Bernstein coefficients of the product of two polynomials in Bernstein
- * form, degrees p and q: out has p + q + 1. */
+ * form, degrees p and q: out has p + q + 1 (C(p, i) C(q, j) a_i b_j summed
+ * at i + j, over C(p + q, i + j)). */
 static void bern_mul(const double *a, int p, const double *b, int q, double *out)
 {
-    double cp = 1, row[3 * TSR_BEZIER_MAX_DEGREE + 1];
+    const double *C = binomials(), *cp = C + p * (BERN_MAX + 1), *cq = C + q * (BERN_MAX + 1),
+                 *cpq = C + (p + q) * (BERN_MAX + 1);
     for (int k = 0; k <= p + q; k++)
         out[k] = 0;
-    /* C(p, i) C(q, j) / C(p + q, i + j), from running products */
-    for (int i = 0; i <= p; i++) {
-        double cq = 1;
-        for (int j = 0; j <= q; j++) {
-            row[j] = cp * cq;
-            cq = cq * (q - j) / (j + 1);
-        }
+    for (int i = 0; i <= p; i++)
         for (int j = 0; j <= q; j++)
-            out[i + j] += row[j] * a[i] * b[j];
-        cp = cp * (p - i) / (i + 1);
-    }
-    double cpq = 1;
-    for (int k = 0; k <= p + q; k++) {
-        out[k] /= cpq;
-        cpq = cpq * (p + q - k) / (k + 1);
-    }
+            out[i + j] += cp[i] * cq[j] * a[i] * b[j];
+    for (int k = 0; k <= p + q; k++)
+        out[k] /= cpq[k];
 }
 
 /* The coefficients of a polynomial of degree n in Bernstein form over
  * [t0, t1] of its interval (de Casteljau twice), in place. */
 static void bern_restrict(double *c, int n, double t0, double t1)
 {
-    for (int r = 1; r <= n; r++) /* left part [0, t1] */
-        for (int i = n; i >= r; i--)
-            c[i] = (1 - t1) * c[i - 1] + t1 * c[i];
+    if (t1 != 1) /* left part [0, t1] (at t1 = 1 the whole) */
+        for (int r = 1; r <= n; r++)
+            for (int i = n; i >= r; i--)
+                c[i] = (1 - t1) * c[i - 1] + t1 * c[i];
     double u = t1 > 0 ? t0 / t1 : 0;
-    for (int r = 1; r <= n; r++) /* right part [u, 1] of that */
-        for (int i = 0; i <= n - r; i++)
-            c[i] = (1 - u) * c[i] + u * c[i + 1];
+    if (u != 0) /* right part [u, 1] of that (at u = 0 the whole) */
+        for (int r = 1; r <= n; r++)
+            for (int i = 0; i <= n - r; i++)
+                c[i] = (1 - u) * c[i] + u * c[i + 1];
 }
 
-/* N = ww Q2 + s (2 wwd Q1 + wwdd Q) + 2 wdwd Q of degree 3n - 2 (the
- * weights' products given): s = -1 gives C'''s numerator below; with the
- * absolute values of every factor and s = 1, a bound of the sizes that
- * cancel in it. */
+/* N = ww Q2 - 2 wwd Q1 - wwdd Q + 2 wdwd Q of degree 3n - 2 (the
+ * weights' products given): C'''s numerator below. */
 static void curve_numerator(int n, const double *ww, const double *wwd, const double *wwdd, const double *wdwd,
-                            const double *Q, const double *Q1, const double *Q2, double s, double *out)
+                            const double *Q, const double *Q1, const double *Q2, double *out)
 {
     double t[3 * TSR_BEZIER_MAX_DEGREE + 1];
     int dn = 3 * n - 2;
     bern_mul(ww, 2 * n, Q2, n - 2, out);
     bern_mul(wwd, 2 * n - 1, Q1, n - 1, t);
     for (int k = 0; k <= dn; k++)
-        out[k] += 2 * s * t[k];
+        out[k] -= 2 * t[k];
     bern_mul(wwdd, 2 * n - 2, Q, n, t);
     for (int k = 0; k <= dn; k++)
-        out[k] += s * t[k];
+        out[k] -= t[k];
     bern_mul(wdwd, 2 * n - 2, Q, n, t);
     for (int k = 0; k <= dn; k++)
         out[k] += 2 * t[k];
@@ -1946,29 +1961,30 @@ static double rational_curve_second_tight(int n, const double *P, int ps, const 
     bern_mul(ww, 2 * n, w, n, D);         /* 3n */
     int dn = 3 * n - 2;
     for (int q = 0; q < 3; q++)
-        curve_numerator(n, ww, wwd, wwdd, wdwd, Q[q], Q1[q], Q2[q], -1, N[q]);
+        curve_numerator(n, ww, wwd, wwdd, wdwd, Q[q], Q1[q], Q2[q], N[q]);
     /* the rounding of N's coefficients is absolute, up to some eps times
-     * the sizes of the terms that cancel in them: bounded from the same
-     * products of absolute values, and added whole */
-    double aw1[MAXC], aw2[MAXC], aQ[3][MAXC], aQ1[3][MAXC], aQ2[3][MAXC], awwd[MAXC], awwdd[MAXC], awdwd[MAXC], big = 0;
+     * the sizes of the terms that cancel in them: bounded by the same
+     * terms with every factor at its largest absolute value (a Bernstein
+     * product's coefficients are weighted means of its factors' products),
+     * and added whole */
+    double mw = 0, mw1 = 0, mw2 = 0, mww = 0, big = 0;
+    for (int k = 0; k <= n; k++)
+        mw = dmax(mw, w[k]);
     for (int k = 0; k < n; k++)
-        aw1[k] = fabs(w1[k]);
+        mw1 = dmax(mw1, fabs(w1[k]));
     for (int k = 0; k + 1 < n; k++)
-        aw2[k] = fabs(w2[k]);
-    for (int q = 0; q < 3; q++)
-        for (int k = 0; k <= n; k++) {
-            aQ[q][k] = fabs(Q[q][k]);
-            aQ1[q][k] = k < n ? fabs(Q1[q][k]) : 0;
-            aQ2[q][k] = k + 1 < n ? fabs(Q2[q][k]) : 0;
-        }
-    bern_mul(w, n, aw1, n - 1, awwd);
-    bern_mul(w, n, aw2, n - 2, awwdd);
-    bern_mul(aw1, n - 1, aw1, n - 1, awdwd);
+        mw2 = dmax(mw2, fabs(w2[k]));
+    for (int k = 0; k <= 2 * n; k++)
+        mww = dmax(mww, ww[k]);
     for (int q = 0; q < 3; q++) {
-        double acc[MAXC];
-        curve_numerator(n, ww, awwd, awwdd, awdwd, aQ[q], aQ1[q], aQ2[q], 1, acc);
-        for (int k = 0; k <= dn; k++)
-            big = dmax(big, acc[k]);
+        double mq = 0, mq1 = 0, mq2 = 0;
+        for (int k = 0; k <= n; k++)
+            mq = dmax(mq, fabs(Q[q][k]));
+        for (int k = 0; k < n; k++)
+            mq1 = dmax(mq1, fabs(Q1[q][k]));
+        for (int k = 0; k + 1 < n; k++)
+            mq2 = dmax(mq2, fabs(Q2[q][k]));
+        big = dmax(big, mww * mq2 + 2 * mw * mw1 * mq1 + mw * mw2 * mq + 2 * mw1 * mw1 * mq);
     }
     double slack = 64.0 * (3 * n + 4) * DBL_EPSILON * sqrt(3.0) * big;
     double bound = 0;
