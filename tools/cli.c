@@ -16,6 +16,8 @@
 #include <time.h>
 #include <unistd.h>
 
+void (*volatile cli_signal_cleanup)(void);
+
 void cli_error(const char *cmd, const char *fmt, ...)
 {
     fprintf(stderr, "tessera%s%s: ", cmd ? " " : "", cmd ? cmd : "");

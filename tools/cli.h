@@ -40,6 +40,11 @@ typedef struct cli_heightfield_options {
     double dx, dy, dz; /* 0: not given */
 } cli_heightfield_options;
 
+/* Called by the signal handler (after the pending atomic outputs are
+ * removed) when set: a command's own clean-up of a half-done output. Only
+ * async-signal-safe work. */
+extern void (*volatile cli_signal_cleanup)(void);
+
 #define CLI_HEIGHTFIELD_HELP                                                                                           \
     "  --decode terrain-rgb  decode an RGB(A) Terrain-RGB tile:\n"                                                     \
     "                        h = (R*65536 + G*256 + B) * 0.1 - 10000 (alpha 0: no-data)\n"                             \

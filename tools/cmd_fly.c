@@ -7,6 +7,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -30,7 +31,8 @@ static void help(FILE *f)
                "options:\n"
                "  --headless            render offscreen along the flight path instead of a window\n"
                "  --frames N            headless: frames to render (default 120); window: quit after N\n"
-               "  --out DIR             headless: where the frames go, DIR/frame_00000.png ... (default fly-frames)\n"
+               "  --out DIR             headless: where the frames go, DIR/frame_00000.png ... (default\n"
+               "                        fly-frames); a run that fails or is interrupted leaves DIR as it was\n"
                "  --video FILE.mp4      headless: assemble the frames with ffmpeg (30 fps, MP4; refused before\n"
                "                        rendering when ffmpeg is not installed)\n"
                "  --path FILE           keyframes, one per line: EX EY EZ [TX TY TZ] (world units); default: an\n"
@@ -38,9 +40,11 @@ static void help(FILE *f)
                "                        at its target, else the terrain's centre); cameras are kept above the\n"
                "                        ground (a path's too: a note says how many were raised)\n"
                "  --width W, --height H viewport in pixels (default 1280 x 720)\n"
-               "  --pixel-error T       screen-space error allowed, pixels (default 2)\n"
+               "  --pixel-error T       screen-space error allowed, pixels, up to 10000 (default 2)\n"
                "  --tile N              tile size: 2, 4, ..., 128 quads (default 16)\n"
                "  --fov DEG             vertical field of view, 1 to 170 degrees (default 60)\n"
+               "  --fog D               haze: the distance at which the sky's colour reaches 63 %%, in world\n"
+               "                        units; 0: none (default: a third of the terrain's diagonal)\n"
                "  --wireframe           start with the wireframe overlay\n"
                "  --no-geomorph         start without geomorphing\n"
                "  --show-normals        draw the shading normals as colours (x red, y green, z blue), unlit\n"
@@ -50,8 +54,7 @@ static void help(FILE *f)
                "                        then integrated, then lavapipe)\n"
                "  --stats FILE.json     per-frame select, upload, record, draw and wait times, tiles, triangles\n"
                "                        and uploaded bytes\n"
-               "  --quiet               no progress\n" CLI_HEIGHTFIELD_HELP
-               "  -h, --help            this help\n");
+               "  --quiet               no progress\n" CLI_HEIGHTFIELD_HELP "  -h, --help            this help\n");
 }
 
 typedef struct frame_rec {
@@ -79,6 +82,7 @@ static cJSON *stats_json(const fly_args *a, const fly_options *used, const char 
     cJSON_AddNumberToObject(root, "height", a->height);
     cJSON_AddNumberToObject(root, "tile", used->tile_n);
     cJSON_AddNumberToObject(root, "pixel_error", used->pixel_error);
+    cJSON_AddNumberToObject(root, "near", used->near_dist);
     cJSON *frames = cJSON_AddArrayToObject(root, "frames");
     double sum[6] = {0};
     for (uint32_t i = 0; i < n; i++) {
@@ -258,6 +262,65 @@ static void remove_frames(const char *out_dir, uint32_t from, uint32_t to)
     closedir(d);
 }
 
+/* A run's frames go into a hidden folder inside --out and are moved into
+ * --out when every one is drawn, so a run that fails or is interrupted
+ * leaves --out as it was: an earlier flight's frames whole, none of this
+ * run's among them. On a signal, cli_signal_cleanup removes the staged
+ * frames (only async-signal-safe calls: the names are built by hand). */
+static char stage_dir[4096];
+static volatile sig_atomic_t stage_count; /* frames 0 .. stage_count - 1 are staged */
+
+/* dir/frame_NNNNN.png (at least five digits, as "%05u") into buf. */
+static void frame_path(char *buf, size_t cap, const char *dir, uint32_t i)
+{
+    char digits[16];
+    int nd = 0;
+    do {
+        digits[nd++] = (char)('0' + i % 10);
+        i /= 10;
+    } while (i || nd < 5);
+    size_t len = strlen(dir);
+    if (len + 12 + (size_t)nd >= cap) {
+        buf[0] = 0;
+        return;
+    }
+    memcpy(buf, dir, len);
+    memcpy(buf + len, "/frame_", 7);
+    len += 7;
+    while (nd)
+        buf[len++] = digits[--nd];
+    memcpy(buf + len, ".png", 5);
+}
+
+static void unstage(void)
+{
+    if (!stage_dir[0])
+        return;
+    char name[4200];
+    for (uint32_t i = 0; i < (uint32_t)stage_count; i++) {
+        frame_path(name, sizeof name, stage_dir, i);
+        unlink(name);
+    }
+    rmdir(stage_dir);
+    stage_dir[0] = 0;
+}
+
+/* The staged frames into out_dir (replacing those of the same numbers). */
+static bool unstage_into(const char *out_dir, uint32_t n, tsr_error *err)
+{
+    char from[4200], to[4200];
+    for (uint32_t i = 0; i < n; i++) {
+        frame_path(from, sizeof from, stage_dir, i);
+        frame_path(to, sizeof to, out_dir, i);
+        if (rename(from, to) != 0)
+            return tsr_error_set(err, TSR_ERR_IO, "%s: %s", to, strerror(errno)), false;
+    }
+    stage_count = 0;
+    rmdir(stage_dir);
+    stage_dir[0] = 0;
+    return true;
+}
+
 static int run_headless(fly_args *a, const tsr_heightfield *hf)
 {
     if (a->video && !have_program("ffmpeg")) { /* before the work, not after it */
@@ -280,7 +343,6 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
     fly_path path;
     tsr_status st = a->path_file ? fly_path_read(a->path_file, &path, &err) : fly_path_auto(&f, &path, &err);
     int rc = CLI_OK;
-    uint32_t written = UINT32_MAX; /* frames 0 .. written - 1 are this run's, once it renders */
     frame_rec *recs = calloc(a->frames, sizeof *recs);
     tsr_camera *cams = malloc((a->frames ? a->frames : 1) * sizeof *cams);
     uint8_t *rgba = malloc((size_t)a->width * a->height * 4);
@@ -298,6 +360,16 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
         rc = CLI_FAIL;
         goto done;
     }
+    if (snprintf(stage_dir, sizeof stage_dir, "%s/.tessera-fly-XXXXXX", a->out_dir) >= (int)sizeof stage_dir ||
+        !mkdtemp(stage_dir)) {
+        cli_error("fly", "cannot create a folder for the frames in %s: %s", a->out_dir,
+                  errno ? strerror(errno) : "the name is too long");
+        stage_dir[0] = 0;
+        rc = CLI_FAIL;
+        goto done;
+    }
+    stage_count = 0;
+    cli_signal_cleanup = unstage;
     double clearance = 0.01 * (f.zmax - f.zmin) + 2 * f.o.near_dist;
     bool tty = !a->quiet && isatty(2);
     double t_start = cli_now();
@@ -316,10 +388,10 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
             first_lifted = i;
     }
     if (lifted && a->path_file && !a->quiet)
-        fprintf(stderr, "tessera fly: note: %s: %u of %u cameras (the first at frame %u) were less than %g above "
-                "the ground; they were raised to %g above it\n", a->path_file, lifted, a->frames, first_lifted,
-                clearance, clearance);
-    written = 0;
+        fprintf(stderr,
+                "tessera fly: note: %s: %u of %u cameras (the first at frame %u) were less than %g above "
+                "the ground; they were raised to %g above it\n",
+                a->path_file, lifted, a->frames, first_lifted, clearance, clearance);
     for (uint32_t i = 0; i < a->frames; i++) {
         double t0 = cli_now();
         fly_frame_stats fs;
@@ -330,13 +402,13 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
         }
         record(&recs[i], &fs, (cli_now() - t0) * 1e3);
         char name[4200];
-        snprintf(name, sizeof name, "%s/frame_%05u.png", a->out_dir, i);
+        frame_path(name, sizeof name, stage_dir, i);
         if (!be->read_color(be, rgba) || tsr_image_save_u8(name, a->width, a->height, 4, rgba, &err) != TSR_OK) {
             cli_error("fly", "%s", err.message[0] ? err.message : "cannot read the frame back");
             rc = CLI_FAIL;
             goto done;
         }
-        written = i + 1;
+        stage_count = (sig_atomic_t)(i + 1);
         if (tty)
             fprintf(stderr, "\rtessera fly: frame %u/%u (%.1f ms, %u tiles, %llu triangles)   ", i + 1, a->frames,
                     recs[i].frame_ms, recs[i].tiles, (unsigned long long)recs[i].triangles);
@@ -357,15 +429,27 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
         fprintf(stderr, "tessera fly: %u frames on %s in %.1f s (%.1f ms per frame to draw), in %s/\n", a->frames,
                 be->name, cli_now() - t_start, a->frames ? ms / a->frames : 0, a->out_dir);
     }
+    uint32_t drawn = 0;
+    for (uint32_t i = 0; i < a->frames; i++)
+        drawn += recs[i].tiles > 0;
+    if (!drawn) /* a warning, even with --quiet: the images show only sky */
+        fprintf(stderr,
+                "tessera fly: warning: no frame shows any of the terrain (no tile in view); the cameras look "
+                "away from it or are too far%s\n",
+                a->path_file ? ": check the path's eyes and targets" : "");
     if (rc == CLI_OK)
         rc = write_stats(a, &f.o, be->name, recs, a->frames);
+    if (rc == CLI_OK && !unstage_into(a->out_dir, a->frames, &err)) {
+        cli_error("fly", "%s", err.message);
+        rc = CLI_FAIL;
+    }
     if (rc == CLI_OK) /* a longer earlier run's frames would read as this flight's */
         remove_frames(a->out_dir, a->frames, UINT32_MAX);
     if (rc == CLI_OK && a->video)
-        rc = assemble_video(a);
+        rc = assemble_video(a); /* on failure the frames stay: ffmpeg can be run on them by hand */
 done:
-    if (rc != CLI_OK && written < UINT32_MAX && !(a->video && written == a->frames))
-        remove_frames(a->out_dir, 0, written);
+    unstage();
+    cli_signal_cleanup = NULL;
     free(recs);
     free(cams);
     free(rgba);
@@ -583,7 +667,7 @@ static int run(int argc, char **argv)
             *(arg[2] == 'w' ? &a.width : &a.height) = v;
         } else if (!strcmp(arg, "--pixel-error") && more) {
             if (!cli_parse_double(argv[++i], &a.o.pixel_error) || !(a.o.pixel_error > 0) || a.o.pixel_error > 1e4) {
-                cli_error("fly", "--pixel-error wants pixels > 0, not '%s'", argv[i]);
+                cli_error("fly", "--pixel-error wants pixels > 0, up to 10000, not '%s'", argv[i]);
                 return CLI_USAGE;
             }
         } else if (!strcmp(arg, "--fov") && more) {
@@ -603,6 +687,13 @@ static int run(int argc, char **argv)
                 return CLI_USAGE;
             }
             a.o.cache_bytes = (uint64_t)mb << 20;
+        } else if (!strcmp(arg, "--fog") && more) {
+            double d;
+            if (!cli_parse_double(argv[++i], &d) || !(d >= 0) || d > 1e15) {
+                cli_error("fly", "--fog wants a distance from 0 (no fog) to 1e15 world units, not '%s'", argv[i]);
+                return CLI_USAGE;
+            }
+            a.o.fog_distance = d > 0 ? d : -1;
         } else if (!strcmp(arg, "--out") && more)
             a.out_dir = argv[++i];
         else if (!strcmp(arg, "--video") && more)

@@ -23,8 +23,6 @@ tsr_status fly_init(fly_ctx *f, const tsr_heightfield *hf, tsr_hw_backend *backe
         f->o.pixel_error = 2;
     if (!(f->o.fovy_deg > 0))
         f->o.fovy_deg = 60;
-    if (!(f->o.near_dist > 0))
-        f->o.near_dist = 1;
     f->hf = hf;
     f->backend = backend;
     tsr_heightfield_spacing(hf, &f->dx, &f->dy, &f->dz);
@@ -43,6 +41,15 @@ tsr_status fly_init(fly_ctx *f, const tsr_heightfield *hf, tsr_hw_backend *backe
     tsr_terrain_node_range(f->terrain, (tsr_qnode){0, 0, 0}, &mn, &mx);
     f->zmin = mn <= mx ? mn * f->dz : 0;
     f->zmax = mn <= mx ? mx * f->dz : 1;
+    if (!(f->o.near_dist > 0)) {
+        /* one unit (a metre), or a thousandth of the terrain's size where
+         * that is less: a terrain in kilometres, or a few units across,
+         * would otherwise sit inside the near plane and the cameras'
+         * clearance above the ground */
+        double w = (tsr_heightfield_width(hf) - 1) * f->dx, h = (tsr_heightfield_height(hf) - 1) * f->dy;
+        double size = fmax(fmax(w, h), f->zmax - f->zmin);
+        f->o.near_dist = size > 0 && 1e-3 * size < 1 ? 1e-3 * size : 1;
+    }
     if (!f->o.cache_bytes)
         f->o.cache_bytes = (uint64_t)256 << 20; /* the renderer's default, named for the notes */
     tsr_hw_renderer_options ro = {.tile_n = f->o.tile_n, .cache_bytes = f->o.cache_bytes};

@@ -12,7 +12,7 @@ typedef struct fly_options {
     uint32_t tile_n;      /* quads per tile side (default 16) */
     double pixel_error;   /* tau, pixels (default 2) */
     double fovy_deg;      /* default 60 */
-    double near_dist;     /* default 1 (world units) */
+    double near_dist;     /* default 1 (world units), or a thousandth of the terrain's size if less */
     bool wireframe, geomorph;
     uint64_t cache_bytes; /* renderer budget (default 256 MiB) */
     double fog_distance;  /* 0: a third of the terrain's diagonal; < 0: none */

@@ -31,6 +31,8 @@ static void usage(FILE *f)
 static void on_signal(int sig)
 {
     tsr_atomic_remove_pending();
+    if (cli_signal_cleanup)
+        cli_signal_cleanup();
     signal(sig, SIG_DFL);
     raise(sig);
 }

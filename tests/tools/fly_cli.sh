@@ -63,17 +63,29 @@ cmp -s "$dir/still/frame_00000.png" "$dir/still/frame_00001.png" || fail "one ke
 printf '5000 -3000 3000 5000 -9000 6000\n' > "$dir/sky.txt"
 "$tessera" fly "$dir/t.png" --dx 20 --headless --frames 1 --width 64 --height 48 --out "$dir/sky" \
   --path "$dir/sky.txt" --quiet || fail "one keyframe with a target"
-for v in still sky; do
+# --fog: 0 draws no haze (the picture of a haze too far to see), and the
+# default haze (a third of the diagonal) shows at the camera's distance
+for fog in 0 1e9; do
+  "$tessera" fly "$dir/t.png" --dx 20 --headless --frames 1 --width 64 --height 48 --out "$dir/fog$fog" \
+    --path "$dir/still.txt" --fog $fog --quiet || fail "--fog $fog"
+  cp "$dir/fog$fog/frame_00000.png" "$dir/fog$fog.png"
+done
+"$tessera" fly "$dir/t.png" --fog -1 --headless --frames 1 --out "$dir/fogbad" --quiet 2>/dev/null && fail "--fog -1"
+for v in still sky fog0 fog1e9; do
+  [ -d "$dir/$v" ] || continue
   oiiotool "$dir/$v/frame_00000.png" --cut 30x22+16+12 -o "$dir/$v.centre.png" && oiiotool --stats "$dir/$v.centre.png" |
     grep 'Stats Avg' | head -1 > "$dir/$v.avg"
 done
-python3 - "$dir/still.avg" "$dir/sky.avg" <<'PY' || fail "one keyframe: the view's centre"
+python3 - "$dir/still.avg" "$dir/sky.avg" "$dir/fog0.avg" "$dir/fog1e9.avg" <<'PY' || fail "one keyframe, --fog"
 import re, sys
 def avg(p):
     return [float(x) for x in re.findall(r"[-0-9.]+", open(p).read().split(":", 1)[1])[:3]]
-still, sky = avg(sys.argv[1]), avg(sys.argv[2])
+still, sky, fog0, far = (avg(p) for p in sys.argv[1:5])
 assert still != sky, (still, sky)
 print("ok one keyframe: centre RGB %s, looking away %s" % (still, sky))
+assert max(abs(a - b) for a, b in zip(fog0, far)) < 2, (fog0, far)
+assert max(abs(a - b) for a, b in zip(fog0, still)) > 10, (fog0, still)
+print("ok --fog 0: centre RGB %s, --fog 1e9 %s, default haze %s" % (fog0, far, still))
 PY
 
 # a cut that does not fit the tile cache is drawn coarser, not a failed
@@ -136,6 +148,40 @@ PY
   fail "2 frames"
 [ "$(ls "$dir/re")" = "$(printf 'frame_00000.png\nframe_00001.png')" ] || fail "stale frames: $(ls "$dir/re")"
 echo "ok a shorter flight removes the longer one's frames"
+
+# an interrupted flight leaves the folder as it was: the earlier flight's
+# frames whole (none overwritten by this run's), no staging folder
+( cd "$dir/re" && md5sum frame_*.png ) > "$dir/re.md5"
+"$tessera" fly "$dir/t.png" --dx 20 --headless --frames 400 --width 32 --height 24 --out "$dir/re" --wireframe \
+  --quiet 2>/dev/null &
+pid=$!
+for _ in $(seq 1 200); do # until this run has drawn some frames
+  [ "$(ls -A "$dir/re"/.tessera-fly-*/ 2>/dev/null | wc -l)" -ge 3 ] && break
+  sleep 0.1
+done
+kill -TERM $pid; wait $pid # (not INT: a background job of a script ignores it)
+[ "$(ls -A "$dir/re")" = "$(printf 'frame_00000.png\nframe_00001.png')" ] ||
+  fail "interrupted flight: the folder holds $(ls -A "$dir/re")"
+( cd "$dir/re" && md5sum --quiet -c "$dir/re.md5" ) || fail "interrupted flight: the earlier frames changed"
+echo "ok an interrupted flight leaves the earlier one's frames as they were"
+
+# a terrain a few units across (2.56 x 2.56, 0.1 high) is drawn as the
+# same terrain in metres is: its frames show tiles (the near plane and the
+# cameras' clearance scale with the terrain)
+"$tessera" fly "$dir/t.png" --dx 0.01 --dz 0.0003 --headless --frames 2 --width 64 --height 48 --out "$dir/small" \
+  --stats "$dir/small.json" --quiet 2>"$dir/small.err" || fail "small terrain: $(cat "$dir/small.err")"
+python3 - "$dir/small.json" <<'PY' || fail "small terrain: no tiles drawn"
+import json, sys
+frames = json.load(open(sys.argv[1]))["frames"]
+assert all(f["tiles"] > 0 for f in frames), [f["tiles"] for f in frames]
+PY
+! grep -q warning "$dir/small.err" || fail "small terrain: $(cat "$dir/small.err")"
+# cameras that see none of the terrain: a warning, even with --quiet
+printf '0 0 100000 -1000 -1000 200000\n' > "$dir/away.path"
+"$tessera" fly "$dir/t.png" --dx 20 --headless --frames 1 --width 64 --height 48 --out "$dir/away" \
+  --path "$dir/away.path" --quiet 2>"$dir/away.err" || fail "looking away: $(cat "$dir/away.err")"
+grep -q "warning: no frame shows any of the terrain" "$dir/away.err" || fail "looking away: '$(cat "$dir/away.err")'"
+echo "ok a small terrain is drawn; cameras looking away get a warning"
 
 # a path whose eye meets its target between keyframes: refused before any
 # frame is written, naming the path file
