@@ -74,11 +74,17 @@ static void help(FILE *f)
                "  --normals             per-vertex normals from the heightfield's gradients (with --base,\n"
                "                        the walls and bottom flat-shaded: their vertices are written apart\n"
                "                        from the top's, except in .stl, which has facet normals)\n"
-               "  --normal-map FILE     a normal map image, one pixel per sample (.png, .tif; RGB, no-data\n"
-               "                        pixels black, 0 0 0, which no normal encodes); with --window, of\n"
-               "                        the window (the whole map's pixels there)\n"
-               "  --hillshade FILE      a hillshade image, one pixel per sample (.png, .tif; with\n"
+               "  --normal-map FILE     a normal map image, one pixel per sample (.png, .tif, or another\n"
+               "                        format OpenImageIO writes; RGB, no-data pixels black, 0 0 0, which\n"
+               "                        no normal encodes; object space: the normals relative to the flat\n"
+               "                        xy plane, green north); with --window, of the window (the whole\n"
+               "                        map's pixels there)\n"
+               "  --hillshade FILE      a hillshade image, one pixel per sample (as --normal-map; with\n"
                "                        no-data, an alpha channel: 0 there); with --window, of the window\n"
+               "  --uvs                 texture coordinates that put those images' pixel centres on the\n"
+               "                        samples (u across the columns; v down the rows in .glb, whose uv\n"
+               "                        origin is the image's top-left, up in .obj and .ply); given with\n"
+               "                        --normal-map or --hillshade unless the output is .stl\n"
                "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
                "                        peak_bytes, method, the input's size, range, no-data count and\n"
                "                        dz (with --nodata, its value), and the window's own range\n"
@@ -105,6 +111,30 @@ static void mirror_rows(tsr_mesh *m)
         v[1] = v[2];
         v[2] = k;
     }
+}
+
+/* Texture coordinates that put the pixel centres of an image of the
+ * window win (x, y, w, h samples, one pixel each: --normal-map,
+ * --hillshade) on the samples: u across the columns, v down the rows from
+ * the image's top (glTF's origin) when top_down, else up from its bottom
+ * (OBJ's and PLY's). The vertices lie at x = c dx, y = r dy (before
+ * --north-up). */
+static bool add_uvs(tsr_mesh *m, double dx, double dy, const uint32_t win[4], bool top_down)
+{
+    size_t cap = m->vertex_capacity > m->vertex_count ? m->vertex_capacity : m->vertex_count;
+    float *uv = tsr_alloc(m->alloc.realloc ? &m->alloc : NULL, (cap ? cap : 1) * 2 * sizeof *uv);
+    if (!uv)
+        return false;
+    for (uint32_t i = 0; i < m->vertex_count; i++) {
+        const float *p = m->positions + 3 * (size_t)i;
+        double u = (p[0] / dx - win[0] + 0.5) / win[2], v = (p[1] / dy - win[1] + 0.5) / win[3];
+        uv[2 * (size_t)i] = (float)u;
+        uv[2 * (size_t)i + 1] = (float)(top_down ? v : 1 - v);
+    }
+    tsr_free(m->alloc.realloc ? &m->alloc : NULL, m->uvs);
+    m->uvs = uv;
+    m->attributes |= TSR_MESH_UVS;
+    return true;
 }
 
 /* Peak resident memory of this process, from /proc (0 when unknown). */
@@ -338,7 +368,7 @@ static int run(int argc, char **argv)
     const char *in = NULL, *out = NULL, *stats = NULL, *normal_map = NULL, *hillshade = NULL;
     tsr_tin_options to = {0};
     double max_error = 0, base = 0;
-    bool quiet = false, has_base = false, has_window = false, no_flip_given = false, north_up = false;
+    bool quiet = false, has_base = false, has_window = false, no_flip_given = false, north_up = false, want_uvs = false;
     uint32_t win[4] = {0};
     uint32_t pinches = 0;
     for (int i = 1; i < argc; i++) {
@@ -429,6 +459,8 @@ static int run(int argc, char **argv)
         }
         else if (!strcmp(a, "--north-up"))
             north_up = true;
+        else if (!strcmp(a, "--uvs"))
+            want_uvs = true;
         else if (!strcmp(a, "--quiet") || !strcmp(a, "-q"))
             quiet = true;
         else if (a[0] == '-' && a[1] != '\0') {
@@ -632,6 +664,12 @@ static int run(int argc, char **argv)
             rc = CLI_FAIL;
         } else
             written[nwritten++] = hillshade;
+    }
+    tsr_mesh_format fmt = tsr_mesh_format_from_path(out);
+    if (rc == CLI_OK && (want_uvs || normal_map || hillshade) && fmt != TSR_FORMAT_STL &&
+        !add_uvs(&mesh, sdx, sdy, win4, fmt == TSR_FORMAT_GLB)) {
+        cli_error("mesh", "out of memory for the texture coordinates");
+        rc = CLI_FAIL;
     }
     if (rc == CLI_OK && north_up)
         mirror_rows(&mesh);

@@ -208,6 +208,48 @@ if [ -f "$modules/gltf-validator/package.json" ]; then
   TSR_NODE_MODULES="$modules" node "$(dirname "$0")/gltf_validate.mjs" --strict "$dir/m.glb" || fail "glTF validator"
   echo "ok glb validated"
 fi
+# with a normal map the mesh gets texture coordinates that put each vertex
+# at the centre of its sample's pixel: the map's normal there is the
+# vertex's own (--normals, from the same gradients); v runs up in .obj
+"$tessera" mesh "$dir/t.png" --dx 10 --window 10,20,30,40 --normals --normal-map "$dir/wn.png" -o "$dir/uv.obj" \
+  --quiet || fail "uvs"
+oiiotool --info -v --dumpdata "$dir/wn.png" > "$dir/wn.txt" || fail "uvs: reading the map"
+python3 - "$dir/uv.obj" "$dir/wn.txt" 30 40 <<'PY' || fail "uvs"
+import re, sys
+obj, dump, W, H = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+px = {}
+for line in open(dump):
+    m = re.match(r"\s*Pixel \((\d+), (\d+)\): (\d+) (\d+) (\d+)", line)
+    if m:
+        x, y, r, g, b = map(int, m.groups())
+        px[(x, y)] = (r, g, b)
+assert len(px) == W * H, len(px)
+vt, vn = [], []
+for line in open(obj):
+    f = line.split()
+    if f and f[0] == "vt":
+        vt.append((float(f[1]), float(f[2])))
+    if f and f[0] == "vn":
+        vn.append(tuple(map(float, f[1:4])))
+assert vt and len(vt) == len(vn), (len(vt), len(vn))
+worst = 0
+for (u, v), n in zip(vt, vn):
+    fx, fy = u * W, (1 - v) * H  # OBJ: v up from the image's bottom
+    i, j = int(fx), int(fy)
+    assert abs(fx - i - 0.5) < 1e-3 and abs(fy - j - 0.5) < 1e-3, (u, v)  # a pixel's centre
+    r, g, b = px[(i, j)]
+    m = ((r / 255) * 2 - 1, -((g / 255) * 2 - 1), (b / 255) * 2 - 1)  # green is north, -y
+    worst = max(worst, max(abs(a - c) for a, c in zip(m, n)))
+assert worst < 0.01, worst
+print("ok %d vertices: uv at pixel centres, the map's normal there within %.4f of the vertex's" % (len(vt), worst))
+PY
+"$tessera" mesh "$dir/t.png" --dx 10 --hillshade "$dir/wh.png" -o "$dir/uv.glb" --quiet || fail "glb uvs"
+grep -aq TEXCOORD_0 "$dir/uv.glb" || fail "glb with --hillshade: no TEXCOORD_0"
+if [ -f "$modules/gltf-validator/package.json" ]; then
+  TSR_NODE_MODULES="$modules" node "$(dirname "$0")/gltf_validate.mjs" --strict "$dir/uv.glb" ||
+    fail "glTF validator (uvs)"
+  echo "ok glb with texture coordinates validated"
+fi
 # with --normals the solid's walls and bottom shade flat: a bottom corner's
 # normal is -z, a wall corner's horizontal, none shared with the top's
 "$tessera" mesh "$dir/t.png" --dx 10 --max-error 3 --base 50 --normals -o "$dir/solid_n.obj" --quiet || fail "base normals"
