@@ -379,8 +379,14 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
         double s = path.closed ? (double)i / a->frames : a->frames > 1 ? (double)i / (a->frames - 1) : 0;
         bool low = false;
         if (!fly_path_camera(&f, &path, s, clearance, &cams[i], &low)) {
-            cli_error("fly", "%s: frame %u: the camera is degenerate (the target at the eye, or no view)",
-                      a->path_file ? a->path_file : "the automatic path", i);
+            if (path.count == 1 && !path.target)
+                cli_error("fly",
+                          "%s: the keyframe's eye is the terrain's centre, which a keyframe without a "
+                          "target looks at: give it a target (EX EY EZ TX TY TZ)",
+                          a->path_file);
+            else
+                cli_error("fly", "%s: frame %u: the camera is degenerate (the target at the eye, or no view)",
+                          a->path_file ? a->path_file : "the automatic path", i);
             rc = CLI_FAIL;
             goto done;
         }
@@ -630,7 +636,7 @@ static int run(int argc, char **argv)
     fly_args a = {.out_dir = "fly-frames", .width = 1280, .height = 720};
     a.o.geomorph = true;
     cli_heightfield_options ho = {0};
-    bool frames_given = false;
+    bool frames_given = false, out_given = false;
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];
         int h = cli_heightfield_option("fly", argc, argv, &i, &ho);
@@ -694,9 +700,10 @@ static int run(int argc, char **argv)
                 return CLI_USAGE;
             }
             a.o.fog_distance = d > 0 ? d : -1;
-        } else if (!strcmp(arg, "--out") && more)
+        } else if (!strcmp(arg, "--out") && more) {
             a.out_dir = argv[++i];
-        else if (!strcmp(arg, "--video") && more)
+            out_given = true;
+        } else if (!strcmp(arg, "--video") && more)
             a.video = argv[++i];
         else if (!strcmp(arg, "--path") && more)
             a.path_file = argv[++i];
@@ -718,8 +725,8 @@ static int run(int argc, char **argv)
         cli_error("fly", "no input heightfield (see tessera fly --help)");
         return CLI_USAGE;
     }
-    if (a.video && !a.headless) {
-        cli_error("fly", "--video needs --headless");
+    if ((a.video || out_given) && !a.headless) {
+        cli_error("fly", "%s needs --headless (the window writes no frames)", a.video ? "--video" : "--out");
         return CLI_USAGE;
     }
     if (a.headless && !frames_given)

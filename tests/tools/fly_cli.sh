@@ -191,6 +191,10 @@ err=$("$tessera" fly "$dir/t.png" --dx 20 --headless --frames 3 --width 32 --hei
 echo "$err" | grep -q "cross\.path: frame 1: the camera is degenerate" || fail "crossing path: '$err'"
 [ -z "$(ls -A "$dir/cr" 2>/dev/null)" ] || fail "crossing path: frames left: $(ls "$dir/cr")"
 echo "ok crossing path: $err"
+# --out is for headless runs: refused with a window
+err=$("$tessera" fly "$dir/t.png" --out "$dir/nohead" 2>&1) && fail "--out without --headless: exit 0"
+echo "$err" | grep -q -- "--out needs --headless" || fail "--out without --headless: '$err'"
+echo "ok $err"
 
 # --video: assembled by ffmpeg when it is installed, else a clear failure
 # before any frame is rendered
