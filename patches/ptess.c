@@ -1872,28 +1872,39 @@ static void bern_mul(const double *a, int p, const double *b, int q, double *out
 {
     const double *C = binomials(), *cp = C + p * (BERN_MAX + 1), *cq = C + q * (BERN_MAX + 1),
                  *cpq = C + (p + q) * (BERN_MAX + 1);
+    double sa[BERN_MAX + 1], sb[BERN_MAX + 1];
+    for (int j = 0; j <= q; j++)
+        sb[j] = cq[j] * b[j];
+    for (int i = 0; i <= p; i++)
+        sa[i] = cp[i] * a[i];
     for (int k = 0; k <= p + q; k++)
         out[k] = 0;
     for (int i = 0; i <= p; i++)
         for (int j = 0; j <= q; j++)
-            out[i + j] += cp[i] * cq[j] * a[i] * b[j];
+            out[i + j] += sa[i] * sb[j];
     for (int k = 0; k <= p + q; k++)
         out[k] /= cpq[k];
 }
 
 /* The coefficients of a polynomial of degree n in Bernstein form over
- * [t0, t1] of its interval (de Casteljau twice), in place. */
-static void bern_restrict(double *c, int n, double t0, double t1)
+ * each quarter of its interval (de Casteljau at 1/2, then at 1/2 of each
+ * half): q[k] over [k/4, (k+1)/4]. */
+static void bern_quarters(const double *c, int n, double q[4][BERN_MAX + 1])
 {
-    if (t1 != 1) /* left part [0, t1] (at t1 = 1 the whole) */
-        for (int r = 1; r <= n; r++)
-            for (int i = n; i >= r; i--)
-                c[i] = (1 - t1) * c[i - 1] + t1 * c[i];
-    double u = t1 > 0 ? t0 / t1 : 0;
-    if (u != 0) /* right part [u, 1] of that (at u = 0 the whole) */
-        for (int r = 1; r <= n; r++)
+    double half[2][BERN_MAX + 1], t[BERN_MAX + 1];
+    for (int level = 0; level < 3; level++) {
+        const double *src = level == 0 ? c : half[level - 1];
+        double *left = level == 0 ? half[0] : q[2 * (level - 1)], *right = level == 0 ? half[1] : q[2 * level - 1];
+        memcpy(t, src, (size_t)(n + 1) * sizeof *t);
+        left[0] = t[0];
+        right[n] = t[n];
+        for (int r = 1; r <= n; r++) {
             for (int i = 0; i <= n - r; i++)
-                c[i] = (1 - u) * c[i] + u * c[i + 1];
+                t[i] = 0.5 * (t[i] + t[i + 1]);
+            left[r] = t[0];
+            right[n - r] = t[n - r];
+        }
+    }
 }
 
 /* N = ww Q2 - 2 wwd Q1 - wwdd Q + 2 wdwd Q of degree 3n - 2 (the
@@ -1915,7 +1926,7 @@ static void curve_numerator(int n, const double *ww, const double *wwd, const do
         out[k] += 2 * t[k];
 }
 
-#define CURVE_PIECES 4 /* a rational curve's bound is the largest of that many parts' */
+#define CURVE_PIECES 4 /* a rational curve's bound is the largest of its quarters' (bern_quarters) */
 
 /* A tighter bound of |C''| for the rational Bézier curve of degree n with
  * points P and weights W over [0, 1] (strides as rational_curve_second),
@@ -1987,20 +1998,16 @@ static double rational_curve_second_tight(int n, const double *P, int ps, const 
         big = dmax(big, mww * mq2 + 2 * mw * mw1 * mq1 + mw * mw2 * mq + 2 * mw1 * mw1 * mq);
     }
     double slack = 64.0 * (3 * n + 4) * DBL_EPSILON * sqrt(3.0) * big;
-    double bound = 0;
+    double bound = 0, dq[4][BERN_MAX + 1], mq[3][4][BERN_MAX + 1];
+    bern_quarters(D, 3 * n, dq);
+    for (int q = 0; q < 3; q++)
+        bern_quarters(N[q], dn, mq[q]);
     for (int piece = 0; piece < CURVE_PIECES; piece++) {
-        double t0 = (double)piece / CURVE_PIECES, t1 = (double)(piece + 1) / CURVE_PIECES, d[MAXC], m[3][MAXC];
-        memcpy(d, D, (size_t)(3 * n + 1) * sizeof *d);
-        bern_restrict(d, 3 * n, t0, t1);
         double dmin_ = INFINITY, nmax = 0;
         for (int k = 0; k <= 3 * n; k++)
-            dmin_ = dmin(dmin_, d[k]);
-        for (int q = 0; q < 3; q++) {
-            memcpy(m[q], N[q], (size_t)(dn + 1) * sizeof *m[q]);
-            bern_restrict(m[q], dn, t0, t1);
-        }
+            dmin_ = dmin(dmin_, dq[piece][k]);
         for (int k = 0; k <= dn; k++)
-            nmax = dmax(nmax, norm3(m[0][k], m[1][k], m[2][k]));
+            nmax = dmax(nmax, norm3(mq[0][piece][k], mq[1][piece][k], mq[2][piece][k]));
         if (!(dmin_ > 0))
             return INFINITY;
         bound = dmax(bound, (nmax + slack) / dmin_);
