@@ -141,23 +141,26 @@ int cli_bench_fly(int argc, char **argv)
         if (h > 0)
             continue;
         bool more = i + 1 < argc, ok = true;
+        const char *want = "";
         if (cli_is_help(a)) {
             help(stdout);
             return CLI_OK;
         } else if (!strcmp(a, "--size") && more)
-            ok = cli_parse_u32(argv[++i], 17, 65537, &size);
+            ok = cli_parse_u32(argv[++i], 17, 65537, &size), want = "a side from 17 to 65537 samples";
         else if (!strcmp(a, "--frames") && more)
-            ok = cli_parse_u32(argv[++i], 1, 1000000, &frames);
+            ok = cli_parse_u32(argv[++i], 1, 1000000, &frames), want = "a count from 1 to 1000000";
         else if (!strcmp(a, "--loop-frames") && more)
-            ok = cli_parse_u32(argv[++i], 2, 100000000, &loop);
+            ok = cli_parse_u32(argv[++i], 2, 100000000, &loop), want = "a count from 2 to 100000000";
         else if (!strcmp(a, "--width") && more)
-            ok = cli_parse_u32(argv[++i], 16, 8192, &width);
+            ok = cli_parse_u32(argv[++i], 16, 8192, &width), want = "pixels from 16 to 8192";
         else if (!strcmp(a, "--height") && more)
-            ok = cli_parse_u32(argv[++i], 16, 8192, &height);
+            ok = cli_parse_u32(argv[++i], 16, 8192, &height), want = "pixels from 16 to 8192";
         else if (!strcmp(a, "--pixel-error") && more)
-            ok = cli_parse_double(argv[++i], &o.pixel_error) && o.pixel_error > 0;
+            ok = cli_parse_double(argv[++i], &o.pixel_error) && o.pixel_error > 0 && o.pixel_error <= 1e4,
+            want = "pixels > 0, up to 10000";
         else if (!strcmp(a, "--tile") && more)
-            ok = cli_parse_u32(argv[++i], TSR_TILE_MIN, TSR_TILE_MAX, &o.tile_n) && cli_tile_size_ok(o.tile_n);
+            ok = cli_parse_u32(argv[++i], TSR_TILE_MIN, TSR_TILE_MAX, &o.tile_n) && cli_tile_size_ok(o.tile_n),
+            want = "a power of two from 2 to 128";
         else if (!strcmp(a, "--input") && more)
             input = argv[++i];
         else if (!strcmp(a, "--device") && more)
@@ -167,7 +170,7 @@ int cli_bench_fly(int argc, char **argv)
             return CLI_USAGE;
         }
         if (!ok) {
-            cli_error("bench", "fly: bad value '%s' for %s", argv[i], a);
+            cli_error("bench", "fly: %s wants %s, not '%s'", a, want, argv[i]);
             return CLI_USAGE;
         }
     }

@@ -255,7 +255,8 @@ static int run(int argc, char **argv)
         else if ((!strcmp(a, "--size") || !strcmp(a, "--tile") || !strcmp(a, "--frames") || !strcmp(a, "--repeat")) &&
                  has_value) {
             if (!cli_parse_u32(argv[++i], !strcmp(a, "--size") ? 2 : 1, 1u << 20, &u)) {
-                cli_error("bench", "%s %s: not a valid number", a, argv[i]);
+                cli_error("bench", "%s wants a whole number from %d to 1048576, not '%s'", a,
+                          !strcmp(a, "--size") ? 2 : 1, argv[i]);
                 return CLI_USAGE;
             }
             *(!strcmp(a, "--size")     ? &size
