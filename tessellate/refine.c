@@ -703,6 +703,9 @@ tsr_status tsr__cdt_refine(tsr_cdt *d, const tsr_tri_options *opt, uint32_t ninp
             const uint32_t *v = d->tv + 3 * (size_t)t;
             area += 0.5 * tsr_orient2d(P(d, v[0]), P(d, v[1]), P(d, v[2]));
         }
+    res->refined_area = area;
+    if (!opt->max_steiner && opt->max_area > 0 && area / opt->max_area > TSR_TRI_MAX_AREA_TRIANGLES)
+        return TSR_ERR_TOO_LARGE;
     double limit = opt->max_steiner ? opt->max_steiner : 20.0 * (d->nv - 1) + 100000;
     if (!opt->max_steiner && opt->max_area > 0)
         limit += 4 * area / opt->max_area;

@@ -437,6 +437,11 @@ fail:
     tsr_free(a, keep);
     tsr_free(a, seeds);
     tsr_cdt_destroy(d);
+    if (st == TSR_ERR_TOO_LARGE)
+        return tsr_error_set(err, st,
+                             "a maximum triangle area of %g over the region's area of %g asks for more than %g "
+                             "triangles: give a larger area, or a Steiner limit",
+                             opt->max_area, out->refined_area, (double)TSR_TRI_MAX_AREA_TRIANGLES);
     return st == TSR_ERR_NOMEM ? tsr_error_set(err, st, "out of memory triangulating %u points", in->nv)
                                : tsr_error_set(err, st, "triangulation failed: %s", tsr_status_str(st));
 }

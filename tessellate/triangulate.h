@@ -121,14 +121,23 @@ typedef struct tsr_triangulation {
                                   than a few ulps that do not meet, where no
                                   vertex can be placed to mend them); they
                                   set quality_limited */
+    double refined_area;       /* the area of the region refinement worked on
+                                  (0 without min_angle or max_area) */
     tsr_allocator alloc;
 } tsr_triangulation;
+
+/* Refinement to a maximum area that would need more triangles than this
+ * (the region's area over max_area), with no max_steiner given, is
+ * refused (TSR_ERR_TOO_LARGE) rather than run out of memory. */
+#define TSR_TRI_MAX_AREA_TRIANGLES 5e7
 
 /* Triangulates in. On failure out is empty (nothing to free). Errors:
  * TSR_ERR_ARGUMENT for a coordinate that is not 0 or of magnitude in
  * [2^-128, 2^250) (non-finite, subnormal-small or so large the exact
  * predicates would overflow) or a segment index out of range (message
- * names it), TSR_ERR_NOMEM. Input that has no triangle
+ * names it), TSR_ERR_TOO_LARGE for a max_area that asks for more than
+ * TSR_TRI_MAX_AREA_TRIANGLES triangles without a max_steiner (message gives
+ * the region's area), TSR_ERR_NOMEM. Input that has no triangle
  * (fewer than 3 distinct points, all collinear) is TSR_OK with nt = 0. */
 tsr_status tsr_triangulate(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out,
                            const tsr_allocator *alloc, tsr_error *err);

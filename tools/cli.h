@@ -16,8 +16,10 @@ typedef struct cli_command {
 } cli_command;
 
 /* Exit codes: 0 success, 1 failure on input or output, 2 bad usage, 3
- * (tessera mesh) nothing to mesh: no-data everywhere, nothing written. */
-enum { CLI_OK = 0, CLI_FAIL = 1, CLI_USAGE = 2, CLI_EMPTY = 3 };
+ * (tessera mesh) nothing to mesh: no-data everywhere, nothing written;
+ * (tessera triangulate) written, but the refinement bounds asked for are
+ * not met everywhere. */
+enum { CLI_OK = 0, CLI_FAIL = 1, CLI_USAGE = 2, CLI_EMPTY = 3, CLI_UNMET = 3 };
 
 /* Prints "tessera CMD: message" to stderr. */
 void cli_error(const char *cmd, const char *fmt, ...)

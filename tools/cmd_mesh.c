@@ -574,7 +574,8 @@ static int run(int argc, char **argv)
     /* The bottom of a solid: DEPTH below the whole heightfield's lowest
      * sample, the same plane for every method and every window. */
     double base_z = fmin(st.min * sdz, st.max * sdz) - base;
-    if (has_base && !(fabs(base_z) <= FLT_MAX)) { /* the vertices are float, as for --dz */
+    if (has_base && st.valid && !(fabs(base_z) <= FLT_MAX)) { /* the vertices are float, as for --dz
+                                                                 (no valid sample: nothing to mesh, below) */
         cli_error("mesh", "%s: --base %g: the bottom at z = %g would lie past the largest float (%g)", in, base, base_z,
                   (double)FLT_MAX);
         cli_progress_end(&pr);

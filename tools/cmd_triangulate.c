@@ -3,6 +3,7 @@
  * checker on request. */
 #include "cli.h"
 #include "pslg_io.h"
+#include "tessellate/predicates.h"
 
 #include <cjson/cJSON.h>
 #include <limits.h>
@@ -12,41 +13,42 @@
 
 static void help(FILE *f)
 {
-    fprintf(f,
-            "usage: tessera triangulate IN [-o OUT] [options]\n\n"
-            "Triangulates a planar straight-line graph (points, segments, hole seeds): a constrained\n"
-            "Delaunay triangulation, or a quadtree triangulation, optionally refined for quality.\n\n"
-            "input (format from the extension, or --format):\n"
-            "  .node, .poly          Triangle's formats (a .poly listing 0 points reads the .node\n"
-            "                        file of the same name)\n"
-            "  .json                 an array of rings, each an array of [x, y]; the first ring is\n"
-            "                        the outer boundary, the others holes (earcut's test format)\n"
-            "  .txt                  'nV nE', then nV lines 'x y', then nE lines 'i j' (0-based)\n\n"
-            "output (format from OUT's extension):\n"
-            "  .node, .ele, .poly    all three of Triangle's files: OUT's base name .node (vertices),\n"
-            "                        .ele (triangles), .poly (constrained edges, marker = segment id + 1)\n"
-            "  .obj, .ply, .stl, .glb  a mesh with z = 0 (coordinates rounded to float32)\n\n"
-            "options:\n"
-            "  -o, --output OUT      file to write; optional with --check or --json\n"
-            "  --method M            delaunay (default) or quadtree\n"
-            "  --region R            what is kept: hull (the convex hull), enclosed (what segments\n"
-            "                        enclose) or evenodd (inside an odd number of loops); hole seeds\n"
-            "                        always apply. Default: evenodd for .json, enclosed for a .poly\n"
-            "                        with segments, hull otherwise\n"
-            "  -q ANGLE              refine until no angle is below ANGLE degrees (0 < ANGLE < 60;\n"
-            "                        above about 34 termination is not guaranteed)\n"
-            "  -a AREA               refine until no triangle is larger than AREA\n"
-            "  --conforming          split segments until every edge is Delaunay (delaunay method)\n"
-            "  --max-steiner N       stop refining after N Steiner points (default: the library's)\n"
-            "  --check               check the result independently (orientation, topology, Delaunay\n"
-            "                        property, segments, area, Euler characteristic, angle and area\n"
-            "                        bounds) and print what was checked; exit 1 if it fails (OUT is\n"
-            "                        still written)\n"
-            "  --json                print statistics (and the check's results) as JSON on stdout\n"
-            "  --format F            read IN as node, poly, json or txt whatever its extension\n"
-            "  --quiet               no summary line on stderr\n"
-            "  -h, --help            this help\n\n"
-            "exit status: 0 success, 1 bad input, failed output or failed check, 2 bad usage\n");
+    fprintf(f, "usage: tessera triangulate IN [-o OUT] [options]\n\n"
+               "Triangulates a planar straight-line graph (points, segments, hole seeds): a constrained\n"
+               "Delaunay triangulation, or a quadtree triangulation, optionally refined for quality.\n\n"
+               "input (format from the extension, or --format):\n"
+               "  .node, .poly          Triangle's formats (a .poly listing 0 points reads the .node\n"
+               "                        file of the same name)\n"
+               "  .json                 an array of rings, each an array of [x, y]; the first ring is\n"
+               "                        the outer boundary, the others holes (earcut's test format)\n"
+               "  .txt                  'nV nE', then nV lines 'x y', then nE lines 'i j' (0-based)\n\n"
+               "output (format from OUT's extension):\n"
+               "  .node, .ele, .poly    all three of Triangle's files: OUT's base name .node (vertices),\n"
+               "                        .ele (triangles), .poly (constrained edges, marker = segment id + 1)\n"
+               "  .obj, .ply, .stl, .glb  a mesh with z = 0 (coordinates rounded to float32)\n\n"
+               "options:\n"
+               "  -o, --output OUT      file to write; optional with --check or --json\n"
+               "  --method M            delaunay (default) or quadtree\n"
+               "  --region R            what is kept: hull (the convex hull), enclosed (what segments\n"
+               "                        enclose) or evenodd (inside an odd number of loops); hole seeds\n"
+               "                        always apply. Default: evenodd for .json, enclosed for a .poly\n"
+               "                        with segments, hull otherwise\n"
+               "  -q ANGLE              refine until no angle is below ANGLE degrees (0 < ANGLE < 60;\n"
+               "                        above about 34 termination is not guaranteed)\n"
+               "  -a AREA               refine until no triangle is larger than AREA\n"
+               "  --conforming          split segments until every edge is Delaunay (delaunay method)\n"
+               "  --max-steiner N       stop refining after N Steiner points (default: the library's)\n"
+               "  --check               check the result independently (orientation, topology, Delaunay\n"
+               "                        property, segments, area, Euler characteristic, angle and area\n"
+               "                        bounds) and print what was checked; exit 1 if it fails (OUT is\n"
+               "                        still written)\n"
+               "  --json                print statistics (and the check's results) as JSON on stdout\n"
+               "  --format F            read IN as node, poly, json or txt whatever its extension\n"
+               "  --quiet               no summary line on stderr\n"
+               "  -h, --help            this help\n\n"
+               "exit status: 0 success, 1 bad input (also: no triangle), failed output or failed check, 2 bad\n"
+               "usage, 3 written, but -q, -a or --conforming not met everywhere (refinement stopped at the\n"
+               "Steiner limit, or stuck; a warning says which)\n");
 }
 
 static const char *region_name(tsr_region r)
@@ -194,6 +196,18 @@ static void print_json(const char *in_path, const cli_pslg *g, const tsr_tri_opt
     cJSON_Delete(j);
 }
 
+/* Whether every point lies on one line (exactly), so no triangle exists. */
+static bool collinear(const cli_pslg *g)
+{
+    uint32_t a = 0, b = 1;
+    while (b < g->nv && g->xy[2 * b] == g->xy[0] && g->xy[2 * b + 1] == g->xy[1])
+        b++;
+    for (uint32_t k = b + 1; k < g->nv; k++)
+        if (tsr_orient2d(g->xy + 2 * a, g->xy + 2 * b, g->xy + 2 * k) != 0)
+            return false;
+    return true;
+}
+
 static int run(int argc, char **argv)
 {
     const char *in_path = NULL, *out_path = NULL;
@@ -319,6 +333,14 @@ static int run(int argc, char **argv)
         return CLI_FAIL;
     }
 
+    if (t.nt == 0 && collinear(&g)) { /* no triangle can exist: said, nothing written (an empty region,
+                                          as of a polygon given twice under even-odd, is a valid answer) */
+        cli_error("triangulate", "%s: no triangle: %s", in_path,
+                  t.input_vertices < 3 ? "fewer than 3 distinct points" : "the points are all on one line");
+        tsr_triangulation_free(&t);
+        cli_pslg_free(&g);
+        return CLI_FAIL;
+    }
     int rc = CLI_OK;
     tsr_tri_check c;
     double check_seconds = 0;
@@ -374,6 +396,21 @@ static int run(int argc, char **argv)
                 in_path, g.nv, g.nseg, t.nv, t.steiner, t.nt, t.nedge, check ? c.min_angle : smallest_angle(&t),
                 seconds, opt.method == TSR_TRI_QUADTREE ? "quadtree" : "delaunay", region_name(opt.region), extra,
                 out_path ? "; wrote " : "", out_path ? out_path : "");
+    }
+    /* bounds asked for and not met (refinement stopped at the Steiner
+     * limit, or stuck): a warning, even with --quiet, and exit 3; the
+     * triangulation written is valid and holds the segments. Triangles
+     * below the resolution of doubles are allowed by the contract. */
+    if (rc == CLI_OK && (t.steiner_limited || t.unrefined)) {
+        fprintf(stderr, "tessera triangulate: warning: %s: the bounds asked for (%s) are not met everywhere: %s%s%s\n",
+                in_path,
+                opt.conforming && opt.min_angle > 0 ? "-q, --conforming"
+                : opt.conforming                    ? "--conforming"
+                                                    : "-q, -a",
+                t.steiner_limited ? "refinement stopped at the Steiner limit" : "",
+                t.steiner_limited && t.unrefined ? "; " : "",
+                t.unrefined ? "some triangles or edges could not be mended (no usable vertex position)" : "");
+        rc = CLI_UNMET;
     }
     tsr_triangulation_free(&t);
     cli_pslg_free(&g);

@@ -106,6 +106,9 @@ all_nan_height)
   expect_error 3 "allnan\.f32: nothing to mesh: no valid sample in the heightfield" -- \
     "$tessera" mesh "$dir/allnan.f32" --raw 4 4 f32 -o "$out" --stats "$dir/a.json" --hillshade "$dir/a.png"
   [ ! -e "$dir/a.json" ] && [ ! -e "$dir/a.png" ] || fail "all no-data: an output was written"
+  # the same with --base (whose bottom plane has no lowest sample to hang from)
+  expect_error 3 "allnan\.f32: nothing to mesh: no valid sample in the heightfield" -- \
+    "$tessera" mesh "$dir/allnan.f32" --raw 4 4 f32 -o "$dir/solid.stl" --base 2
   "$tessera" info "$dir/allnan.f32" --raw 4 4 f32 | grep -q '^nodata:  16 (every sample)' || fail "info of no-data only"
   expect_error 1 "allnan\.f32: every sample is no-data" -- "$tessera" check terrain "$dir/allnan.f32" --raw 4 4 f32
   # a window of no-data only, and one whose valid samples form no triangle

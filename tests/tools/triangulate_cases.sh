@@ -144,6 +144,29 @@ tri_unwritable_output)
     expect_error 1 "ro/x\.node: cannot write" -- "$tessera" triangulate "$dir/square.node" -o "$dir/ro/x.ele"
     [ -z "$(ls -A "$dir/ro")" ] || fail "files left in a read-only folder"
   fi ;;
+tri_no_triangle)
+  # points on one line (a segment among them or not): no triangle can
+  # exist; said, nothing written (an empty region of a valid polygon is
+  # not this: earcut's empty-square.json triangulates to nothing, exit 0)
+  printf '3 1\n0 0\n1 1\n3 3\n0 2\n' > "$dir/line.txt"
+  expect_error 1 "line\.txt: no triangle: the points are all on one line" -- tri "$dir/line.txt"
+  printf '2 2 0 0\n1 0 0\n2 5 1\n' > "$dir/two.node"
+  expect_error 1 "two\.node: no triangle: fewer than 3 distinct points" -- tri "$dir/two.node" ;;
+tri_refinement_bounds)
+  # a maximum area asking for more than 5e7 triangles (no --max-steiner):
+  # refused before it runs out of memory, naming the region's area
+  expect_error 1 "square\.node: a maximum triangle area of 1e-09 over the region's area of 1 asks for more than" \
+    -- tri "$dir/square.node" -a 1e-9
+  # bounds not met (the Steiner limit stops -q 50): written, exit 3, a
+  # warning even with --quiet
+  "$tessera" triangulate "$dir/square.node" -q 50 --max-steiner 3 -o "$dir/lim.node" --quiet 2>"$dir/lim.err"
+  rc=$?
+  [ $rc -eq 3 ] || fail "Steiner-limited: exit $rc: $(cat "$dir/lim.err")"
+  grep -q "warning: .*square\.node: the bounds asked for (-q, -a) are not met everywhere: refinement stopped at the Steiner limit" \
+    "$dir/lim.err" || fail "Steiner-limited: '$(cat "$dir/lim.err")'"
+  [ -s "$dir/lim.node" ] && [ -s "$dir/lim.ele" ] || fail "Steiner-limited: not written"
+  "$tessera" triangulate "$dir/square.node" -q 20 -o "$dir/ok.node" --quiet || fail "-q 20: exit $?"
+  echo "ok [$case]: $(cat "$dir/lim.err")" ;;
 *) fail "unknown case" ;;
 esac
 exit 0
