@@ -23,8 +23,10 @@ static void help(FILE *f)
                "                        the outer boundary, the others holes (earcut's test format)\n"
                "  .txt                  'nV nE', then nV lines 'x y', then nE lines 'i j' (0-based)\n\n"
                "output (format from OUT's extension):\n"
-               "  .node, .ele, .poly    all three of Triangle's files: OUT's base name .node (vertices),\n"
-               "                        .ele (triangles), .poly (constrained edges, marker = segment id + 1)\n"
+               "  .node, .ele, .poly    all three of Triangle's files: OUT's base name .node (vertices,\n"
+               "                        1-based: the k-th input point is vertex k, a repeated one too,\n"
+               "                        then the Steiner points), .ele (triangles), .poly\n"
+               "                        (constrained edges, marker = segment id + 1)\n"
                "  .obj, .ply, .stl, .glb  a mesh with z = 0 (coordinates rounded to float32)\n\n"
                "options:\n"
                "  -o, --output OUT      file to write; optional with --check or --json\n"
@@ -37,7 +39,9 @@ static void help(FILE *f)
                "                        above about 34 termination is not guaranteed)\n"
                "  -a AREA               refine until no triangle is larger than AREA\n"
                "  --conforming          split segments until every edge is Delaunay (delaunay method)\n"
-               "  --max-steiner N       stop refining after N Steiner points (default: the library's)\n"
+               "  --max-steiner N       stop refining after N Steiner points (default: 20 per input point\n"
+               "                        plus 100,000, plus 4 per -a AREA of the region; an -a asking for\n"
+               "                        more than 5e7 triangles is refused without --max-steiner)\n"
                "  --check               check the result independently (orientation, topology, Delaunay\n"
                "                        property, segments, area, Euler characteristic, angle and area\n"
                "                        bounds) and print what was checked; exit 1 if it fails (OUT is\n"
@@ -360,7 +364,7 @@ static int run(int argc, char **argv)
         }
     }
     if (out_path) {
-        s = out_kind == CLI_OUT_TRIANGLE ? cli_tri_write_triangle(out_path, &t, g.holes, g.nholes, &err)
+        s = out_kind == CLI_OUT_TRIANGLE ? cli_tri_write_triangle(out_path, &t, g.nv, g.holes, g.nholes, &err)
                                          : cli_tri_write_mesh(out_path, &t, &err);
         if (s != TSR_OK) {
             cli_error("triangulate", "%s", err.message);

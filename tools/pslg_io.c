@@ -608,37 +608,61 @@ tsr_status cli_pslg_read(const char *path, cli_pslg_format f, cli_pslg *out, tsr
 
 /* ---- Writers ----------------------------------------------------------------- */
 
-static void write_node(FILE *f, const tsr_triangulation *t)
+/* File numbers (1-based) of the output vertices: an input point's is its
+ * input number (a point given twice: the first's), a Steiner point's
+ * follows the ninput input points. */
+static uint32_t *file_numbers(const tsr_triangulation *t, uint32_t ninput)
 {
-    fprintf(f, "# Tessera triangulation: %u vertices (1-based), x y\n%u 2 0 0\n", t->nv, t->nv);
+    uint32_t *num = malloc(((size_t)t->nv + 1) * sizeof *num);
+    if (!num)
+        return NULL;
     for (uint32_t v = 0; v < t->nv; v++)
-        fprintf(f, "%u %.17g %.17g\n", v + 1, t->xy[2 * (size_t)v], t->xy[2 * (size_t)v + 1]);
+        num[v] = v < t->input_vertices ? 0 : ninput + 1 + (v - t->input_vertices);
+    for (uint32_t i = ninput; i-- > 0;) /* from the end: the first occurrence wins */
+        num[t->vertex_of_input[i]] = i + 1;
+    return num;
 }
 
-static void write_ele(FILE *f, const tsr_triangulation *t)
+static void write_node(FILE *f, const tsr_triangulation *t, uint32_t ninput)
+{
+    uint32_t steiner = t->nv - t->input_vertices, n = ninput + steiner;
+    fprintf(f,
+            "# Tessera triangulation: %u vertices (1-based), x y: the %u input points in input order (the k-th "
+            "is vertex k), then %u Steiner points\n%u 2 0 0\n",
+            n, ninput, steiner, n);
+    for (uint32_t i = 0; i < ninput; i++) {
+        const double *p = t->xy + 2 * (size_t)t->vertex_of_input[i];
+        fprintf(f, "%u %.17g %.17g\n", i + 1, p[0], p[1]);
+    }
+    for (uint32_t v = t->input_vertices; v < t->nv; v++)
+        fprintf(f, "%u %.17g %.17g\n", ninput + 1 + (v - t->input_vertices), t->xy[2 * (size_t)v],
+                t->xy[2 * (size_t)v + 1]);
+}
+
+static void write_ele(FILE *f, const tsr_triangulation *t, const uint32_t *num)
 {
     fprintf(f, "# Tessera triangulation: %u triangles, counter-clockwise, vertices of the .node\n%u 3 0\n", t->nt,
             t->nt);
     for (uint32_t i = 0; i < t->nt; i++)
-        fprintf(f, "%u %u %u %u\n", i + 1, t->tri[3 * (size_t)i] + 1, t->tri[3 * (size_t)i + 1] + 1,
-                t->tri[3 * (size_t)i + 2] + 1);
+        fprintf(f, "%u %u %u %u\n", i + 1, num[t->tri[3 * (size_t)i]], num[t->tri[3 * (size_t)i + 1]],
+                num[t->tri[3 * (size_t)i + 2]]);
 }
 
-static void write_poly(FILE *f, const tsr_triangulation *t, const double *holes, uint32_t nholes)
+static void write_poly(FILE *f, const tsr_triangulation *t, const uint32_t *num, const double *holes, uint32_t nholes)
 {
     fprintf(f, "# Tessera triangulation: constrained edges; marker = input segment id + 1\n"
                "# 0 points: they are in the .node file of the same name\n0 2 0 0\n%u 1\n",
             t->nedge);
     for (uint32_t e = 0; e < t->nedge; e++)
-        fprintf(f, "%u %u %u %u\n", e + 1, t->edge[2 * (size_t)e] + 1, t->edge[2 * (size_t)e + 1] + 1,
+        fprintf(f, "%u %u %u %u\n", e + 1, num[t->edge[2 * (size_t)e]], num[t->edge[2 * (size_t)e + 1]],
                 t->edge_segment[e] + 1);
     fprintf(f, "%u\n", nholes);
     for (uint32_t h = 0; h < nholes; h++)
         fprintf(f, "%u %.17g %.17g\n", h + 1, holes[2 * (size_t)h], holes[2 * (size_t)h + 1]);
 }
 
-tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, const double *holes, uint32_t nholes,
-                                  tsr_error *err)
+tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, uint32_t ninput, const double *holes,
+                                  uint32_t nholes, tsr_error *err)
 {
     static const char *const ext[3] = {".node", ".ele", ".poly"};
     const char *e = extension(path);
@@ -650,6 +674,9 @@ tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, 
         if (snprintf(name[i], sizeof name[i], "%.*s%s", (int)base, path, ext[i]) >= (int)sizeof name[i])
             return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path too long", path);
     }
+    uint32_t *num = file_numbers(t, ninput);
+    if (!num)
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
     for (; begun < 3; begun++)
         if ((s = tsr_atomic_begin(name[begun], tmp[begun], sizeof tmp[begun], err)) != TSR_OK)
             goto fail;
@@ -660,11 +687,11 @@ tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, 
             goto fail;
         }
         if (i == 0)
-            write_node(f, t);
+            write_node(f, t, ninput);
         else if (i == 1)
-            write_ele(f, t);
+            write_ele(f, t, num);
         else
-            write_poly(f, t, holes, nholes);
+            write_poly(f, t, num, holes, nholes);
         bool bad = ferror(f) != 0;
         int saved = errno;
         if (fclose(f) != 0 && !bad) {
@@ -683,12 +710,15 @@ tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, 
                 remove(name[j]);
             for (int j = i + 1; j < 3; j++)
                 tsr_atomic_abort(tmp[j]);
+            free(num);
             return s;
         }
+    free(num);
     return TSR_OK;
 fail:
     for (int i = 0; i < begun; i++)
         tsr_atomic_abort(tmp[i]);
+    free(num);
     return s;
 }
 

@@ -69,12 +69,15 @@ typedef enum cli_tri_output { CLI_OUT_UNKNOWN = 0, CLI_OUT_TRIANGLE, CLI_OUT_MES
 cli_tri_output cli_tri_output_from_path(const char *path);
 
 /* For a path ending in .node, .ele or .poly, writes BASE.node (vertices,
- * 1-based), BASE.ele (triangles) and BASE.poly (0 points, meaning BASE.node;
- * the constrained edges as segments with marker = input segment id + 1;
- * the hole seeds given). All three are written to temporary files first
- * and renamed only when all are complete. */
-tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, const double *holes, uint32_t nholes,
-                                  tsr_error *err);
+ * 1-based: the ninput input points first, in input order (the k-th is
+ * vertex k), a duplicate too though no triangle uses it, as Triangle keeps
+ * them;
+ * then the Steiner points), BASE.ele (triangles) and BASE.poly (0 points,
+ * meaning BASE.node; the constrained edges as segments with marker =
+ * input segment id + 1; the hole seeds given). All three are written to
+ * temporary files first and renamed only when all are complete. */
+tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, uint32_t ninput, const double *holes,
+                                  uint32_t nholes, tsr_error *err);
 
 /* Writes t as a mesh (z = 0) in the format of path's extension. */
 tsr_status cli_tri_write_mesh(const char *path, const tsr_triangulation *t, tsr_error *err);

@@ -108,6 +108,18 @@ EOF
   [ "$(grep -v '^#' "$dir/out.node" | head -1 | awk '{print $1}')" = "$nv" ] || fail ".node count"
   [ "$(grep -v '^#' "$dir/out.ele" | head -1 | awk '{print $1}')" = "$nt" ] || fail ".ele count"
   [ "$(grep -v '^#' "$dir/out.ele" | grep -c .)" -eq $((nt + 1)) ] || fail ".ele lines"
+  # the input points keep their numbers (as Triangle keeps them): out.node's
+  # points 1..9 are in.poly's, and the Steiner points follow
+  [ "$(grep -v '^#' "$dir/out.node" | sed -n 2,10p | awk '{print $1, $2 + 0, $3 + 0}')" = \
+    "$(grep -v '^#' "$dir/in.poly" | sed -n 2,10p | awk '{print $1, $2 + 0, $3 + 0}')" ] ||
+    fail "out.node does not keep the input numbers: $(sed -n 1,12p "$dir/out.node")"
+  # a point given twice keeps its number too (no triangle uses it) and the
+  # triangles use the first
+  printf '5 2 0 0\n1 0 0\n2 4 0\n3 4 4\n4 4 0\n5 0 4\n' > "$dir/dup.node"
+  "$tessera" triangulate "$dir/dup.node" -o "$dir/dupout.node" --quiet || fail "dup.node"
+  [ "$(grep -v '^#' "$dir/dupout.node" | sed -n 5p)" = "4 4 0" ] || fail "duplicate's number: $(cat "$dir/dupout.node")"
+  grep -v '^#' "$dir/dupout.ele" | sed 1d | awk '$2 == 4 || $3 == 4 || $4 == 4 {exit 1}' ||
+    fail "a triangle uses the duplicate: $(cat "$dir/dupout.ele")"
   # the .poly (0 points: they are in out.node) back through our reader:
   # same points and constrained edges, and triangulating them again with
   # the hole seed gives the same number of triangles and the same area
