@@ -360,6 +360,7 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
         rc = CLI_FAIL;
         goto done;
     }
+    errno = 0;
     if (snprintf(stage_dir, sizeof stage_dir, "%s/.tessera-fly-XXXXXX", a->out_dir) >= (int)sizeof stage_dir ||
         !mkdtemp(stage_dir)) {
         cli_error("fly", "cannot create a folder for the frames in %s: %s", a->out_dir,
