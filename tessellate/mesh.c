@@ -160,3 +160,35 @@ tsr_status tsr_mesh_compute_normals(tsr_mesh *m)
     }
     return TSR_OK;
 }
+
+uint32_t tsr_mesh_drop_unused(tsr_mesh *m)
+{
+    const tsr_allocator *a = m->alloc.realloc ? &m->alloc : NULL;
+    uint32_t *to = tsr_alloc(a, ((size_t)m->vertex_count + 1) * sizeof *to);
+    if (!to)
+        return UINT32_MAX;
+    for (uint32_t v = 0; v < m->vertex_count; v++)
+        to[v] = UINT32_MAX;
+    for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
+        to[m->indices[i]] = 0;
+    uint32_t n = 0;
+    for (uint32_t v = 0; v < m->vertex_count; v++) {
+        if (to[v] == UINT32_MAX)
+            continue;
+        to[v] = n;
+        if (n != v) {
+            memcpy(m->positions + 3 * (size_t)n, m->positions + 3 * (size_t)v, 3 * sizeof *m->positions);
+            if (m->normals)
+                memcpy(m->normals + 3 * (size_t)n, m->normals + 3 * (size_t)v, 3 * sizeof *m->normals);
+            if (m->uvs)
+                memcpy(m->uvs + 2 * (size_t)n, m->uvs + 2 * (size_t)v, 2 * sizeof *m->uvs);
+        }
+        n++;
+    }
+    for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
+        m->indices[i] = to[m->indices[i]];
+    uint32_t dropped = m->vertex_count - n;
+    m->vertex_count = n;
+    tsr_free(a, to);
+    return dropped;
+}

@@ -403,6 +403,19 @@ static bool same_mesh(const tsr_mesh *a, const tsr_mesh *b)
  * Both hold the bound by the oracle, with and without no-data, and are
  * valid (bound_case); the exact errors need fewer triangles in all, and
  * their mesh is the same whatever the thread count. */
+/* Vertices of m that no triangle uses. */
+static uint32_t unreferenced(const tsr_mesh *m)
+{
+    uint8_t *used = calloc(m->vertex_count + 1, 1);
+    for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
+        used[m->indices[i]] = 1;
+    uint32_t n = 0;
+    for (uint32_t v = 0; v < m->vertex_count; v++)
+        n += !used[v];
+    free(used);
+    return n;
+}
+
 static uint32_t quadtree_case(const tsr_heightfield *hf, uint32_t tile_n, double e, const char *what)
 {
     tsr_tin_options o = {0};
@@ -415,7 +428,9 @@ static uint32_t quadtree_case(const tsr_heightfield *hf, uint32_t tile_n, double
     tsr_error err = {0};
     o.threads = 1;
     CHECK(tsr_terrain_mesh(hf, &o, &m, NULL, &err) == TSR_OK);
-    uint32_t n = m.triangle_count;
+    uint32_t n = m.triangle_count, lone = unreferenced(&m);
+    /* grid tiles over no-data left their points there, in no triangle */
+    CHECK_MSG(lone == 0, "%s, tile %u: %u vertices in no triangle", what, tile_n, lone);
     if (tile_n == 0) { /* nodes tested on several threads: the same mesh */
         tsr_mesh m3;
         tsr_mesh_init(&m3, 0, NULL);

@@ -52,6 +52,33 @@ TEST(container_grows)
     CHECK(m.vertex_count == 0 && m.positions == NULL);
 }
 
+TEST(drop_unused_keeps_the_used_in_order)
+{
+    /* 12 vertices, x = i, normal z = i, uv = (i, -i); triangles use those
+     * not divisible by 3: after the drop, the same triangles by position */
+    tsr_mesh m;
+    tsr_mesh_init(&m, TSR_MESH_NORMALS | TSR_MESH_UVS, NULL);
+    for (int i = 0; i < 12; i++) {
+        float p[3] = {(float)i, 0, 0}, n[3] = {0, 0, (float)i}, uv[2] = {(float)i, (float)-i};
+        CHECK(tsr_mesh_add_vertex(&m, p, n, uv) == (uint32_t)i);
+    }
+    const uint32_t tri[3][3] = {{1, 2, 4}, {5, 7, 8}, {10, 11, 1}};
+    for (int t = 0; t < 3; t++)
+        CHECK(tsr_mesh_add_triangle(&m, tri[t][0], tri[t][1], tri[t][2]));
+    CHECK(tsr_mesh_drop_unused(&m) == 4);
+    CHECK(m.vertex_count == 8 && m.triangle_count == 3);
+    for (int t = 0; t < 3; t++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t v = m.indices[3 * t + k];
+            CHECK(v < 8 && m.positions[3 * v] == (float)tri[t][k] && m.normals[3 * v + 2] == (float)tri[t][k] &&
+                  m.uvs[2 * v + 1] == -(float)tri[t][k]);
+        }
+    for (uint32_t v = 1; v < m.vertex_count; v++) /* the order kept */
+        CHECK(m.positions[3 * v] > m.positions[3 * (v - 1)]);
+    CHECK(tsr_mesh_drop_unused(&m) == 0 && m.vertex_count == 8);
+    tsr_mesh_free(&m);
+}
+
 TEST(normals_face_up)
 {
     tsr_mesh m;
@@ -548,7 +575,8 @@ TEST(cgroup_cpu_limits)
     CHECK(system(cmd) == 0);
 }
 
-TEST_MAIN(T(container_grows), T(normals_face_up), T(format_from_path), T(unwritable_output_leaves_nothing),
-          T(pending_temporaries_removed), T(atomic_output_links_and_modes), T(binary_layouts), T(status_table),
-          T(custom_allocator_is_used_and_balanced), T(keymap_clear_keeps_room), T(cpu_count_follows_affinity),
-          T(cpu_quota_text), T(cgroup_cpu_limits), T(default_allocator_kinds), T(custom_allocator_dense_blocks))
+TEST_MAIN(T(container_grows), T(drop_unused_keeps_the_used_in_order), T(normals_face_up), T(format_from_path),
+          T(unwritable_output_leaves_nothing), T(pending_temporaries_removed), T(atomic_output_links_and_modes),
+          T(binary_layouts), T(status_table), T(custom_allocator_is_used_and_balanced), T(keymap_clear_keeps_room),
+          T(cpu_count_follows_affinity), T(cpu_quota_text), T(cgroup_cpu_limits), T(default_allocator_kinds),
+          T(custom_allocator_dense_blocks))
