@@ -582,6 +582,16 @@ static int run(int argc, char **argv)
         tsr_heightfield_destroy(hf);
         return CLI_FAIL;
     }
+    float zlow = (float)fmin(st.min * sdz, st.max * sdz);
+    if (has_base && st.valid && !((float)base_z < zlow)) { /* a depth below float32's step there */
+        cli_error("mesh",
+                  "%s: --base %g: the bottom rounds to the lowest height, z = %.9g, in float32 (the "
+                  "vertices' type): give a depth of at least %g",
+                  in, base, (double)zlow, (double)(zlow - nextafterf(zlow, -INFINITY)));
+        cli_progress_end(&pr);
+        tsr_heightfield_destroy(hf);
+        return CLI_FAIL;
+    }
     /* with normals (not in .stl: facet normals), the walls and the bottom
      * shade flat, their vertices apart from the top's; turns of the
      * outline under 30 degrees stay smooth */
