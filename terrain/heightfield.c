@@ -373,10 +373,12 @@ static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_
     if (info.has_scale && o->has_nodata && o->decode == TSR_DECODE_NONE) {
         /* the no-data value asked for is a stored value, as a GIS file's
          * is (tsr_georef_apply): compared before the file's scale */
+        size_t colour = nch >= 2 && info.alpha_channel == (int)nch - 1 ? nch - 1 : nch; /* not the alpha */
         if (!isnan(o->nodata) && fabs(o->nodata) <= FLT_MAX)
-            for (size_t i = 0; i < n * nch; i++)
-                if (px[i] == (float)o->nodata)
-                    px[i] = NAN;
+            for (size_t i = 0; i < n; i++)
+                for (size_t c = 0; c < colour; c++)
+                    if (px[i * nch + c] == (float)o->nodata)
+                        px[i * nch + c] = NAN;
         *nodata_done = true;
     }
     if (nch == 1 && o->decode != TSR_DECODE_TERRAIN_RGB) {

@@ -250,10 +250,15 @@ static void remove_frames(const char *out_dir, uint32_t from, uint32_t to)
         return;
     struct dirent *e;
     while ((e = readdir(d))) {
-        unsigned n;
-        char tail[8];
-        if (strlen(e->d_name) != 15 || sscanf(e->d_name, "frame_%5u.%4s", &n, tail) != 2 || strcmp(tail, "png") ||
-            n < from || n >= to)
+        /* frame_ and at least five digits (more only without a leading 0), .png */
+        const char *p = e->d_name, *q;
+        if (strncmp(p, "frame_", 6) != 0)
+            continue;
+        uint64_t n = 0;
+        for (q = p + 6; *q >= '0' && *q <= '9' && q - p < 16; q++)
+            n = n * 10 + (uint64_t)(*q - '0');
+        size_t nd = (size_t)(q - p - 6);
+        if (nd < 5 || (nd > 5 && p[6] == '0') || strcmp(q, ".png") != 0 || n < from || n >= to)
             continue;
         char name[4200];
         snprintf(name, sizeof name, "%s/%s", out_dir, e->d_name);
@@ -297,7 +302,9 @@ static void unstage(void)
     if (!stage_dir[0])
         return;
     char name[4200];
-    for (uint32_t i = 0; i < (uint32_t)stage_count; i++) {
+    /* stage_count itself too: the frame being written may be in place
+     * before the count says so */
+    for (uint32_t i = 0; i <= (uint32_t)stage_count; i++) {
         frame_path(name, sizeof name, stage_dir, i);
         unlink(name);
     }

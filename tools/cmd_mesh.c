@@ -587,7 +587,7 @@ static int run(int argc, char **argv)
         cli_error("mesh",
                   "%s: --base %g: the bottom rounds to the lowest height, z = %.9g, in float32 (the "
                   "vertices' type): give a depth of at least %g",
-                  in, base, (double)zlow, (double)(zlow - nextafterf(zlow, -INFINITY)));
+                  in, base, (double)zlow, (double)(zlow - nextafterf(nextafterf(zlow, -INFINITY), -INFINITY)));
         cli_progress_end(&pr);
         tsr_heightfield_destroy(hf);
         return CLI_FAIL;

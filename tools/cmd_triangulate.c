@@ -407,15 +407,17 @@ static int run(int argc, char **argv)
      * limit, or stuck): a warning, even with --quiet, and exit 3; the
      * triangulation written is valid and holds the segments. Triangles
      * below the resolution of doubles are allowed by the contract. */
-    if (rc == CLI_OK && (t.steiner_limited || t.unrefined)) {
-        fprintf(stderr, "tessera triangulate: warning: %s: the bounds asked for (%s) are not met everywhere: %s%s%s\n",
-                in_path,
-                opt.conforming && opt.min_angle > 0 ? "-q, --conforming"
-                : opt.conforming                    ? "--conforming"
-                                                    : "-q, -a",
-                t.steiner_limited ? "refinement stopped at the Steiner limit" : "",
-                t.steiner_limited && t.unrefined ? "; " : "",
-                t.unrefined ? "some triangles or edges could not be mended (no usable vertex position)" : "");
+    if (rc == CLI_OK && t.unrefined) {
+        char asked[64] = "";
+        snprintf(asked, sizeof asked, "%s%s%s%s%s", opt.min_angle > 0 ? "-q" : "",
+                 opt.min_angle > 0 && (opt.max_area > 0 || opt.conforming) ? ", " : "", opt.max_area > 0 ? "-a" : "",
+                 opt.max_area > 0 && opt.conforming ? ", " : "", opt.conforming ? "--conforming" : "");
+        fprintf(stderr,
+                "tessera triangulate: warning: %s: the bounds asked for (%s) are not met everywhere: %u triangle%s or "
+                "edge%s left, %s\n",
+                in_path, asked, t.unrefined, t.unrefined == 1 ? "" : "s", t.unrefined == 1 ? "" : "s",
+                t.steiner_limited ? "refinement stopped at the Steiner limit"
+                                  : "where no usable vertex position could mend them");
         rc = CLI_UNMET;
     }
     tsr_triangulation_free(&t);

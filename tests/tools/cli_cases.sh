@@ -79,7 +79,7 @@ height_overflow)
     "$tessera" mesh "$dir/big.f32" --raw 4 4 f32 --base 4e38 -o "$out"
   # and a base too shallow for float32 at heights of 1e30 (its step there
   # is about 7.6e22): said, with the least depth that works
-  expect_error 1 "big\.f32: --base 1: the bottom rounds to the lowest height, z = 1.00000002e\+30, in float32 .*give a depth of at least 7.5" -- \
+  expect_error 1 "big\.f32: --base 1: the bottom rounds to the lowest height, z = 1.00000002e\+30, in float32 .*give a depth of at least 1.5" -- \
     "$tessera" mesh "$dir/big.f32" --raw 4 4 f32 --base 1 -o "$out" ;;
 one_by_one_image)
   oiiotool --create 1x1 1 -d uint16 -o "$dir/one.png" || fail "oiiotool failed"
