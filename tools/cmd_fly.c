@@ -240,10 +240,9 @@ static int assemble_video(const fly_args *a)
     return CLI_OK;
 }
 
-/* Removes out_dir/frame_NNNNN.png for N >= from (to, when to < UINT32_MAX:
- * below to): frames of an earlier, longer run, or those of this run when
- * it failed. */
-static void remove_frames(const char *out_dir, uint32_t from, uint32_t to)
+/* Removes out_dir/frame_NNNNN.png for N >= from: the frames of an earlier,
+ * longer run. */
+static void remove_frames(const char *out_dir, uint32_t from)
 {
     DIR *d = opendir(out_dir);
     if (!d)
@@ -258,7 +257,7 @@ static void remove_frames(const char *out_dir, uint32_t from, uint32_t to)
         for (q = p + 6; *q >= '0' && *q <= '9' && q - p < 16; q++)
             n = n * 10 + (uint64_t)(*q - '0');
         size_t nd = (size_t)(q - p - 6);
-        if (nd < 5 || (nd > 5 && p[6] == '0') || strcmp(q, ".png") != 0 || n < from || n >= to)
+        if (nd < 5 || (nd > 5 && p[6] == '0') || strcmp(q, ".png") != 0 || n < from)
             continue;
         char name[4200];
         snprintf(name, sizeof name, "%s/%s", out_dir, e->d_name);
@@ -312,7 +311,8 @@ static void unstage(void)
     stage_dir[0] = 0;
 }
 
-/* The staged frames into out_dir (replacing those of the same numbers). */
+/* The staged frames into out_dir (replacing those of the same numbers);
+ * unstage then removes the emptied folder. */
 static bool unstage_into(const char *out_dir, uint32_t n, tsr_error *err)
 {
     char from[4200], to[4200];
@@ -323,8 +323,6 @@ static bool unstage_into(const char *out_dir, uint32_t n, tsr_error *err)
             return tsr_error_set(err, TSR_ERR_IO, "%s: %s", to, strerror(errno)), false;
     }
     stage_count = 0;
-    rmdir(stage_dir);
-    stage_dir[0] = 0;
     return true;
 }
 
@@ -458,7 +456,7 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
         rc = CLI_FAIL;
     }
     if (rc == CLI_OK) /* a longer earlier run's frames would read as this flight's */
-        remove_frames(a->out_dir, a->frames, UINT32_MAX);
+        remove_frames(a->out_dir, a->frames);
     if (rc == CLI_OK && a->video)
         rc = assemble_video(a); /* on failure the frames stay: ffmpeg can be run on them by hand */
 done:

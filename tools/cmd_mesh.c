@@ -574,20 +574,19 @@ static int run(int argc, char **argv)
     /* The bottom of a solid: DEPTH below the whole heightfield's lowest
      * sample, the same plane for every method and every window. */
     double base_z = fmin(st.min * sdz, st.max * sdz) - base;
-    if (has_base && st.valid && !(fabs(base_z) <= FLT_MAX)) { /* the vertices are float, as for --dz
-                                                                 (no valid sample: nothing to mesh, below) */
-        cli_error("mesh", "%s: --base %g: the bottom at z = %g would lie past the largest float (%g)", in, base, base_z,
-                  (double)FLT_MAX);
-        cli_progress_end(&pr);
-        tsr_heightfield_destroy(hf);
-        return CLI_FAIL;
-    }
+    /* the vertices are float, as for --dz: the bottom must lie within the
+     * float range and below the lowest height as a float (no valid sample:
+     * nothing to mesh, below) */
     float zlow = (float)fmin(st.min * sdz, st.max * sdz);
-    if (has_base && st.valid && !((float)base_z < zlow)) { /* a depth below float32's step there */
-        cli_error("mesh",
-                  "%s: --base %g: the bottom rounds to the lowest height, z = %.9g, in float32 (the "
-                  "vertices' type): give a depth of at least %g",
-                  in, base, (double)zlow, (double)(zlow - nextafterf(nextafterf(zlow, -INFINITY), -INFINITY)));
+    if (has_base && st.valid && (!(fabs(base_z) <= FLT_MAX) || !((float)base_z < zlow))) {
+        if (!(fabs(base_z) <= FLT_MAX))
+            cli_error("mesh", "%s: --base %g: the bottom at z = %g would lie past the largest float (%g)", in, base,
+                      base_z, (double)FLT_MAX);
+        else
+            cli_error("mesh",
+                      "%s: --base %g: the bottom rounds to the lowest height, z = %.9g, in float32 (the "
+                      "vertices' type): give a depth of at least %g",
+                      in, base, (double)zlow, (double)(zlow - nextafterf(nextafterf(zlow, -INFINITY), -INFINITY)));
         cli_progress_end(&pr);
         tsr_heightfield_destroy(hf);
         return CLI_FAIL;

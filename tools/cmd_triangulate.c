@@ -384,16 +384,10 @@ static int run(int argc, char **argv)
                                   t.fallback_reason ? t.fallback_reason : "no reason given");
         else if (t.fallback_cells)
             n += (size_t)snprintf(extra, sizeof extra, "; %u quadtree cells went to Delaunay", t.fallback_cells);
-        if (t.steiner_limited && n < sizeof extra)
-            n += (size_t)snprintf(extra + n, sizeof extra - n, "; refinement stopped at the Steiner limit");
         if (t.below_resolution && n < sizeof extra)
             n += (size_t)snprintf(extra + n, sizeof extra - n,
                                   "; %u triangle%s below the angle bound, below the resolution of doubles",
                                   t.below_resolution, t.below_resolution == 1 ? "" : "s");
-        if (t.unrefined && !t.steiner_limited && n < sizeof extra)
-            n += (size_t)snprintf(extra + n, sizeof extra - n,
-                                  "; %u triangle%s or edge%s refinement could not mend (no usable vertex position)",
-                                  t.unrefined, t.unrefined == 1 ? "" : "s", t.unrefined == 1 ? "" : "s");
         if (check && n < sizeof extra)
             snprintf(extra + n, sizeof extra - n, "; check %s", c.ok ? "passed" : "FAILED");
         fprintf(stderr,
