@@ -271,10 +271,16 @@ static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_
                                const tsr_allocator *alloc, float *px, const tsr_image_info *ip, bool *nodata_done,
                                tsr_error *err);
 
+/* Whether v can be a float32 sample's no-data value (not NaN, in range). */
+static bool nodata_usable(double v)
+{
+    return !isnan(v) && fabs(v) <= FLT_MAX;
+}
+
 void tsr_georef_apply(const tsr_georef *g, const double *nodata, float *px, size_t n)
 {
     double v = nodata ? *nodata : g->has_nodata ? g->nodata : NAN;
-    bool nd = !isnan(v) && fabs(v) <= FLT_MAX;
+    bool nd = nodata_usable(v);
     float ndv = nd ? (float)v : 0;
     double scale = g->z_scale, offset = g->z_offset;
     if (!nd && scale == 1 && offset == 0)
@@ -374,7 +380,7 @@ static tsr_status finish_image(const char *path, const tsr_load_options *o, tsr_
         /* the no-data value asked for is a stored value, as a GIS file's
          * is (tsr_georef_apply): compared before the file's scale */
         size_t colour = nch >= 2 && info.alpha_channel == (int)nch - 1 ? nch - 1 : nch; /* not the alpha */
-        if (!isnan(o->nodata) && fabs(o->nodata) <= FLT_MAX)
+        if (nodata_usable(o->nodata))
             for (size_t i = 0; i < n; i++)
                 for (size_t c = 0; c < colour; c++)
                     if (px[i * nch + c] == (float)o->nodata)
@@ -487,7 +493,7 @@ tsr_status tsr_heightfield_load(const char *path, const tsr_load_options *opts, 
      * loader did not compare it with the stored values already */
     bool file_nd = !o->has_nodata && !nodata_done && hf->has_georef && hf->georef.has_nodata;
     double ndd = o->has_nodata && !nodata_done ? o->nodata : file_nd ? hf->georef.nodata : NAN;
-    bool has_nd = !isnan(ndd) && fabs(ndd) <= FLT_MAX;
+    bool has_nd = nodata_usable(ndd);
     float nd = has_nd ? (float)ndd : 0;
     size_t n = (size_t)hf->width * hf->height;
     uint64_t valid = 0;
