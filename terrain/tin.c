@@ -1778,12 +1778,6 @@ static tsr_status mesh_quadtree_budget(const tsr_heightfield *hf, double tol, do
         tsr_error_set(err, st, "quadtree mesh: %s", tsr_status_str(st));
         goto done;
     }
-    /* the tiles' grid points no triangle uses (stitched away, or in
-     * no-data cells); tsr_quadtree_mesh keeps them for its other users */
-    if (tsr_mesh_drop_unused(mesh) == UINT32_MAX) {
-        st = tsr_error_set(err, TSR_ERR_NOMEM, "quadtree mesh: out of memory");
-        goto done;
-    }
     if (max_vert && mesh->vertex_count > max_vert) {
         /* the vertices a triangle budget gives vary with the mesh's
          * boundary: tighten the triangle budget and bisect again */

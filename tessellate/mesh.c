@@ -161,14 +161,16 @@ tsr_status tsr_mesh_compute_normals(tsr_mesh *m)
     return TSR_OK;
 }
 
-uint32_t tsr_mesh_drop_unused(tsr_mesh *m)
+uint32_t tsr_mesh_drop_unused(tsr_mesh *m, uint32_t first)
 {
+    if (first >= m->vertex_count)
+        return 0;
     const tsr_allocator *a = m->alloc.realloc ? &m->alloc : NULL;
     uint32_t *to = tsr_alloc(a, ((size_t)m->vertex_count + 1) * sizeof *to);
     if (!to)
         return UINT32_MAX;
     for (uint32_t v = 0; v < m->vertex_count; v++)
-        to[v] = UINT32_MAX;
+        to[v] = v < first ? 0 : UINT32_MAX;
     for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
         to[m->indices[i]] = 0;
     uint32_t n = 0;

@@ -551,6 +551,7 @@ static tsr_status mesh_cut(const tsr_quadtree *qt, bool skip_culled, bool morph,
         return TSR_ERR_NOMEM;
     }
     bool normals = (m->attributes & TSR_MESH_NORMALS) != 0;
+    uint32_t first = m->vertex_count;
     for (uint32_t li = 0; li < qt->leaf_count && st == TSR_OK; li++) {
         const tsr_qleaf *leaf = &qt->leaves[li];
         if (skip_culled && leaf->culled)
@@ -595,6 +596,10 @@ static tsr_status mesh_cut(const tsr_quadtree *qt, bool skip_culled, bool morph,
                 st = TSR_ERR_NOMEM;
         }
     }
+    /* the tiles' points no triangle uses: stitched away, or with a no-data
+     * neighbour on every side */
+    if (st == TSR_OK && tsr_mesh_drop_unused(m, first) == UINT32_MAX)
+        st = TSR_ERR_NOMEM;
     tsr_free(a, local);
     tsr_free(a, dense);
     tsr_keymap_free(&map, a);

@@ -198,7 +198,9 @@ float tsr_quadtree_vertex_morph(const tsr_qleaf *leaf, uint32_t n, uint32_t i, u
  * when m has them): every leaf's tile with its stitch pattern, lattice
  * points clamped to the extent, vertices welded by lattice point across
  * tiles, triangles with a no-data corner or a repeated (clamped) vertex
- * left out. Culled leaves are included unless skip_culled. */
+ * left out, and the lattice points no triangle uses (stitched away, or
+ * only in such triangles) with them. Culled leaves are included unless
+ * skip_culled. */
 tsr_status tsr_quadtree_mesh(const tsr_quadtree *qt, bool skip_culled, tsr_mesh *m);
 
 /* The same mesh as the renderer draws it with geomorphing (after

@@ -150,10 +150,11 @@ bool tsr_mesh_add_triangle(tsr_mesh *m, uint32_t a, uint32_t b, uint32_t c);
 /* Computes area-weighted vertex normals from the triangles, allocating the
  * normal array when absent. */
 tsr_status tsr_mesh_compute_normals(tsr_mesh *m);
-/* Removes the vertices no triangle uses, keeping the others' order (their
- * indices shift down); returns how many were removed, or UINT32_MAX when
- * out of memory (the mesh unchanged). */
-uint32_t tsr_mesh_drop_unused(tsr_mesh *m);
+/* Removes the vertices from index `first` on that no triangle uses, keeping
+ * the others' order (their indices shift down; those below `first` stay);
+ * returns how many were removed, or UINT32_MAX when out of memory (the mesh
+ * unchanged). */
+uint32_t tsr_mesh_drop_unused(tsr_mesh *m, uint32_t first);
 
 /* ---- Writers ----------------------------------------------------------- */
 

@@ -65,7 +65,10 @@ TEST(drop_unused_keeps_the_used_in_order)
     const uint32_t tri[3][3] = {{1, 2, 4}, {5, 7, 8}, {10, 11, 1}};
     for (int t = 0; t < 3; t++)
         CHECK(tsr_mesh_add_triangle(&m, tri[t][0], tri[t][1], tri[t][2]));
-    CHECK(tsr_mesh_drop_unused(&m) == 4);
+    CHECK(tsr_mesh_drop_unused(&m, 12) == 0 && m.vertex_count == 12); /* none from 12 on */
+    CHECK(tsr_mesh_drop_unused(&m, 4) == 2 && m.vertex_count == 10);  /* 6 and 9 */
+    CHECK(m.positions[3 * 0] == 0.0f && m.positions[3 * 3] == 3.0f);  /* 0 and 3 kept: below `first` */
+    CHECK(tsr_mesh_drop_unused(&m, 0) == 2);                          /* then 0 and 3 */
     CHECK(m.vertex_count == 8 && m.triangle_count == 3);
     for (int t = 0; t < 3; t++)
         for (int k = 0; k < 3; k++) {
@@ -75,7 +78,7 @@ TEST(drop_unused_keeps_the_used_in_order)
         }
     for (uint32_t v = 1; v < m.vertex_count; v++) /* the order kept */
         CHECK(m.positions[3 * v] > m.positions[3 * (v - 1)]);
-    CHECK(tsr_mesh_drop_unused(&m) == 0 && m.vertex_count == 8);
+    CHECK(tsr_mesh_drop_unused(&m, 0) == 0 && m.vertex_count == 8);
     tsr_mesh_free(&m);
 }
 

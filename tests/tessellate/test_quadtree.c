@@ -253,6 +253,20 @@ static double point_triangle_dist(const double p[3], const float *a, const float
     return sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
 }
 
+/* Vertices that no triangle uses (the stitched-away tile points, unless
+ * tsr_quadtree_mesh drops them). */
+static uint32_t unused_vertices(const tsr_mesh *m)
+{
+    uint32_t n = 0;
+    unsigned char *used = calloc(m->vertex_count + 1, 1);
+    for (size_t i = 0; i < 3 * (size_t)m->triangle_count; i++)
+        used[m->indices[i]] = 1;
+    for (uint32_t v = 0; v < m->vertex_count; v++)
+        n += !used[v];
+    free(used);
+    return n;
+}
+
 static void check_surface(int kind, const double *tols, int ntols)
 {
     test_surface t;
@@ -369,6 +383,8 @@ TEST(random_cuts_are_balanced_and_conforming)
             tsr_validation_describe(&v, msg, sizeof msg);
             CHECK_MSG(tsr_validation_ok(&v) && v.boundary_loops == 1, "extent %ux%u seed %u: %s", extents[e][0],
                       extents[e][1], seed, msg);
+            CHECK_MSG(unused_vertices(&m) == 0, "extent %ux%u seed %u: %u vertices no triangle uses", extents[e][0],
+                      extents[e][1], seed, unused_vertices(&m));
             CHECK(tsr_mesh_boundary_is_rect(&m, 0, 0, extents[e][0], extents[e][1], 1e-4, NULL));
             /* covers exactly the extent: projected area */
             double area = 0;
