@@ -143,6 +143,30 @@ tsr_status tsr_triangulate(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
                            const tsr_allocator *alloc, tsr_error *err);
 void tsr_triangulation_free(tsr_triangulation *t);
 
+/* ---- Values carried to the output vertices ------------------------------- */
+
+/* Values at every output vertex of out, a triangulation of in (vals: out->nv
+ * rows of n doubles) from values at the input points (in_vals: in->nv rows
+ * of n), as Triangle carries a .node file's attributes:
+ *  - an input point keeps its own row (a point given twice: its first row);
+ *  - a vertex the triangulator added takes the piecewise-linear interpolant
+ *    of the input values over the input's own constrained Delaunay
+ *    triangulation (the convex hull, no refinement): barycentric in the
+ *    triangle that contains it, so linear along the piece of segment or
+ *    edge it lies on;
+ *  - a crossing of two segments (a vertex of that triangulation too) takes
+ *    the value linear along the lower-numbered segment between the nearest
+ *    input points on it.
+ * The result does not depend on how refinement placed or ordered its
+ * vertices. The barycentric coordinates come from nearly exact areas, so
+ * an affine field comes out affine to rounding even in slivers. A vertex
+ * that rounding put just outside every triangle takes the values at the
+ * nearest point of the nearest triangle's edges. n must be at least 1; in
+ * must be the input out was made from. Errors: TSR_ERR_ARGUMENT (n = 0, or out not from in),
+ * TSR_ERR_NOMEM. */
+tsr_status tsr_tri_interpolate(const tsr_pslg *in, const double *in_vals, uint32_t n, const tsr_triangulation *out,
+                               double *vals, const tsr_allocator *alloc, tsr_error *err);
+
 /* ---- Independent checker ------------------------------------------------ */
 
 /* What tsr_triangulation_check found. It uses only exact predicates, the

@@ -18,16 +18,22 @@ static void help(FILE *f)
                "Delaunay triangulation, or a quadtree triangulation, optionally refined for quality.\n\n"
                "input (format from the extension, or --format):\n"
                "  .node, .poly          Triangle's formats (a .poly listing 0 points reads the .node\n"
-               "                        file of the same name)\n"
+               "                        file of the same name); point attributes (up to 64) and\n"
+               "                        markers are carried to the output\n"
                "  .json                 an array of rings, each an array of [x, y]; the first ring is\n"
                "                        the outer boundary, the others holes (earcut's test format)\n"
                "  .txt                  'nV nE', then nV lines 'x y', then nE lines 'i j' (0-based)\n\n"
                "output (format from OUT's extension):\n"
                "  .node, .ele, .poly    all three of Triangle's files: OUT's base name .node (vertices,\n"
                "                        1-based: the k-th input point is vertex k, a repeated one too,\n"
-               "                        then the Steiner points), .ele (triangles), .poly\n"
-               "                        (constrained edges, marker = segment id + 1)\n"
-               "  .obj, .ply, .stl, .glb  a mesh with z = 0 (coordinates rounded to float32)\n\n"
+               "                        then the Steiner points; the input's attributes, interpolated\n"
+               "                        linearly at Steiner points over the input's own triangulation;\n"
+               "                        boundary markers: a point's own, else that of a segment it is\n"
+               "                        on, else 1 on the boundary), .ele (triangles), .poly\n"
+               "                        (constrained edges; marker = the input segment's marker, or its\n"
+               "                        number when the input gives none)\n"
+               "  .obj, .ply, .stl, .glb  a mesh with z = 0, or an attribute (--z-attribute;\n"
+               "                        coordinates rounded to float32)\n\n"
                "options:\n"
                "  -o, --output OUT      file to write; optional with --check or --json\n"
                "  --method M            delaunay (default) or quadtree (for the enclosed and evenodd\n"
@@ -49,6 +55,8 @@ static void help(FILE *f)
                "                        bounds) and print what was checked; exit 1 if it fails (OUT is\n"
                "                        still written)\n"
                "  --json                print statistics (and the check's results) as JSON on stdout\n"
+               "  --z-attribute K       mesh output: z = the K-th .node attribute (1-based), interpolated\n"
+               "                        at Steiner points as above (e.g. elevations: a TIN)\n"
                "  --format F            read IN as node, poly, json or txt whatever its extension\n"
                "  --quiet               no summary line on stderr\n"
                "  -h, --help            this help\n\n"
@@ -220,6 +228,7 @@ static int run(int argc, char **argv)
     tsr_tri_options opt = {0};
     bool check = false, json = false, quiet = false, region_given = false;
     cli_pslg_format fmt = CLI_PSLG_UNKNOWN;
+    uint32_t z_attr = 0; /* 1-based; 0: z = 0 */
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (cli_is_help(a)) {
@@ -271,6 +280,12 @@ static int run(int argc, char **argv)
                 cli_error("triangulate", "--max-steiner %s: must be a positive integer", v);
                 return CLI_USAGE;
             }
+        } else if (!strcmp(a, "--z-attribute") && has_value) {
+            const char *v = argv[++i];
+            if (!cli_parse_u32(v, 1, 64, &z_attr)) {
+                cli_error("triangulate", "--z-attribute %s: must be an attribute number from 1 to 64", v);
+                return CLI_USAGE;
+            }
         } else if (!strcmp(a, "--format") && has_value) {
             const char *v = argv[++i];
             fmt = cli_pslg_format_parse(v);
@@ -313,6 +328,25 @@ static int run(int argc, char **argv)
         cli_error("triangulate", "%s: unknown input format (use .node, .poly, .json or .txt, or --format)", in_path);
         return CLI_USAGE;
     }
+    /* the input (and the .node a .poly may read) never among the outputs:
+     * Triangle's three files share OUT's base name */
+    {
+        char outs[3][4096], node[4096];
+        const char *names[5] = {"the input", "the points' file", "the output", "the output", "the output"};
+        const char *paths[5] = {in_path, NULL, out_path, NULL, NULL};
+        if (cli_pslg_format_from_path(in_path) == CLI_PSLG_POLY || fmt == CLI_PSLG_POLY) {
+            cli_pslg_node_path(in_path, node, sizeof node);
+            paths[1] = node;
+        }
+        if (out_kind == CLI_OUT_TRIANGLE && cli_tri_output_names(out_path, outs))
+            paths[2] = outs[0], paths[3] = outs[1], paths[4] = outs[2];
+        if (!cli_paths_distinct("triangulate", 5, names, paths))
+            return CLI_USAGE;
+    }
+    if (z_attr && out_kind != CLI_OUT_MESH) {
+        cli_error("triangulate", "--z-attribute applies to a mesh output (.obj, .ply, .stl, .glb)");
+        return CLI_USAGE;
+    }
     if (opt.conforming && opt.method == TSR_TRI_QUADTREE) {
         cli_error("triangulate", "--conforming applies to --method delaunay only");
         return CLI_USAGE;
@@ -323,6 +357,12 @@ static int run(int argc, char **argv)
     if (cli_pslg_read(in_path, fmt, &g, &err) != TSR_OK) {
         cli_error("triangulate", "%s", err.message);
         return CLI_FAIL;
+    }
+    if (z_attr > g.nattr) {
+        cli_error("triangulate", "--z-attribute %u: %s has %s%u attribute%s per point", z_attr, in_path,
+                  g.nattr ? "only " : "", g.nattr, g.nattr == 1 ? "" : "s");
+        cli_pslg_free(&g);
+        return CLI_USAGE;
     }
     if (!region_given)
         opt.region = g.format == CLI_PSLG_JSON                   ? TSR_REGION_EVEN_ODD
@@ -365,9 +405,21 @@ static int run(int argc, char **argv)
                 rc = CLI_FAIL;
         }
     }
+    double *vals = NULL; /* the attributes at every output vertex, when written */
+    if (out_path && g.nattr && (out_kind == CLI_OUT_TRIANGLE || z_attr)) {
+        vals = malloc(((size_t)t.nv * g.nattr + 1) * sizeof *vals);
+        s = vals ? tsr_tri_interpolate(&in, g.attr, g.nattr, &t, vals, NULL, &err)
+                 : tsr_error_set(&err, TSR_ERR_NOMEM, "out of memory");
+        if (s != TSR_OK) {
+            cli_error("triangulate", "%s: the attributes: %s", in_path, err.message);
+            rc = CLI_FAIL;
+            out_path = NULL;
+        }
+    }
     if (out_path) {
-        s = out_kind == CLI_OUT_TRIANGLE ? cli_tri_write_triangle(out_path, &t, g.nv, g.holes, g.nholes, &err)
-                                         : cli_tri_write_mesh(out_path, &t, &err);
+        s = out_kind == CLI_OUT_TRIANGLE
+                ? cli_tri_write_triangle(out_path, &t, &g, vals, &err)
+                : cli_tri_write_mesh(out_path, &t, vals, g.nattr, z_attr ? z_attr - 1 : 0, &err);
         if (s != TSR_OK) {
             cli_error("triangulate", "%s", err.message);
             rc = CLI_FAIL;
@@ -414,6 +466,7 @@ static int run(int argc, char **argv)
                                   : "where no usable vertex position could mend them");
         rc = CLI_UNMET;
     }
+    free(vals);
     tsr_triangulation_free(&t);
     cli_pslg_free(&g);
     return rc;

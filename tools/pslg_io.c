@@ -67,6 +67,9 @@ void cli_pslg_free(cli_pslg *p)
     free(p->xy);
     free(p->seg);
     free(p->holes);
+    free(p->attr);
+    free(p->marker);
+    free(p->seg_marker);
     memset(p, 0, sizeof *p);
 }
 
@@ -85,7 +88,7 @@ typedef struct token {
     size_t n;
 } token;
 
-#define MAX_TOKENS 8
+#define MAX_TOKENS 68 /* index x y, 64 attributes, marker */
 
 typedef struct text {
     const char *path;
@@ -191,6 +194,22 @@ static tsr_status parse_u32(const text *t, const token *k, const char *what, uin
     return TSR_OK;
 }
 
+/* A boundary marker: an integer (as Triangle reads them), within int32. */
+static tsr_status parse_marker(const text *t, const token *k, int32_t *m, tsr_error *err)
+{
+    double v;
+    tsr_status s = parse_number(t, k, "marker", &v, err);
+    if (s != TSR_OK)
+        return s;
+    if (v != floor(v) || fabs(v) > INT32_MAX) {
+        char shownbuf[128];
+        return tsr_error_set(err, TSR_ERR_VALUE, "%s:%u: marker '%s' is not an integer of at most 2147483647", t->path,
+                             t->line, shown(k, shownbuf, sizeof shownbuf));
+    }
+    *m = (int32_t)v;
+    return TSR_OK;
+}
+
 /* Could n more records fit in the rest of the file? Each needs at least
  * a one-byte value and a line end; checked before allocating, so absurd
  * counts cost nothing (records short of values are caught line by line). */
@@ -287,6 +306,10 @@ static tsr_status read_node_section(text *t, cli_pslg *g, uint32_t *base, bool a
     if (!g->xy)
         return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %u points", t->path, v[0]);
     g->nv = v[0];
+    g->nattr = v[2];
+    if ((v[2] && !(g->attr = malloc((size_t)v[0] * v[2] * sizeof *g->attr))) ||
+        (v[3] && !(g->marker = malloc((size_t)v[0] * sizeof *g->marker))))
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %u points' attributes", t->path, v[0]);
     char layout[64];
     snprintf(layout, sizeof layout, "index x y%s%s", v[2] ? " attributes" : "", v[3] ? " marker" : "");
     for (uint32_t i = 0; i < v[0]; i++) {
@@ -295,11 +318,11 @@ static tsr_status read_node_section(text *t, cli_pslg *g, uint32_t *base, bool a
             (s = parse_number(t, &tok[1], "x", &g->xy[2 * (size_t)i], err)) != TSR_OK ||
             (s = parse_number(t, &tok[2], "y", &g->xy[2 * (size_t)i + 1], err)) != TSR_OK)
             return s;
-        for (int a = 3; a < k; a++) {
-            double ignored;
-            if ((s = parse_number(t, &tok[a], a < 3 + (int)v[2] ? "attribute" : "marker", &ignored, err)) != TSR_OK)
+        for (uint32_t a = 0; a < v[2]; a++)
+            if ((s = parse_number(t, &tok[3 + a], "attribute", &g->attr[(size_t)i * v[2] + a], err)) != TSR_OK)
                 return s;
-        }
+        if (v[3] && (s = parse_marker(t, &tok[3 + v[2]], &g->marker[i], err)) != TSR_OK)
+            return s;
     }
     return TSR_OK;
 }
@@ -319,8 +342,7 @@ static tsr_status read_node_text(const char *path, const char *buf, size_t len, 
     return TSR_OK;
 }
 
-/* BASE.node beside a .poly. */
-static void node_path_of(const char *poly, char *buf, size_t cap)
+void cli_pslg_node_path(const char *poly, char *buf, size_t cap)
 {
     const char *e = extension(poly);
     snprintf(buf, cap, "%.*s.node", (int)(e - poly), poly);
@@ -336,7 +358,7 @@ static tsr_status read_poly_text(const char *path, const char *buf, size_t len, 
         return s;
     if (none) {
         char node[4096];
-        node_path_of(path, node, sizeof node);
+        cli_pslg_node_path(path, node, sizeof node);
         char *nb;
         size_t nl;
         if ((s = tsr_read_file(node, MAX_FILE_BYTES, NULL, &nb, &nl, err)) != TSR_OK) {
@@ -371,6 +393,8 @@ static tsr_status read_poly_text(const char *path, const char *buf, size_t len, 
     if (!g->seg)
         return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %u segments", path, ns);
     g->nseg = ns;
+    if (nb && !(g->seg_marker = malloc(((size_t)ns + 1) * sizeof *g->seg_marker)))
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %u segment markers", path, ns);
     for (uint32_t i = 0; i < ns; i++) {
         if ((s = record(&t, tok, k, k, i, ns, "segments", nb ? "index a b marker" : "index a b", err)) != TSR_OK ||
             (s = check_index(&t, &tok[0], i, &base, "segment", err)) != TSR_OK)
@@ -384,8 +408,7 @@ static tsr_status read_poly_text(const char *path, const char *buf, size_t len, 
                                      path, t.line, base + i, v, base, (unsigned long long)base + g->nv - 1);
             g->seg[2 * (size_t)i + e] = v - base;
         }
-        double ignored;
-        if (nb && (s = parse_number(&t, &tok[3], "marker", &ignored, err)) != TSR_OK)
+        if (nb && (s = parse_marker(&t, &tok[3], &g->seg_marker[i], err)) != TSR_OK)
             return s;
     }
     n = next_record(&t, tok);
@@ -623,20 +646,97 @@ static uint32_t *file_numbers(const tsr_triangulation *t, uint32_t ninput)
     return num;
 }
 
-static void write_node(FILE *f, const tsr_triangulation *t, uint32_t ninput)
+/* Triangles at each vertex (CSR), for the boundary tests. */
+typedef struct vtris {
+    uint32_t *first, *list;
+} vtris;
+
+static bool vtris_build(vtris *c, const tsr_triangulation *t)
 {
-    uint32_t steiner = t->nv - t->input_vertices, n = ninput + steiner;
+    c->first = calloc((size_t)t->nv + 2, sizeof *c->first);
+    c->list = malloc((3 * (size_t)t->nt + 1) * sizeof *c->list);
+    if (!c->first || !c->list)
+        return false;
+    for (size_t i = 0; i < 3 * (size_t)t->nt; i++)
+        c->first[t->tri[i] + 2]++;
+    for (uint32_t v = 0; v < t->nv; v++)
+        c->first[v + 2] += c->first[v + 1];
+    for (size_t i = 0; i < 3 * (size_t)t->nt; i++)
+        c->list[c->first[t->tri[i] + 1]++] = (uint32_t)(i / 3);
+    return true;
+}
+
+/* How many triangles have the edge u-w (either way). */
+static uint32_t edge_triangles(const vtris *c, const tsr_triangulation *t, uint32_t u, uint32_t w)
+{
+    uint32_t n = 0;
+    for (uint32_t j = c->first[u]; j < c->first[u + 1]; j++) {
+        const uint32_t *q = &t->tri[3 * (size_t)c->list[j]];
+        n += q[0] == w || q[1] == w || q[2] == w;
+    }
+    return n;
+}
+
+/* Boundary markers of the output vertices (vm, t->nv) and of the
+ * constrained edges (em, t->nedge), as cli_tri_write_triangle says. */
+static bool markers(const tsr_triangulation *t, const cli_pslg *g, int32_t *vm, int32_t *em)
+{
+    vtris c;
+    if (!vtris_build(&c, t)) {
+        free(c.first);
+        free(c.list);
+        return false;
+    }
+    memset(vm, 0, (size_t)t->nv * sizeof *vm);
+    for (uint32_t i = 0; g->marker && i < g->nv; i++)
+        if (!vm[t->vertex_of_input[i]])
+            vm[t->vertex_of_input[i]] = g->marker[i];
+    for (uint32_t e = 0; e < t->nedge; e++) {
+        int32_t m = g->seg_marker ? g->seg_marker[t->edge_segment[e]] : 0;
+        for (int k = 0; k < 2 && m; k++)
+            if (!vm[t->edge[2 * (size_t)e + k]])
+                vm[t->edge[2 * (size_t)e + k]] = m;
+        em[e] = !g->seg_marker ? (int32_t)(t->edge_segment[e] + 1)
+                : m            ? m
+                               : edge_triangles(&c, t, t->edge[2 * (size_t)e], t->edge[2 * (size_t)e + 1]) == 1;
+    }
+    for (uint32_t i = 0; i < t->nt; i++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t u = t->tri[3 * (size_t)i + k], w = t->tri[3 * (size_t)i + (k + 1) % 3];
+            if ((!vm[u] || !vm[w]) && edge_triangles(&c, t, u, w) == 1) {
+                vm[u] = vm[u] ? vm[u] : 1;
+                vm[w] = vm[w] ? vm[w] : 1;
+            }
+        }
+    free(c.first);
+    free(c.list);
+    return true;
+}
+
+static void write_row(FILE *f, uint32_t num, const double *xy, const double *attr, uint32_t nattr, int32_t marker)
+{
+    fprintf(f, "%u %.17g %.17g", num, xy[0], xy[1]);
+    for (uint32_t a = 0; a < nattr; a++)
+        fprintf(f, " %.17g", attr[a]);
+    fprintf(f, " %d\n", (int)marker);
+}
+
+static void write_node(FILE *f, const tsr_triangulation *t, const cli_pslg *g, const double *vals, const int32_t *vm)
+{
+    uint32_t ninput = g->nv, steiner = t->nv - t->input_vertices, n = ninput + steiner, na = g->nattr;
     fprintf(f,
-            "# Tessera triangulation: %u vertices (1-based), x y: the %u input points in input order (the k-th "
-            "is vertex k), then %u Steiner points\n%u 2 0 0\n",
-            n, ninput, steiner, n);
+            "# Tessera triangulation: %u vertices (1-based), x y%s boundary-marker: the %u input points in input "
+            "order (the k-th is vertex k), then %u Steiner points%s\n%u 2 %u 1\n",
+            n, na ? " attributes" : "", ninput, steiner,
+            na ? " (their attributes interpolated linearly over the input's triangulation)" : "", n, na);
     for (uint32_t i = 0; i < ninput; i++) {
-        const double *p = t->xy + 2 * (size_t)t->vertex_of_input[i];
-        fprintf(f, "%u %.17g %.17g\n", i + 1, p[0], p[1]);
+        uint32_t v = t->vertex_of_input[i];
+        write_row(f, i + 1, t->xy + 2 * (size_t)v, na ? g->attr + (size_t)i * na : NULL, na,
+                  g->marker && g->marker[i] ? g->marker[i] : vm[v]);
     }
     for (uint32_t v = t->input_vertices; v < t->nv; v++)
-        fprintf(f, "%u %.17g %.17g\n", ninput + 1 + (v - t->input_vertices), t->xy[2 * (size_t)v],
-                t->xy[2 * (size_t)v + 1]);
+        write_row(f, ninput + 1 + (v - t->input_vertices), t->xy + 2 * (size_t)v, na ? vals + (size_t)v * na : NULL, na,
+                  vm[v]);
 }
 
 static void write_ele(FILE *f, const tsr_triangulation *t, const uint32_t *num)
@@ -648,35 +748,46 @@ static void write_ele(FILE *f, const tsr_triangulation *t, const uint32_t *num)
                 num[t->tri[3 * (size_t)i + 2]]);
 }
 
-static void write_poly(FILE *f, const tsr_triangulation *t, const uint32_t *num, const double *holes, uint32_t nholes)
+static void write_poly(FILE *f, const tsr_triangulation *t, const uint32_t *num, const cli_pslg *g, const int32_t *em)
 {
-    fprintf(f, "# Tessera triangulation: constrained edges; marker = input segment id + 1\n"
-               "# 0 points: they are in the .node file of the same name\n0 2 0 0\n%u 1\n",
+    fprintf(f,
+            "# Tessera triangulation: constrained edges; marker = %s\n"
+            "# 0 points: they are in the .node file of the same name\n0 2 0 0\n%u 1\n",
+            g->seg_marker ? "the input segment's marker (1 for a 0 on the boundary)" : "input segment number",
             t->nedge);
     for (uint32_t e = 0; e < t->nedge; e++)
-        fprintf(f, "%u %u %u %u\n", e + 1, num[t->edge[2 * (size_t)e]], num[t->edge[2 * (size_t)e + 1]],
-                t->edge_segment[e] + 1);
-    fprintf(f, "%u\n", nholes);
-    for (uint32_t h = 0; h < nholes; h++)
-        fprintf(f, "%u %.17g %.17g\n", h + 1, holes[2 * (size_t)h], holes[2 * (size_t)h + 1]);
+        fprintf(f, "%u %u %u %d\n", e + 1, num[t->edge[2 * (size_t)e]], num[t->edge[2 * (size_t)e + 1]], (int)em[e]);
+    fprintf(f, "%u\n", g->nholes);
+    for (uint32_t h = 0; h < g->nholes; h++)
+        fprintf(f, "%u %.17g %.17g\n", h + 1, g->holes[2 * (size_t)h], g->holes[2 * (size_t)h + 1]);
 }
 
-tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, uint32_t ninput, const double *holes,
-                                  uint32_t nholes, tsr_error *err)
+bool cli_tri_output_names(const char *path, char (*names)[4096])
 {
     static const char *const ext[3] = {".node", ".ele", ".poly"};
-    const char *e = extension(path);
-    size_t base = (size_t)(e - path);
+    size_t base = (size_t)(extension(path) - path);
+    for (int i = 0; i < 3; i++)
+        if (snprintf(names[i], 4096, "%.*s%s", (int)base, path, ext[i]) >= 4096)
+            return false;
+    return true;
+}
+
+tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, const cli_pslg *g, const double *vals,
+                                  tsr_error *err)
+{
     char name[3][4096], tmp[3][4200];
     int begun = 0;
     tsr_status s = TSR_OK;
-    for (int i = 0; i < 3; i++) {
-        if (snprintf(name[i], sizeof name[i], "%.*s%s", (int)base, path, ext[i]) >= (int)sizeof name[i])
-            return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path too long", path);
-    }
-    uint32_t *num = file_numbers(t, ninput);
-    if (!num)
+    if (!cli_tri_output_names(path, name))
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path too long", path);
+    uint32_t *num = file_numbers(t, g->nv);
+    int32_t *vm = malloc(((size_t)t->nv + 1) * sizeof *vm), *em = malloc(((size_t)t->nedge + 1) * sizeof *em);
+    if (!num || !vm || !em || !markers(t, g, vm, em)) {
+        free(num);
+        free(vm);
+        free(em);
         return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
+    }
     for (; begun < 3; begun++)
         if ((s = tsr_atomic_begin(name[begun], tmp[begun], sizeof tmp[begun], err)) != TSR_OK)
             goto fail;
@@ -687,11 +798,11 @@ tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, 
             goto fail;
         }
         if (i == 0)
-            write_node(f, t, ninput);
+            write_node(f, t, g, vals, vm);
         else if (i == 1)
             write_ele(f, t, num);
         else
-            write_poly(f, t, num, holes, nholes);
+            write_poly(f, t, num, g, em);
         bool bad = ferror(f) != 0;
         int saved = errno;
         if (fclose(f) != 0 && !bad) {
@@ -710,19 +821,21 @@ tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, 
                 remove(name[j]);
             for (int j = i + 1; j < 3; j++)
                 tsr_atomic_abort(tmp[j]);
-            free(num);
-            return s;
+            goto done;
         }
-    free(num);
-    return TSR_OK;
+    goto done;
 fail:
     for (int i = 0; i < begun; i++)
         tsr_atomic_abort(tmp[i]);
+done:
     free(num);
+    free(vm);
+    free(em);
     return s;
 }
 
-tsr_status cli_tri_write_mesh(const char *path, const tsr_triangulation *t, tsr_error *err)
+tsr_status cli_tri_write_mesh(const char *path, const tsr_triangulation *t, const double *vals, uint32_t nvals,
+                              uint32_t z_col, tsr_error *err)
 {
     tsr_mesh m;
     tsr_mesh_init(&m, 0, NULL);
@@ -732,7 +845,8 @@ tsr_status cli_tri_write_mesh(const char *path, const tsr_triangulation *t, tsr_
         return tsr_error_set(err, s, "%s: out of memory for the mesh", path);
     }
     for (uint32_t v = 0; v < t->nv; v++) {
-        float p[3] = {(float)t->xy[2 * (size_t)v], (float)t->xy[2 * (size_t)v + 1], 0.0f};
+        float p[3] = {(float)t->xy[2 * (size_t)v], (float)t->xy[2 * (size_t)v + 1],
+                      vals ? (float)vals[(size_t)v * nvals + z_col] : 0.0f};
         tsr_mesh_add_vertex(&m, p, NULL, NULL);
     }
     for (uint32_t i = 0; i < t->nt; i++)

@@ -3,10 +3,10 @@
  *
  * Readers (each gives one error line naming the file and the line, or the
  * JSON position, and the problem; nothing is returned on failure):
- *  - Triangle's .node (`n dim nattr nbound`, then `i x y [attrs] [bmark]`)
- *    and .poly (a node section, which may say 0 points, meaning "read the
- *    .node file of the same name"; `nseg nbound`, `i a b [bmark]`;
- *    `nholes`, `i x y`; a regional attribute section, if any, is ignored).
+ *  - Triangle's .node (`n dim nattr nbound`, then `i x y [attrs] [bmark]`;
+ *    up to 64 attributes, kept with integer markers) and .poly (a node section, which may say 0 points, meaning "read
+ * the .node file of the same name"; `nseg nbound`, `i a b [bmark]`; `nholes`, `i x y`; a regional attribute section, if
+ * any, is ignored; segment markers are kept).
  *    `#` starts a comment, blank lines are skipped, and the index base (0
  *    or 1) is the first point's index; indices must then be consecutive.
  *  - JSON rings (an array of rings, each an array of [x, y]; the first
@@ -42,6 +42,10 @@ typedef struct cli_pslg {
     uint32_t nseg;
     double *holes; /* 2 per hole seed */
     uint32_t nholes;
+    double *attr; /* .node attributes: nattr per point, or NULL */
+    uint32_t nattr;
+    int32_t *marker;     /* .node boundary markers, one per point, or NULL */
+    int32_t *seg_marker; /* .poly segment markers, one per segment, or NULL */
     cli_pslg_format format;
     uint32_t rings; /* JSON: rings read (including one-point rings) */
 } cli_pslg;
@@ -68,18 +72,34 @@ tsr_pslg cli_pslg_view(const cli_pslg *p);
 typedef enum cli_tri_output { CLI_OUT_UNKNOWN = 0, CLI_OUT_TRIANGLE, CLI_OUT_MESH } cli_tri_output;
 cli_tri_output cli_tri_output_from_path(const char *path);
 
-/* For a path ending in .node, .ele or .poly, writes BASE.node (vertices,
- * 1-based: the ninput input points first, in input order (the k-th is
- * vertex k), a duplicate too though no triangle uses it, as Triangle keeps
- * them;
- * then the Steiner points), BASE.ele (triangles) and BASE.poly (0 points,
- * meaning BASE.node; the constrained edges as segments with marker =
- * input segment id + 1; the hole seeds given). All three are written to
- * temporary files first and renamed only when all are complete. */
-tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, uint32_t ninput, const double *holes,
-                                  uint32_t nholes, tsr_error *err);
+/* The three files cli_tri_write_triangle writes for path (BASE.node,
+ * BASE.ele, BASE.poly); false when a name does not fit in cap bytes. */
+bool cli_tri_output_names(const char *path, char (*names)[4096]);
 
-/* Writes t as a mesh (z = 0) in the format of path's extension. */
-tsr_status cli_tri_write_mesh(const char *path, const tsr_triangulation *t, tsr_error *err);
+/* The .node file a .poly of 0 points reads its points from (BASE.node). */
+void cli_pslg_node_path(const char *poly, char *buf, size_t cap);
+
+/* For a path ending in .node, .ele or .poly, writes BASE.node, BASE.ele
+ * (triangles) and BASE.poly, all three to temporary files first, renamed
+ * only when all are complete.
+ *  - BASE.node: vertices, 1-based: g's points first, in input order (the
+ *    k-th is vertex k, a repeated one too though no triangle uses it, as
+ *    Triangle keeps them), then the Steiner points; with g's attributes,
+ *    carried to the Steiner points by vals (t->nv rows of g->nattr, from
+ *    tsr_tri_interpolate; NULL when g has none); and a boundary marker, by
+ *    Triangle's rules: a point's own marker when not 0, else the marker
+ *    (not 0) of an input segment it lies on, else 1 on the triangulation's
+ *    boundary, else 0.
+ *  - BASE.poly: 0 points (meaning BASE.node), the constrained edges as
+ *    segments, and g's hole seeds. An edge's marker is its input segment's
+ *    marker when g has segment markers (1 for a 0 on the boundary, as
+ *    Triangle does), else the input segment's number (1-based). */
+tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, const cli_pslg *g, const double *vals,
+                                  tsr_error *err);
+
+/* Writes t as a mesh in the format of path's extension: z = 0, or, with
+ * vals (t->nv rows of nvals), z = vals[v * nvals + z_col]. */
+tsr_status cli_tri_write_mesh(const char *path, const tsr_triangulation *t, const double *vals, uint32_t nvals,
+                              uint32_t z_col, tsr_error *err);
 
 #endif

@@ -20,7 +20,8 @@
  * Checked: no allocation above 256 MiB; valid input gives TSR_OK (or
  * NOMEM), invalid input TSR_ERR_ARGUMENT with a message; every result
  * passes fuzz_check_triangulation (fuzz.h), the independent checker among
- * others; a quadtree result keeps the area the Delaunay method keeps on
+ * others; an affine field given at the input points comes out the same
+ * field at every output vertex (tsr_tri_interpolate); a quadtree result keeps the area the Delaunay method keeps on
  * the same input (within 1e-8 of the box diagonal squared: slivers of
  * rounding), which the checker cannot see where segments dangle, unless
  * a hole seed lies on a segment or point (its side is unspecified), or,
@@ -181,6 +182,24 @@ int fuzz_triangulate(const uint8_t *data, size_t size)
         fuzz_fail("triangulate: valid input refused, status %d: %s", (int)s, err.message);
 
     fuzz_check_triangulation(&in, &o, &t, "triangulate");
+    /* values carried to the vertices: an affine field at the input points
+     * comes out as the same field at every vertex (linear interpolation
+     * reproduces it; rounding aside) */
+    if (nv > 0) {
+        double iv[MAX_POINTS], *ov = tsr_alloc(&alloc, ((size_t)t.nv + 1) * sizeof *ov);
+        for (uint32_t i = 0; i < nv; i++)
+            iv[i] = 1 + 2 * xy[2 * i] - 3 * xy[2 * i + 1];
+        tsr_status si = ov ? tsr_tri_interpolate(&in, iv, 1, &t, ov, &alloc, &err) : TSR_ERR_NOMEM;
+        if (si != TSR_OK && si != TSR_ERR_NOMEM)
+            fuzz_fail("triangulate: tsr_tri_interpolate refused, status %d: %s", (int)si, err.message);
+        for (uint32_t v = 0; si == TSR_OK && v < t.nv; v++) {
+            double want = 1 + 2 * t.xy[2 * (size_t)v] - 3 * t.xy[2 * (size_t)v + 1];
+            if (!(fabs(ov[v] - want) <= 1e-9 * 100))
+                fuzz_fail("triangulate: vertex %u (%.17g, %.17g) carries %.17g, the affine field is %.17g", v,
+                          t.xy[2 * (size_t)v], t.xy[2 * (size_t)v + 1], ov[v], want);
+        }
+        tsr_free(&alloc, ov);
+    }
     /* the quadtree method keeps the Delaunay method's region: same area
      * (within slivers of rounding), whatever the refinement */
     if (o.method == TSR_TRI_QUADTREE && !seed_on_feature(&in) &&

@@ -1039,6 +1039,149 @@ TEST(small_angle_beside_short_hull_edge)
     }
 }
 
+/* ---- Values carried to the output vertices (tsr_tri_interpolate) ---- */
+
+/* The oracle for a Steiner point: the triangle of the input's own
+ * triangulation that contains it, found by trying every triangle with exact
+ * orient2d (any triangle whose closed area holds it will do: on a shared
+ * edge both give the same value), and its barycentric interpolant; NAN if
+ * none contains it. */
+static double oracle_value(const tsr_triangulation *t0, const double *v0, const double p[2])
+{
+    for (uint32_t i = 0; i < t0->nt; i++) {
+        const double *a = t0->xy + 2 * (size_t)t0->tri[3 * i], *b = t0->xy + 2 * (size_t)t0->tri[3 * i + 1],
+                     *c = t0->xy + 2 * (size_t)t0->tri[3 * i + 2];
+        if (tsr_orient2d(a, b, p) < 0 || tsr_orient2d(b, c, p) < 0 || tsr_orient2d(c, a, p) < 0)
+            continue;
+        double d = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        double lb = ((p[0] - a[0]) * (c[1] - a[1]) - (p[1] - a[1]) * (c[0] - a[0])) / d;
+        double lc = ((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])) / d;
+        return (1 - lb - lc) * v0[t0->tri[3 * i]] + lb * v0[t0->tri[3 * i + 1]] + lc * v0[t0->tri[3 * i + 2]];
+    }
+    return NAN;
+}
+
+/* Carries values of the input points through t (one per point, and a
+ * second, affine one): input points keep theirs (a repeated point its
+ * first), the affine field comes out exact everywhere (piecewise-linear
+ * interpolation reproduces it, crossings too), and each Steiner point's
+ * first value is the oracle's from the unrefined triangulation when one of
+ * its triangles contains it (else, rounded outside, within the input's
+ * range). Returns how many Steiner points the oracle checked. */
+static uint32_t check_values(const build *b, const tsr_triangulation *t, const char *what)
+{
+    tsr_pslg in = pslg_of(b);
+    double *iv = malloc(2 * (size_t)b->nv * sizeof *iv), lo = INFINITY, hi = -INFINITY;
+    for (uint32_t i = 0; i < b->nv; i++) {
+        iv[2 * i] = urand() * 100 - 50; /* not linear */
+        iv[2 * i + 1] = 3 + 2 * b->xy[2 * i] - 5 * b->xy[2 * i + 1];
+        lo = fmin(lo, iv[2 * i]);
+        hi = fmax(hi, iv[2 * i]);
+    }
+    double *ov = malloc(2 * ((size_t)t->nv + 1) * sizeof *ov);
+    tsr_error err = {0};
+    tsr_status st = tsr_tri_interpolate(&in, iv, 2, t, ov, NULL, &err);
+    CHECK_MSG(st == TSR_OK, "%s: %s", what, err.message);
+    uint32_t checked = 0;
+    if (st == TSR_OK) {
+        for (uint32_t i = b->nv; i-- > 0;) {
+            uint32_t v = t->vertex_of_input[i];
+            bool first = true; /* no earlier point equal to i */
+            for (uint32_t j = 0; j < i && first; j++)
+                first = t->vertex_of_input[j] != v;
+            if (first)
+                CHECK_MSG(ov[2 * v] == iv[2 * i] && ov[2 * v + 1] == iv[2 * i + 1], "%s: input point %u", what, i);
+        }
+        tsr_triangulation t0;
+        tsr_tri_options o0 = {.region = TSR_REGION_HULL};
+        tsr_pslg p0 = in;
+        p0.holes = NULL, p0.nholes = 0;
+        CHECK(tsr_triangulate(&p0, &o0, &t0, NULL, &err) == TSR_OK);
+        double *v0 = malloc(((size_t)t0.nv + 1) * sizeof *v0), *iv1 = malloc(((size_t)b->nv + 1) * sizeof *iv1);
+        for (uint32_t i = 0; i < b->nv; i++)
+            iv1[i] = iv[2 * i];
+        /* t0's own vertices are the input points and the crossings */
+        CHECK(tsr_tri_interpolate(&in, iv1, 1, &t0, v0, NULL, &err) == TSR_OK);
+        free(iv1);
+        double scale = 1;
+        for (uint32_t i = 0; i < b->nv; i++)
+            scale = fmax(scale, fabs(iv[2 * i + 1]));
+        for (uint32_t v = t->input_vertices; v < t->nv; v++) {
+            const double *p = t->xy + 2 * (size_t)v;
+            double affine = 3 + 2 * p[0] - 5 * p[1];
+            CHECK_MSG(fabs(ov[2 * v + 1] - affine) <= 1e-9 * scale, "%s: vertex %u affine %.17g, expected %.17g", what,
+                      v, ov[2 * v + 1], affine);
+            double want = oracle_value(&t0, v0, p);
+            if (isnan(want)) {
+                CHECK_MSG(ov[2 * v] >= lo - 1e-9 && ov[2 * v] <= hi + 1e-9, "%s: vertex %u outside the range", what, v);
+                continue;
+            }
+            checked++;
+            CHECK_MSG(fabs(ov[2 * v] - want) <= 1e-9 * 50, "%s: vertex %u (%.17g, %.17g): %.17g, oracle %.17g", what, v,
+                      p[0], p[1], ov[2 * v], want);
+        }
+        free(v0);
+        tsr_triangulation_free(&t0);
+    }
+    free(iv);
+    free(ov);
+    return checked;
+}
+
+TEST(values_carried_to_steiner_points)
+{
+    /* a ring with a hole, crossing segments, a repeated point, scattered
+     * points; refined several ways and by both methods */
+    build b = {0};
+    square_ring(&b, 0, 0, 10, 8);
+    square_ring(&b, 6, 5, 8, 7);
+    hole(&b, 7, 6);
+    sg(&b, pt(&b, 1, 1), pt(&b, 5, 6));
+    sg(&b, pt(&b, 1, 6), pt(&b, 5, 1.5));
+    pt(&b, 1, 1); /* the same point again */
+    for (int i = 0; i < 40; i++)
+        pt(&b, 0.2 + 9.6 * urand(), 0.2 + 4.6 * urand());
+    const tsr_tri_options opts[5] = {{.min_angle = 30},
+                                     {.max_area = 0.05},
+                                     {.conforming = true, .min_angle = 25},
+                                     {.method = TSR_TRI_QUADTREE, .region = TSR_REGION_ENCLOSED},
+                                     {.region = TSR_REGION_HULL}};
+    const char *names[5] = {"-q 30", "-a 0.05", "conforming -q 25", "quadtree", "crossings only"};
+    uint32_t checked = 0;
+    for (int k = 0; k < 5; k++) {
+        tsr_triangulation t = run(&b, &opts[k], names[k]);
+        CHECK_MSG(t.steiner > 0, "%s: no Steiner points", names[k]);
+        checked += check_values(&b, &t, names[k]);
+        tsr_triangulation_free(&t);
+    }
+    CHECK(checked > 500);
+    build_free(&b);
+}
+
+TEST(values_at_a_crossing_follow_the_lower_segment)
+{
+    /* segment 0 from (0,0) to (4,0) with values 0 and 8; segment 1 from
+     * (1,-1) to (1,3) with values 100 and 104: the crossing at (1,0) is 2
+     * (a quarter along segment 0), not 101 */
+    build b = {0};
+    pt(&b, 0, 0), pt(&b, 4, 0), pt(&b, 1, -1), pt(&b, 1, 3);
+    sg(&b, 0, 1);
+    sg(&b, 2, 3);
+    double iv[4] = {0, 8, 100, 104};
+    tsr_tri_options o = {0};
+    tsr_triangulation t = run(&b, &o, "crossing");
+    CHECK(t.intersections == 1 && t.nv == 5);
+    tsr_pslg in = pslg_of(&b);
+    double ov[5];
+    tsr_error err = {0};
+    CHECK(tsr_tri_interpolate(&in, iv, 1, &t, ov, NULL, &err) == TSR_OK);
+    CHECK_NEAR(ov[4], 2.0, 1e-12);
+    /* and the refusals */
+    CHECK(tsr_tri_interpolate(&in, iv, 0, &t, ov, NULL, &err) == TSR_ERR_ARGUMENT);
+    build_free(&b);
+    tsr_triangulation_free(&t);
+}
+
 TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T(segments_crossing_at_one_point),
           T(overlapping_collinear_segments), T(points_on_segments), T(point_on_segment_beside_rounded_crossing),
           T(integer_grid_1000), T(hole_touching_outer_boundary), T(self_touching_ring), T(polygon_with_1024_holes),
@@ -1048,4 +1191,5 @@ TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T
           T(crossing_rounded_beyond_its_triangles), T(crossing_an_ulp_from_an_end), T(crossing_of_a_far_edge),
           T(near_vertex_beyond_the_segments_end), T(near_vertex_beside_the_pieces_end),
           T(crossing_fallbacks_terminate_forwards), T(conforming_delaunay), T(random_crossing_segments),
-          T(bad_input_refused), T(incremental_changes), T(small_angle_beside_short_hull_edge))
+          T(bad_input_refused), T(incremental_changes), T(small_angle_beside_short_hull_edge),
+          T(values_carried_to_steiner_points), T(values_at_a_crossing_follow_the_lower_segment))

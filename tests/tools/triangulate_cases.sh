@@ -116,7 +116,13 @@ tri_dimension)
   printf '3 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n' > "$dir/three.node"
   expect_error 1 "three\.node:1: dimension 3; only 2 is supported" -- tri "$dir/three.node"
   printf '3 2 0 2\n1 0 0 1 1\n' > "$dir/marks.node"
-  expect_error 1 "marks\.node:1: marker count 2; it is 0 or 1" -- tri "$dir/marks.node" ;;
+  expect_error 1 "marks\.node:1: marker count 2; it is 0 or 1" -- tri "$dir/marks.node"
+  printf '3 2 0 1\n1 0 0 1\n2 1 0 1.5\n3 0 1 0\n' > "$dir/halfmark.node"
+  expect_error 1 "halfmark\.node:3: marker '1\.5' is not an integer" -- tri "$dir/halfmark.node"
+  printf '3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n1 1\n1 1 2 3e10\n0\n' > "$dir/bigmark.poly"
+  expect_error 1 "bigmark\.poly:6: marker '3e10' is not an integer of at most 2147483647" -- tri "$dir/bigmark.poly"
+  printf '3 2 65 0\n' > "$dir/attrs.node"
+  expect_error 1 "attrs\.node:1: 65 attributes per point; at most 64 are read" -- tri "$dir/attrs.node" ;;
 tri_bad_options)
   sq="$dir/square.node"
   expect_error 2 "-q 70: the minimum angle must be" -- "$tessera" triangulate "$sq" --check -q 70
@@ -133,6 +139,18 @@ tri_bad_options)
   expect_error 2 "--conforming applies to --method delaunay only" -- "$tessera" triangulate "$sq" --check --conforming --method quadtree
   expect_error 2 "unknown option '--frobnicate'" -- "$tessera" triangulate "$sq" --frobnicate
   expect_error 2 "one input at a time" -- "$tessera" triangulate "$sq" "$sq" --check
+  expect_error 2 "--z-attribute 1: .*square\.node has 0 attributes per point" -- "$tessera" triangulate "$sq" -o "$dir/z.obj" --z-attribute 1
+  printf '3 2 2 0\n1 0 0 5 6\n2 1 0 5 6\n3 0 1 5 6\n' > "$dir/two_attr.node"
+  expect_error 2 "--z-attribute 3: .*two_attr\.node has only 2 attributes per point" -- "$tessera" triangulate "$dir/two_attr.node" -o "$dir/z.obj" --z-attribute 3
+  expect_error 2 "--z-attribute 0: must be an attribute number from 1 to 64" -- "$tessera" triangulate "$sq" -o "$dir/z.obj" --z-attribute 0
+  # Triangle's three output files never replace the input (they share OUT's base name)
+  printf '3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n3 0\n1 1 2\n2 2 3\n3 3 1\n0\n' > "$dir/tri.poly"
+  cp "$dir/tri.poly" "$dir/tri.poly.orig"
+  expect_error 2 "the input .*tri\.poly and the output .*tri\.poly name the same file" -- "$tessera" triangulate "$dir/tri.poly" -o "$dir/tri.ele"
+  expect_error 2 "the input .*square\.node and the output .*square\.node name the same file" -- "$tessera" triangulate "$sq" -o "$dir/square.poly"
+  cmp -s "$dir/tri.poly" "$dir/tri.poly.orig" || fail "tri.poly was overwritten"
+  [ ! -e "$dir/tri.node" ] && [ ! -e "$dir/tri.ele" ] || fail "output files written beside tri.poly"
+  expect_error 2 "--z-attribute applies to a mesh output" -- "$tessera" triangulate "$dir/two_attr.node" -o "$dir/z.node" --z-attribute 1
   # --format overrides the extension
   "$tessera" triangulate "$dir/square.dat" --format node --check --quiet > /dev/null || fail "--format node"
   echo "ok [$case]: --format node reads square.dat" ;;

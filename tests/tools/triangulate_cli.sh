@@ -117,7 +117,7 @@ EOF
   # triangles use the first
   printf '5 2 0 0\n1 0 0\n2 4 0\n3 4 4\n4 4 0\n5 0 4\n' > "$dir/dup.node"
   "$tessera" triangulate "$dir/dup.node" -o "$dir/dupout.node" --quiet || fail "dup.node"
-  [ "$(grep -v '^#' "$dir/dupout.node" | sed -n 5p)" = "4 4 0" ] || fail "duplicate's number: $(cat "$dir/dupout.node")"
+  [ "$(grep -v '^#' "$dir/dupout.node" | sed -n 5p)" = "4 4 0 1" ] || fail "duplicate's number: $(cat "$dir/dupout.node")"
   grep -v '^#' "$dir/dupout.ele" | sed 1d | awk '$2 == 4 || $3 == 4 || $4 == 4 {exit 1}' ||
     fail "a triangle uses the duplicate: $(cat "$dir/dupout.ele")"
   # the .poly (0 points: they are in out.node) back through our reader:
@@ -148,6 +148,44 @@ EOF
     [ "$got_f" = "$nt" ] || fail "$fmt: assimp reads $got_f faces, wrote $nt"
     echo "ok $fmt: assimp reads $got_f faces"
   done
+  # attributes and markers carried through. a1 = 1 + 2x + 3y (affine: the
+  # linear interpolation must give it exactly at every Steiner point), a2 =
+  # x y (kept at the input points); the bottom side's segments marked 5, the
+  # other sides' 0 (so 1 on the boundary), the hole's 7, point 9 marked 9
+  awk 'BEGIN {
+    n = split("0 0 10 0 10 10 0 10 3 3 7 3 7 7 3 7 5 0", c, " ");
+    print "9 2 2 1";
+    for (i = 1; i <= 9; i++) { x = c[2 * i - 1]; y = c[2 * i]; printf "%d %s %s %.17g %.17g %d\n", i, x, y, 1 + 2 * x + 3 * y, x * y, i == 9 ? 9 : 0 }
+    print "9 1"; print "1 1 9 5"; print "2 9 2 5"; print "3 2 3 0"; print "4 3 4 0"; print "5 4 1 0";
+    print "6 5 6 7"; print "7 6 7 7"; print "8 7 8 7"; print "9 8 5 7"; print "1"; print "1 5 5" }' > "$dir/attr.poly"
+  "$tessera" triangulate "$dir/attr.poly" -o "$dir/attr.1.node" -q 30 -a 1 --quiet || fail "attr.poly"
+  grep -v '^#' "$dir/attr.1.node" | awk -v in_file="$dir/attr.poly" '
+    BEGIN { while ((getline l < in_file) > 0) { split(l, f, " "); if (++k >= 2 && k <= 10) a2[f[1]] = f[5] } }
+    NR == 1 { if ($2 != 2 || $3 != 2 || $4 != 1) { print "header " $0; bad = 1 }; n = $1; next }
+    {
+      x = $2; y = $3; d = $4 - (1 + 2 * x + 3 * y); if (d < 0) d = -d;
+      if (d > 1e-9 * (1 + 2 * 10 + 3 * 10)) { print "a1 at " x, y ": " $4; bad = 1 }
+      if ($1 <= 9 && $5 != a2[$1]) { print "a2 of input point " $1 ": " $5 " not " a2[$1]; bad = 1 }
+      hole_side = x >= 3 && x <= 7 && y >= 3 && y <= 7 && (x == 3 || x == 7 || y == 3 || y == 7);
+      want = $1 == 9 ? 9 : y == 0 ? 5 : (x == 0 || x == 10 || y == 10) ? 1 : hole_side ? 7 : 0;
+      if ($6 != want) { print "marker of " $1 " (" x ", " y "): " $6 " not " want; bad = 1 }
+      if ($1 > 9) steiner++
+    }
+    END { if (steiner < 50) { print "only " steiner " Steiner points"; bad = 1 }; exit bad }' ||
+    fail "attributes or markers in attr.1.node"
+  # the .poly: every edge on the bottom side marked 5, on the hole 7, else 1
+  grep -v '^#' "$dir/attr.1.node" | sed 1d | awk '{ print $1, $2, $3 }' > "$dir/attr.xy"
+  grep -v '^#' "$dir/attr.1.poly" | sed -n '2,$p' | awk -v xy="$dir/attr.xy" '
+    BEGIN { while ((getline l < xy) > 0) { split(l, f, " "); X[f[1]] = f[2]; Y[f[1]] = f[3] } }
+    NR == 1 { n = $1; next } NR > n + 1 { exit }
+    { y0 = Y[$2]; y1 = Y[$3]; want = (y0 == 0 && y1 == 0) ? 5 : (X[$2] >= 3 && X[$2] <= 7 && Y[$2] >= 3 && Y[$2] <= 7) ? 7 : 1;
+      if ($4 != want) { print "segment " $0 ": marker " $4 " not " want; bad = 1 } }
+    END { exit bad }' || fail "segment markers in the output .poly"
+  # --z-attribute 1 to a mesh: a TIN whose every vertex has z = a1 (float32)
+  "$tessera" triangulate "$dir/attr.poly" -o "$dir/attr.obj" -q 30 -a 1 --z-attribute 1 --quiet || fail "--z-attribute"
+  awk '$1 == "v" { n++; d = $4 - (1 + 2 * $2 + 3 * $3); if (d < 0) d = -d; if (d > 1e-4) { print "z at " $2, $3 ": " $4; bad = 1 } }
+       END { if (n < 60) bad = 1; exit bad }' "$dir/attr.obj" || fail "z of --z-attribute 1"
+  echo "ok attributes interpolated (affine exact), markers by Triangle's rules, --z-attribute"
   # JSON rings: the same square with its hole, even-odd by default
   printf '[[[0,0],[10,0],[10,10],[0,10],[0,0]],[[3,3],[7,3],[7,7],[3,7]]]' > "$dir/ring.json"
   "$tessera" triangulate "$dir/ring.json" --check --json > "$dir/ring.out" || fail "ring.json"

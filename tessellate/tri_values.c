@@ -1,0 +1,348 @@
+/* tri_values.c: values carried from the input points of a triangulation to
+ * its output vertices (tsr_tri_interpolate), as Triangle carries a .node
+ * file's attributes. The interpolant is that of the input's own
+ * constrained Delaunay triangulation, so it does not depend on refinement;
+ * the Steiner points are located in it by a walk from a nearby triangle. */
+#include "tessellate/tessellate.h"
+
+#include <math.h>
+#include <string.h>
+
+/* The input's own triangulation and what the walk needs of it. */
+typedef struct base {
+    tsr_triangulation t;
+    uint32_t *adj;   /* 3 per triangle: the triangle across edge (k, k+1), or NONE */
+    uint32_t *start; /* per cell: a triangle whose centroid lies in it, or NONE */
+    uint32_t cells;  /* per side */
+    double lo[2], scale[2];
+    uint32_t last, seed;
+} base;
+
+#define NONE UINT32_MAX
+
+/* Incidences per vertex (CSR): first[v] .. first[v + 1] in list. */
+typedef struct incid {
+    uint32_t *first, *list;
+} incid;
+
+static bool incid_build(incid *c, uint32_t nv, const uint32_t *items, uint32_t nitems, uint32_t per,
+                        const tsr_allocator *a)
+{
+    c->first = tsr_alloc(a, ((size_t)nv + 2) * sizeof *c->first);
+    c->list = tsr_alloc(a, ((size_t)nitems * per + 1) * sizeof *c->list);
+    if (!c->first || !c->list)
+        return false;
+    memset(c->first, 0, ((size_t)nv + 2) * sizeof *c->first);
+    for (size_t i = 0; i < (size_t)nitems * per; i++)
+        c->first[items[i] + 2]++;
+    for (uint32_t v = 0; v < nv; v++)
+        c->first[v + 2] += c->first[v + 1];
+    for (size_t i = 0; i < (size_t)nitems * per; i++)
+        c->list[c->first[items[i] + 1]++] = (uint32_t)(i / per);
+    return true;
+}
+
+static void incid_free(incid *c, const tsr_allocator *a)
+{
+    tsr_free(a, c->first);
+    tsr_free(a, c->list);
+}
+
+/* Neighbours across each triangle edge, from the triangles at each vertex. */
+static bool build_adjacency(base *b, const tsr_allocator *a)
+{
+    const tsr_triangulation *t = &b->t;
+    incid at;
+    b->adj = tsr_alloc(a, (3 * (size_t)t->nt + 1) * sizeof *b->adj);
+    if (!b->adj || !incid_build(&at, t->nv, t->tri, t->nt, 3, a)) {
+        if (b->adj)
+            incid_free(&at, a);
+        return false;
+    }
+    for (uint32_t i = 0; i < t->nt; i++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t u = t->tri[3 * (size_t)i + k], w = t->tri[3 * (size_t)i + (k + 1) % 3], found = NONE;
+            for (uint32_t j = at.first[u]; j < at.first[u + 1] && found == NONE; j++) {
+                uint32_t o = at.list[j];
+                const uint32_t *q = &t->tri[3 * (size_t)o];
+                /* the neighbour has the edge the other way: w then u */
+                for (int m = 0; m < 3 && o != i; m++)
+                    if (q[m] == w && q[(m + 1) % 3] == u)
+                        found = o;
+            }
+            b->adj[3 * (size_t)i + k] = found;
+        }
+    incid_free(&at, a);
+    return true;
+}
+
+static uint32_t cell_of(const base *b, const double p[2])
+{
+    uint32_t c[2];
+    for (int d = 0; d < 2; d++) {
+        double f = (p[d] - b->lo[d]) * b->scale[d];
+        c[d] = !(f > 0) ? 0 : f >= b->cells - 1 ? b->cells - 1 : (uint32_t)f;
+    }
+    return c[1] * b->cells + c[0];
+}
+
+static bool build_start_grid(base *b, const tsr_allocator *a)
+{
+    const tsr_triangulation *t = &b->t;
+    double hi[2] = {-INFINITY, -INFINITY};
+    b->lo[0] = b->lo[1] = INFINITY;
+    for (uint32_t v = 0; v < t->nv; v++)
+        for (int d = 0; d < 2; d++) {
+            b->lo[d] = fmin(b->lo[d], t->xy[2 * (size_t)v + d]);
+            hi[d] = fmax(hi[d], t->xy[2 * (size_t)v + d]);
+        }
+    double side = ceil(sqrt(t->nt / 4.0));
+    b->cells = side < 1 ? 1 : side > 4096 ? 4096 : (uint32_t)side;
+    for (int d = 0; d < 2; d++)
+        b->scale[d] = hi[d] > b->lo[d] ? b->cells / (hi[d] - b->lo[d]) : 0;
+    b->start = tsr_alloc(a, (size_t)b->cells * b->cells * sizeof *b->start);
+    if (!b->start)
+        return false;
+    memset(b->start, 0xff, (size_t)b->cells * b->cells * sizeof *b->start);
+    for (uint32_t i = 0; i < t->nt; i++) {
+        double c[2] = {0, 0};
+        for (int k = 0; k < 3; k++)
+            for (int d = 0; d < 2; d++)
+                c[d] += t->xy[2 * (size_t)t->tri[3 * (size_t)i + k] + d] / 3;
+        b->start[cell_of(b, c)] = i;
+    }
+    return true;
+}
+
+/* Twice the signed area of a, b, c, nearly exact (within a few units in
+ * the last place of the result, however thin the triangle): the six
+ * products of the expanded determinant, each exact as two doubles (fma),
+ * summed with Neumaier's compensation. The differences of the plain formula
+ * would lose the area of a sliver: with edges of length L it is off by
+ * about L^2 times the rounding unit, which for a sliver 1e-11 wide and 30
+ * long moves the interpolated point by a hundredth of a unit. */
+static double area2(const double *a, const double *b, const double *c)
+{
+    const double f[6][2] = {{a[0], b[1]}, {-a[1], b[0]}, {b[0], c[1]}, {-b[1], c[0]}, {c[0], a[1]}, {-c[1], a[0]}};
+    double s = 0, comp = 0;
+    for (int i = 0; i < 6; i++) {
+        double hi = f[i][0] * f[i][1], lo = fma(f[i][0], f[i][1], -hi), t[2] = {hi, lo};
+        for (int k = 0; k < 2; k++) {
+            double u = s + t[k];
+            comp += fabs(s) >= fabs(t[k]) ? (s - u) + t[k] : (t[k] - u) + s;
+            s = u;
+        }
+    }
+    return s + comp;
+}
+
+/* The weights of p on triangle i's vertices: its barycentric coordinates
+ * when p lies in it; otherwise (p beyond a hull edge by rounding) those of
+ * the nearest point of the triangle's edges, so the point used moves no
+ * further than p is outside. */
+static void barycentric(const base *b, uint32_t i, const double p[2], double l[3])
+{
+    const uint32_t *q = &b->t.tri[3 * (size_t)i];
+    const double *v[3] = {&b->t.xy[2 * (size_t)q[0]], &b->t.xy[2 * (size_t)q[1]], &b->t.xy[2 * (size_t)q[2]]};
+    double sum = 0;
+    bool outside = false;
+    for (int k = 0; k < 3; k++) {
+        l[k] = area2(v[(k + 1) % 3], v[(k + 2) % 3], p); /* the sub-triangle opposite vertex k */
+        outside = outside || l[k] < 0;
+        sum += l[k];
+    }
+    if (!outside && sum > 0) {
+        for (int k = 0; k < 3; k++)
+            l[k] /= sum;
+        return;
+    }
+    double best = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        const double *u = v[k], *w = v[(k + 1) % 3];
+        double d[2] = {w[0] - u[0], w[1] - u[1]}, len2 = d[0] * d[0] + d[1] * d[1];
+        double f = len2 > 0 ? ((p[0] - u[0]) * d[0] + (p[1] - u[1]) * d[1]) / len2 : 0;
+        f = f < 0 ? 0 : f > 1 ? 1 : f;
+        double dist = hypot(u[0] + f * d[0] - p[0], u[1] + f * d[1] - p[1]);
+        if (dist < best) {
+            best = dist;
+            l[k] = 1 - f;
+            l[(k + 1) % 3] = f;
+            l[(k + 2) % 3] = 0;
+        }
+    }
+}
+
+/* The triangle p lies in (or, outside the hull, a hull triangle it lies
+ * beyond): a visibility walk with a random first edge at each step, which
+ * ends on any triangulation; a brute-force search if it runs long. */
+static uint32_t locate(base *b, const double p[2])
+{
+    const tsr_triangulation *t = &b->t;
+    uint32_t i = b->start[cell_of(b, p)];
+    if (i == NONE)
+        i = b->last;
+    for (uint64_t steps = 0; steps <= 4 * (uint64_t)t->nt + 64; steps++) {
+        b->seed = b->seed * 1664525u + 1013904223u;
+        uint32_t r = (b->seed >> 16) % 3, next = NONE;
+        for (uint32_t m = 0; m < 3 && next == NONE; m++) {
+            uint32_t k = (r + m) % 3, o = b->adj[3 * (size_t)i + k];
+            if (o == NONE)
+                continue;
+            const double *u = &t->xy[2 * (size_t)t->tri[3 * (size_t)i + k]];
+            const double *w = &t->xy[2 * (size_t)t->tri[3 * (size_t)i + (k + 1) % 3]];
+            if (tsr_orient2d(u, w, p) < 0)
+                next = o;
+        }
+        if (next == NONE)
+            return b->last = i;
+        i = next;
+    }
+    /* not reached on a valid triangulation: the triangle whose nearest
+     * point (barycentric) is nearest */
+    uint32_t best = 0;
+    double best_d = INFINITY;
+    for (uint32_t j = 0; j < t->nt; j++) {
+        double l[3], q[2] = {0, 0};
+        barycentric(b, j, p, l);
+        for (int k = 0; k < 3; k++)
+            for (int d = 0; d < 2; d++)
+                q[d] += l[k] * t->xy[2 * (size_t)t->tri[3 * (size_t)j + k] + d];
+        double dd = hypot(q[0] - p[0], q[1] - p[1]);
+        if (dd < best_d)
+            best_d = dd, best = j;
+    }
+    return b->last = best;
+}
+
+/* Rows of the input values at a triangulation's input vertices (a point
+ * given twice: its first row). */
+static void input_rows(const tsr_pslg *in, const double *in_vals, uint32_t n, const tsr_triangulation *t, double *vals)
+{
+    for (uint32_t i = in->nv; i-- > 0;)
+        memcpy(&vals[(size_t)t->vertex_of_input[i] * n], &in_vals[(size_t)i * n], n * sizeof *vals);
+}
+
+static double dist(const double *a, const double *b)
+{
+    return hypot(a[0] - b[0], a[1] - b[1]);
+}
+
+/* The crossings of segments in the base triangulation: linear along the
+ * lower-numbered segment through each, between the nearest input points. */
+static bool crossing_rows(const tsr_pslg *in, uint32_t n, const base *b, double *vals, const tsr_allocator *a)
+{
+    const tsr_triangulation *t = &b->t;
+    incid ce;
+    if (!incid_build(&ce, t->nv, t->edge, t->nedge, 2, a)) {
+        incid_free(&ce, a);
+        return false;
+    }
+    for (uint32_t v = t->input_vertices; v < t->nv; v++) {
+        uint32_t s = NONE;
+        for (uint32_t j = ce.first[v]; j < ce.first[v + 1]; j++)
+            s = t->edge_segment[ce.list[j]] < s ? t->edge_segment[ce.list[j]] : s;
+        uint32_t end[2] = {NONE, NONE};
+        int side = 0;
+        /* walk each way along segment s's edges to an input vertex */
+        for (uint32_t j = ce.first[v]; j < ce.first[v + 1] && s != NONE && side < 2; j++) {
+            uint32_t e = ce.list[j];
+            if (t->edge_segment[e] != s)
+                continue;
+            uint32_t prev = v, cur = t->edge[2 * (size_t)e] == v ? t->edge[2 * (size_t)e + 1] : t->edge[2 * (size_t)e];
+            for (uint32_t guard = 0; cur != NONE && cur >= t->input_vertices && guard < t->nv; guard++) {
+                uint32_t nxt = NONE;
+                for (uint32_t k = ce.first[cur]; k < ce.first[cur + 1] && nxt == NONE; k++) {
+                    uint32_t f = ce.list[k],
+                             o = t->edge[2 * (size_t)f] == cur ? t->edge[2 * (size_t)f + 1] : t->edge[2 * (size_t)f];
+                    if (t->edge_segment[f] == s && o != prev)
+                        nxt = o;
+                }
+                prev = cur;
+                cur = nxt;
+            }
+            end[side++] = cur;
+        }
+        if (s == NONE) /* not on a constrained edge: not expected; the nearest input point */
+            continue;
+        if (side < 2 || end[0] == NONE || end[1] == NONE) {
+            /* the chain breaks (segments overlapping along it): the ends
+             * of segment s itself */
+            end[0] = t->vertex_of_input[in->seg[2 * (size_t)s]];
+            end[1] = t->vertex_of_input[in->seg[2 * (size_t)s + 1]];
+        }
+        const double *p = &t->xy[2 * (size_t)v], *pa = &t->xy[2 * (size_t)end[0]], *pb = &t->xy[2 * (size_t)end[1]];
+        double da = dist(p, pa), db = dist(p, pb), f = da + db > 0 ? da / (da + db) : 0.5;
+        for (uint32_t c = 0; c < n; c++)
+            vals[(size_t)v * n + c] = (1 - f) * vals[(size_t)end[0] * n + c] + f * vals[(size_t)end[1] * n + c];
+    }
+    incid_free(&ce, a);
+    return true;
+}
+
+/* Without a triangle (all points on a line): the nearest input point's row. */
+static void nearest_rows(const tsr_triangulation *out, uint32_t n, double *vals)
+{
+    for (uint32_t v = out->input_vertices; v < out->nv; v++) {
+        uint32_t best = 0;
+        double best_d = INFINITY;
+        for (uint32_t u = 0; u < out->input_vertices; u++) {
+            double d = dist(&out->xy[2 * (size_t)v], &out->xy[2 * (size_t)u]);
+            if (d < best_d)
+                best_d = d, best = u;
+        }
+        memcpy(&vals[(size_t)v * n], &vals[(size_t)best * n], n * sizeof *vals);
+    }
+}
+
+tsr_status tsr_tri_interpolate(const tsr_pslg *in, const double *in_vals, uint32_t n, const tsr_triangulation *out,
+                               double *vals, const tsr_allocator *alloc, tsr_error *err)
+{
+    if (n == 0)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "values to interpolate: none per point");
+    if (!out->vertex_of_input || out->input_vertices > in->nv || out->input_vertices > out->nv)
+        return tsr_error_set(err, TSR_ERR_ARGUMENT, "values to interpolate: the triangulation is not of this input");
+    for (uint32_t i = 0; i < in->nv; i++)
+        if (out->vertex_of_input[i] >= out->input_vertices)
+            return tsr_error_set(err, TSR_ERR_ARGUMENT,
+                                 "values to interpolate: the triangulation is not of this input");
+    input_rows(in, in_vals, n, out, vals);
+    if (out->nv == out->input_vertices)
+        return TSR_OK;
+    base b;
+    memset(&b, 0, sizeof b);
+    tsr_pslg p0 = *in;
+    p0.holes = NULL;
+    p0.nholes = 0;
+    tsr_tri_options o0 = {.method = TSR_TRI_DELAUNAY, .region = TSR_REGION_HULL};
+    tsr_status st = tsr_triangulate(&p0, &o0, &b.t, alloc, err);
+    if (st != TSR_OK)
+        return st;
+    double *v0 = NULL;
+    if (b.t.nt == 0) {
+        nearest_rows(out, n, vals);
+        goto done;
+    }
+    v0 = tsr_alloc(alloc, (size_t)b.t.nv * n * sizeof *v0);
+    if (v0)
+        input_rows(in, in_vals, n, &b.t, v0); /* before the crossings, which read them */
+    if (!v0 || !build_adjacency(&b, alloc) || !build_start_grid(&b, alloc) || !crossing_rows(in, n, &b, v0, alloc)) {
+        st = tsr_error_set(err, TSR_ERR_NOMEM, "values to interpolate: out of memory");
+        goto done;
+    }
+    for (uint32_t v = out->input_vertices; v < out->nv; v++) {
+        const double *p = &out->xy[2 * (size_t)v];
+        uint32_t i = locate(&b, p);
+        double l[3];
+        barycentric(&b, i, p, l);
+        const uint32_t *q = &b.t.tri[3 * (size_t)i];
+        for (uint32_t c = 0; c < n; c++)
+            vals[(size_t)v * n + c] =
+                l[0] * v0[(size_t)q[0] * n + c] + l[1] * v0[(size_t)q[1] * n + c] + l[2] * v0[(size_t)q[2] * n + c];
+    }
+done:
+    tsr_free(alloc, v0);
+    tsr_free(alloc, b.adj);
+    tsr_free(alloc, b.start);
+    tsr_triangulation_free(&b.t);
+    return st;
+}
