@@ -741,6 +741,14 @@ static int run(int argc, char **argv)
     if (!cli_paths_distinct("fly", 3, names, files))
         return CLI_USAGE;
     const char *outputs[2] = {a.stats, a.video}; /* checked before the flight, not after it */
+    /* a --stats or --video inside the frames' folder: the folder the
+     * flight would create is made now, so they can be checked */
+    size_t nd = strlen(a.out_dir);
+    while (nd > 1 && a.out_dir[nd - 1] == '/')
+        nd--;
+    for (int i = 0; i < 2 && a.headless; i++)
+        if (outputs[i] && !strncmp(outputs[i], a.out_dir, nd) && outputs[i][nd] == '/' && !make_dir(a.out_dir))
+            break; /* the check below names the problem */
     if (!cli_outputs_writable("fly", 2, outputs))
         return CLI_FAIL;
     tsr_heightfield *hf = cli_load_heightfield("fly", a.in, &ho);
