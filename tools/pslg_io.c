@@ -432,6 +432,7 @@ static tsr_status read_poly_text(const char *path, const char *buf, size_t len, 
             (s = parse_number(&t, &tok[2], "y", &g->holes[2 * (size_t)i + 1], err)) != TSR_OK)
             return s;
     /* a regional attribute section may follow; it is not used */
+    g->first_index = base;
     return TSR_OK;
 }
 
@@ -615,7 +616,10 @@ tsr_status cli_pslg_read(const char *path, cli_pslg_format f, cli_pslg *out, tsr
         return s;
     uint32_t base = UINT32_MAX;
     switch (f) {
-    case CLI_PSLG_NODE: s = read_node_text(path, buf, len, out, &base, err); break;
+    case CLI_PSLG_NODE:
+        s = read_node_text(path, buf, len, out, &base, err);
+        out->first_index = base;
+        break;
     case CLI_PSLG_POLY: s = read_poly_text(path, buf, len, out, err); break;
     case CLI_PSLG_JSON: s = read_json_text(path, buf, len, out, err); break;
     default: s = read_txt_text(path, buf, len, out, err); break;
@@ -626,23 +630,25 @@ tsr_status cli_pslg_read(const char *path, cli_pslg_format f, cli_pslg *out, tsr
         return s;
     }
     out->format = f;
+    if (f != CLI_PSLG_NODE && f != CLI_PSLG_POLY)
+        out->first_index = 1;
     return TSR_OK;
 }
 
 /* ---- Writers ----------------------------------------------------------------- */
 
-/* File numbers (1-based) of the output vertices: an input point's is its
+/* File numbers (from base) of the output vertices: an input point's is its
  * input number (a point given twice: the first's), a Steiner point's
  * follows the ninput input points. */
-static uint32_t *file_numbers(const tsr_triangulation *t, uint32_t ninput)
+static uint32_t *file_numbers(const tsr_triangulation *t, uint32_t ninput, uint32_t base)
 {
     uint32_t *num = malloc(((size_t)t->nv + 1) * sizeof *num);
     if (!num)
         return NULL;
     for (uint32_t v = 0; v < t->nv; v++)
-        num[v] = v < t->input_vertices ? 0 : ninput + 1 + (v - t->input_vertices);
+        num[v] = v < t->input_vertices ? 0 : ninput + base + (v - t->input_vertices);
     for (uint32_t i = ninput; i-- > 0;) /* from the end: the first occurrence wins */
-        num[t->vertex_of_input[i]] = i + 1;
+        num[t->vertex_of_input[i]] = i + base;
     return num;
 }
 
@@ -724,27 +730,28 @@ static void write_row(FILE *f, uint32_t num, const double *xy, const double *att
 static void write_node(FILE *f, const tsr_triangulation *t, const cli_pslg *g, const double *vals, const int32_t *vm)
 {
     uint32_t ninput = g->nv, steiner = t->nv - t->input_vertices, n = ninput + steiner, na = g->nattr;
+    uint32_t base = g->first_index;
     fprintf(f,
-            "# Tessera triangulation: %u vertices (1-based), x y%s boundary-marker: the %u input points in input "
-            "order (the k-th is vertex k), then %u Steiner points%s\n%u 2 %u 1\n",
-            n, na ? " attributes" : "", ninput, steiner,
+            "# Tessera triangulation: %u vertices (%u-based, as the input), x y%s boundary-marker: the %u input "
+            "points in input order (the k-th is vertex k), then %u Steiner points%s\n%u 2 %u 1\n",
+            n, base, na ? " attributes" : "", ninput, steiner,
             na ? " (their attributes interpolated linearly over the input's triangulation)" : "", n, na);
     for (uint32_t i = 0; i < ninput; i++) {
         uint32_t v = t->vertex_of_input[i];
-        write_row(f, i + 1, t->xy + 2 * (size_t)v, na ? g->attr + (size_t)i * na : NULL, na,
+        write_row(f, i + base, t->xy + 2 * (size_t)v, na ? g->attr + (size_t)i * na : NULL, na,
                   g->marker && g->marker[i] ? g->marker[i] : vm[v]);
     }
     for (uint32_t v = t->input_vertices; v < t->nv; v++)
-        write_row(f, ninput + 1 + (v - t->input_vertices), t->xy + 2 * (size_t)v, na ? vals + (size_t)v * na : NULL, na,
-                  vm[v]);
+        write_row(f, ninput + base + (v - t->input_vertices), t->xy + 2 * (size_t)v, na ? vals + (size_t)v * na : NULL,
+                  na, vm[v]);
 }
 
-static void write_ele(FILE *f, const tsr_triangulation *t, const uint32_t *num)
+static void write_ele(FILE *f, const tsr_triangulation *t, const uint32_t *num, uint32_t base)
 {
     fprintf(f, "# Tessera triangulation: %u triangles, counter-clockwise, vertices of the .node\n%u 3 0\n", t->nt,
             t->nt);
     for (uint32_t i = 0; i < t->nt; i++)
-        fprintf(f, "%u %u %u %u\n", i + 1, num[t->tri[3 * (size_t)i]], num[t->tri[3 * (size_t)i + 1]],
+        fprintf(f, "%u %u %u %u\n", i + base, num[t->tri[3 * (size_t)i]], num[t->tri[3 * (size_t)i + 1]],
                 num[t->tri[3 * (size_t)i + 2]]);
 }
 
@@ -756,10 +763,11 @@ static void write_poly(FILE *f, const tsr_triangulation *t, const uint32_t *num,
             g->seg_marker ? "the input segment's marker (1 for a 0 on the boundary)" : "input segment number",
             t->nedge);
     for (uint32_t e = 0; e < t->nedge; e++)
-        fprintf(f, "%u %u %u %d\n", e + 1, num[t->edge[2 * (size_t)e]], num[t->edge[2 * (size_t)e + 1]], (int)em[e]);
+        fprintf(f, "%u %u %u %d\n", e + g->first_index, num[t->edge[2 * (size_t)e]], num[t->edge[2 * (size_t)e + 1]],
+                (int)em[e]);
     fprintf(f, "%u\n", g->nholes);
     for (uint32_t h = 0; h < g->nholes; h++)
-        fprintf(f, "%u %.17g %.17g\n", h + 1, g->holes[2 * (size_t)h], g->holes[2 * (size_t)h + 1]);
+        fprintf(f, "%u %.17g %.17g\n", h + g->first_index, g->holes[2 * (size_t)h], g->holes[2 * (size_t)h + 1]);
 }
 
 bool cli_tri_output_names(const char *path, char (*names)[4096])
@@ -780,7 +788,7 @@ tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, 
     tsr_status s = TSR_OK;
     if (!cli_tri_output_names(path, name))
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path too long", path);
-    uint32_t *num = file_numbers(t, g->nv);
+    uint32_t *num = file_numbers(t, g->nv, g->first_index);
     int32_t *vm = malloc(((size_t)t->nv + 1) * sizeof *vm), *em = malloc(((size_t)t->nedge + 1) * sizeof *em);
     if (!num || !vm || !em || !markers(t, g, vm, em)) {
         free(num);
@@ -800,7 +808,7 @@ tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, 
         if (i == 0)
             write_node(f, t, g, vals, vm);
         else if (i == 1)
-            write_ele(f, t, num);
+            write_ele(f, t, num, g->first_index);
         else
             write_poly(f, t, num, g, em);
         bool bad = ferror(f) != 0;

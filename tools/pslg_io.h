@@ -46,6 +46,7 @@ typedef struct cli_pslg {
     uint32_t nattr;
     int32_t *marker;     /* .node boundary markers, one per point, or NULL */
     int32_t *seg_marker; /* .poly segment markers, one per segment, or NULL */
+    uint32_t first_index; /* Triangle's files: the input's numbering base (0 or 1), kept by the output; else 1 */
     cli_pslg_format format;
     uint32_t rings; /* JSON: rings read (including one-point rings) */
 } cli_pslg;
@@ -82,7 +83,7 @@ void cli_pslg_node_path(const char *poly, char *buf, size_t cap);
 /* For a path ending in .node, .ele or .poly, writes BASE.node, BASE.ele
  * (triangles) and BASE.poly, all three to temporary files first, renamed
  * only when all are complete.
- *  - BASE.node: vertices, 1-based: g's points first, in input order (the
+ *  - BASE.node: vertices, numbered from g->first_index: g's points first, in input order (the
  *    k-th is vertex k, a repeated one too though no triangle uses it, as
  *    Triangle keeps them), then the Steiner points; with g's attributes,
  *    carried to the Steiner points by vals (t->nv rows of g->nattr, from
@@ -93,7 +94,9 @@ void cli_pslg_node_path(const char *poly, char *buf, size_t cap);
  *  - BASE.poly: 0 points (meaning BASE.node), the constrained edges as
  *    segments, and g's hole seeds. An edge's marker is its input segment's
  *    marker when g has segment markers (1 for a 0 on the boundary, as
- *    Triangle does), else the input segment's number (1-based). */
+ *    Triangle does), else the input segment's number (1-based).
+ * Every section is numbered from g->first_index, as Triangle keeps its
+ * input's numbering. */
 tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, const cli_pslg *g, const double *vals,
                                   tsr_error *err);
 

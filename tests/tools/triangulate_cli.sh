@@ -120,6 +120,18 @@ EOF
   [ "$(grep -v '^#' "$dir/dupout.node" | sed -n 5p)" = "4 4 0 1" ] || fail "duplicate's number: $(cat "$dir/dupout.node")"
   grep -v '^#' "$dir/dupout.ele" | sed 1d | awk '$2 == 4 || $3 == 4 || $4 == 4 {exit 1}' ||
     fail "a triangle uses the duplicate: $(cat "$dir/dupout.ele")"
+  # a 0-based input gives 0-based output, as Triangle keeps its numbering:
+  # the same square, numbered from 0, gives the same triangles less one
+  printf '5 2 0 0\n0 0 0\n1 4 0\n2 4 4\n3 4 0\n4 0 4\n' > "$dir/dup0.node"
+  "$tessera" triangulate "$dir/dup0.node" -o "$dir/dup0out.node" --quiet || fail "dup0.node"
+  [ "$(grep -v '^#' "$dir/dup0out.node" | sed -n 2p | awk '{print $1}')" = 0 ] || fail "0-based .node output: $(cat "$dir/dup0out.node")"
+  grep -v '^#' "$dir/dupout.ele" | sed 1d | awk '{ print $1 - 1, $2 - 1, $3 - 1, $4 - 1 }' > "$dir/dup1.ele"
+  grep -v '^#' "$dir/dup0out.ele" | sed 1d | awk '{ print $1, $2, $3, $4 }' > "$dir/dup0.ele"
+  cmp -s "$dir/dup1.ele" "$dir/dup0.ele" || fail "0-based .ele differs from the 1-based one less one: $(cat "$dir/dup0.ele")"
+  printf '3 2 0 0\n0 0 0\n1 1 0\n2 0 1\n3 0\n0 0 1\n1 1 2\n2 2 0\n1\n0 5 5\n' > "$dir/tri0.poly"
+  "$tessera" triangulate "$dir/tri0.poly" -o "$dir/tri0out.poly" --quiet || fail "tri0.poly"
+  [ "$(grep -v '^#' "$dir/tri0out.poly" | awk 'NR >= 3 && NF == 4 { printf "%s;", $1 " " $2 " " $3 } NF == 3 { print "hole " $1 }')" = \
+    "0 0 1;1 1 2;2 2 0;hole 0" ] || fail "0-based .poly output: $(cat "$dir/tri0out.poly")"
   # the .poly (0 points: they are in out.node) back through our reader:
   # same points and constrained edges, and triangulating them again with
   # the hole seed gives the same number of triangles and the same area
