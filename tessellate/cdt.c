@@ -108,10 +108,10 @@ static bool grow_triangles(tsr_cdt *d, uint32_t cap)
         d->tc = tc;
     }
     if (d->tf) {
-        uint8_t *tf = tsr_realloc(da(d), d->tf, cap);
+        uint32_t *tf = tsr_realloc(da(d), d->tf, (size_t)cap * sizeof *tf);
         if (!tf)
             return false;
-        memset(tf + d->cap_t, 0, cap - d->cap_t);
+        memset(tf + d->cap_t, 0, (size_t)(cap - d->cap_t) * sizeof *tf);
         d->tf = tf;
     }
     d->cap_t = cap;
@@ -137,10 +137,10 @@ bool tsr__cdt_enable_marks(tsr_cdt *d, bool flags)
         memset(d->tc, 0, 3 * cap * sizeof *d->tc);
     }
     if (flags && !d->tf) {
-        d->tf = tsr_alloc(da(d), cap);
+        d->tf = tsr_alloc(da(d), cap * sizeof *d->tf);
         if (!d->tf)
             return false;
-        memset(d->tf, 0, cap);
+        memset(d->tf, 0, cap * sizeof *d->tf);
     }
     return true;
 }
@@ -270,7 +270,7 @@ static void remark_slits(tsr_cdt *d, const uint32_t *out, uint32_t n, const slit
 static bool retriangulate(tsr_cdt *d, const uint32_t *old, uint32_t nold, const uint32_t (*nw)[3], uint32_t nnew,
                           uint32_t *out)
 {
-    uint8_t flag = d->tf ? d->tf[old[0]] : 0;
+    uint32_t flag = d->tf ? d->tf[old[0]] : 0;
     if (nold > 5 || nnew > 8) {
         /* the cavity's boundary, as the outside triangles' edges; cavity
          * membership by binary search in a sorted copy of old */
@@ -647,7 +647,7 @@ static bool split_edge_at(tsr_cdt *d, uint32_t t, int k, uint32_t pv)
     uint32_t s = d->tn[3 * (size_t)t + k];
     uint32_t q = apex(d, s, a, b);
     uint32_t m = cdt_mark(d, t, k);
-    uint8_t ft = d->tf ? d->tf[t] : 0, fs = d->tf ? d->tf[s] : 0;
+    uint32_t ft = d->tf ? d->tf[t] : 0, fs = d->tf ? d->tf[s] : 0;
     uint32_t old[2] = {t, s}, nw[4][3] = {{a, pv, c}, {pv, b, c}, {b, pv, q}, {pv, a, q}}, out[4];
     if (!retriangulate(d, old, 2, nw, 4, out))
         return false;
@@ -660,7 +660,7 @@ static bool split_edge_at(tsr_cdt *d, uint32_t t, int k, uint32_t pv)
         tsr__cdt_mark_edge(d, out[1], 0, m);
     }
     for (int i = 0; i < 4; i++) /* triangles outside a domain being refined are left alone */
-        if ((!d->tf || !d->tf[out[i]]) && !push(d, out[i]))
+        if ((!d->tf || d->tf[out[i]] != CDT_OUTSIDE) && !push(d, out[i]))
             return false;
     return true;
 }
@@ -717,7 +717,7 @@ bool tsr__cdt_split_edge(tsr_cdt *d, uint32_t t, int k, uint32_t pv, bool *nomem
         return false;
     if (tsr_orient2d(P(d, a), p, P(d, c)) <= 0 || tsr_orient2d(p, P(d, b), P(d, c)) <= 0)
         return false;
-    bool outside = d->tf && d->tf[s]; /* never looked at again: its shape does not matter */
+    bool outside = d->tf && d->tf[s] == CDT_OUTSIDE; /* never looked at again: its shape does not matter */
     if (q != GHOST && !outside && (tsr_orient2d(P(d, b), p, P(d, q)) <= 0 || tsr_orient2d(p, P(d, a), P(d, q)) <= 0))
         return false;
     /* on a hull edge (q the ghost), a point rounded off the edge's line

@@ -10,8 +10,10 @@
  * label CDT_LABEL(m): the input segment id + 1, or CDT_BOUNDARY for a
  * domain boundary that is no input segment; the bit CDT_EVEN says that an
  * even number of input segments cover the edge (overlapping segments, a
- * ring given twice), which the even-odd rule crosses without counting. tf[t] (when allocated) is 1 for triangles
- * outside the domain being refined (ghosts included). */
+ * ring given twice), which the even-odd rule crosses without counting. tf[t] (when allocated) is CDT_OUTSIDE for
+ * triangles outside the domain being refined (ghosts included), 0 inside,
+ * or, inside, CDT_REGION0 + r for a triangle of region r (a bound of its
+ * own on the area); new triangles take the flag of those they replace. */
 #ifndef TSR_CDT_INTERNAL_H
 #define TSR_CDT_INTERNAL_H
 
@@ -22,13 +24,15 @@
 #define CDT_BOUNDARY 0x7FFFFFFFu
 #define CDT_EVEN 0x80000000u
 #define CDT_LABEL(m) ((m)&0x7FFFFFFFu)
+#define CDT_OUTSIDE 1u
+#define CDT_REGION0 2u
 
 struct tsr_cdt {
     tsr_allocator alloc;
     double *xy; /* 2 per internal vertex; vertex 0 (infinity) unused */
     uint32_t nv, cap_v;
     uint32_t *tv, *tn, *tc;
-    uint8_t *tf;
+    uint32_t *tf;
     uint32_t nt, cap_t;
     uint32_t last;
     uint32_t dups;

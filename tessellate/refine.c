@@ -34,8 +34,10 @@
  *    do not meet, where no vertex can go between them), counted in
  *    below_resolution and reported by quality_limited, since the bound is
  *    not met there.
- * Only triangles with tf 0 (the domain) are refined; the domain's
- * boundary is constrained, so walks and flips never leave it. */
+ * Only triangles inside the domain (tf not CDT_OUTSIDE) are refined; the
+ * domain's boundary is constrained, so walks and flips never leave it. A
+ * triangle of a region (tf >= CDT_REGION0) has the smaller of max_area and
+ * its region's bound (area_bound). */
 #include "tessellate/cdt_internal.h"
 
 #include <float.h>
@@ -76,7 +78,21 @@ typedef struct refiner {
 
 static bool in_domain(const refiner *r, uint32_t t)
 {
-    return !r->d->tf[t];
+    return r->d->tf[t] != CDT_OUTSIDE;
+}
+
+/* The bound on triangle t's area: max_area, or its region's when smaller
+ * (0: none). */
+static double area_bound(const refiner *r, uint32_t t)
+{
+    double b = r->opt->max_area;
+    uint32_t f = r->d->tf[t];
+    if (f >= CDT_REGION0) {
+        double rb = r->opt->regions[3 * (size_t)(f - CDT_REGION0) + 2];
+        if (rb > 0 && !(b > 0 && b <= rb))
+            b = rb;
+    }
+    return b;
 }
 
 static double dot_at(const double *c, const double *u, const double *w)
@@ -250,8 +266,8 @@ static int bad(refiner *r, uint32_t t, bool count)
         double dx = p[(k + 1) % 3][0] - p[k][0], dy = p[(k + 1) % 3][1] - p[k][1];
         l[k] = dx * dx + dy * dy;
     }
-    double area2 = tsr_orient2d(p[0], p[1], p[2]);
-    if (r->opt->max_area > 0 && 0.5 * area2 > r->opt->max_area)
+    double area2 = tsr_orient2d(p[0], p[1], p[2]), bound = area_bound(r, t);
+    if (bound > 0 && 0.5 * area2 > bound)
         return 2;
     if (r->cos_min > 1)
         return 0;
@@ -697,18 +713,24 @@ tsr_status tsr__cdt_refine(tsr_cdt *d, const tsr_tri_options *opt, uint32_t ninp
         r.off = 0.475 * sqrt((1 + r.cos_min) / (1 - r.cos_min));
         r.cot_min = r.cos_min / sqrt(1 - r.cos_min * r.cos_min);
     }
-    double area = 0;
+    /* the area, and the triangles the area bounds ask for at least */
+    double area = 0, asked = 0;
+    bool area_bounds = opt->max_area > 0;
     for (uint32_t t = 0; t < d->nt; t++)
         if (in_domain(&r, t) && !cdt_is_ghost(d, t)) {
             const uint32_t *v = d->tv + 3 * (size_t)t;
-            area += 0.5 * tsr_orient2d(P(d, v[0]), P(d, v[1]), P(d, v[2]));
+            double at = 0.5 * tsr_orient2d(P(d, v[0]), P(d, v[1]), P(d, v[2])), bt = area_bound(&r, t);
+            area += at;
+            asked += bt > 0 ? at / bt : 0;
+            area_bounds = area_bounds || bt > 0;
         }
     res->refined_area = area;
-    if (!opt->max_steiner && opt->max_area > 0 && area / opt->max_area > TSR_TRI_MAX_AREA_TRIANGLES)
+    res->asked_triangles = asked;
+    if (!opt->max_steiner && asked > TSR_TRI_MAX_AREA_TRIANGLES)
         return TSR_ERR_TOO_LARGE;
     double limit = opt->max_steiner ? opt->max_steiner : 20.0 * (d->nv - 1) + 100000;
-    if (!opt->max_steiner && opt->max_area > 0)
-        limit += 4 * area / opt->max_area;
+    if (!opt->max_steiner)
+        limit += 4 * asked;
     r.limit = limit > UINT32_MAX / 4 ? UINT32_MAX / 4 : (uint32_t)limit;
     tsr_status st = TSR_ERR_NOMEM;
     bool was_tracking = d->track;
@@ -721,7 +743,7 @@ tsr_status tsr__cdt_refine(tsr_cdt *d, const tsr_tri_options *opt, uint32_t ninp
             goto done;
     if (!take_changes(&r))
         goto done;
-    bool quality = opt->min_angle > 0 || opt->max_area > 0;
+    bool quality = opt->min_angle > 0 || area_bounds;
     for (;;) {
         if (r.steiner >= r.limit) {
             res->quality_limited = res->steiner_limited = true;
@@ -762,7 +784,7 @@ tsr_status tsr__cdt_refine(tsr_cdt *d, const tsr_tri_options *opt, uint32_t ninp
     for (uint32_t t = 0; t < d->nt; t++) {
         if (!in_domain(&r, t) || cdt_is_ghost(d, t))
             continue;
-        if ((opt->min_angle > 0 || opt->max_area > 0) && bad(&r, t, opt->min_angle > 0))
+        if (quality && bad(&r, t, opt->min_angle > 0))
             res->unrefined++;
         for (int k = 0; k < 3 && r.eager; k++) {
             uint32_t n = d->tn[3 * (size_t)t + k]; /* each edge once */

@@ -1,8 +1,9 @@
-/* tri_values.c: values carried from the input points of a triangulation to
- * its output vertices (tsr_tri_interpolate), as Triangle carries a .node
- * file's attributes. The interpolant is that of the input's own
- * constrained Delaunay triangulation, so it does not depend on refinement;
- * the Steiner points are located in it by a walk from a nearby triangle. */
+/* tri_values.c: what Triangle carries from its input to a triangulation:
+ * values at the input points to every output vertex (tsr_tri_interpolate;
+ * the interpolant is that of the input's own constrained Delaunay
+ * triangulation, so it does not depend on refinement, and the Steiner
+ * points are located in it by a walk from a nearby triangle), and regions
+ * grown from seed points to the triangles (tsr_tri_regions). */
 #include "tessellate/tessellate.h"
 
 #include <math.h>
@@ -10,7 +11,7 @@
 
 /* The input's own triangulation and what the walk needs of it. */
 typedef struct base {
-    tsr_triangulation t;
+    const tsr_triangulation *t;
     uint32_t *adj;   /* 3 per triangle: the triangle across edge (k, k+1), or NONE */
     uint32_t *start; /* per cell: a triangle whose centroid lies in it, or NONE */
     uint32_t cells;  /* per side */
@@ -51,7 +52,7 @@ static void incid_free(incid *c, const tsr_allocator *a)
 /* Neighbours across each triangle edge, from the triangles at each vertex. */
 static bool build_adjacency(base *b, const tsr_allocator *a)
 {
-    const tsr_triangulation *t = &b->t;
+    const tsr_triangulation *t = b->t;
     incid at;
     b->adj = tsr_alloc(a, (3 * (size_t)t->nt + 1) * sizeof *b->adj);
     if (!b->adj || !incid_build(&at, t->nv, t->tri, t->nt, 3, a)) {
@@ -88,7 +89,7 @@ static uint32_t cell_of(const base *b, const double p[2])
 
 static bool build_start_grid(base *b, const tsr_allocator *a)
 {
-    const tsr_triangulation *t = &b->t;
+    const tsr_triangulation *t = b->t;
     double hi[2] = {-INFINITY, -INFINITY};
     b->lo[0] = b->lo[1] = INFINITY;
     for (uint32_t v = 0; v < t->nv; v++)
@@ -142,8 +143,8 @@ static double area2(const double *a, const double *b, const double *c)
  * further than p is outside. */
 static void barycentric(const base *b, uint32_t i, const double p[2], double l[3])
 {
-    const uint32_t *q = &b->t.tri[3 * (size_t)i];
-    const double *v[3] = {&b->t.xy[2 * (size_t)q[0]], &b->t.xy[2 * (size_t)q[1]], &b->t.xy[2 * (size_t)q[2]]};
+    const uint32_t *q = &b->t->tri[3 * (size_t)i];
+    const double *v[3] = {&b->t->xy[2 * (size_t)q[0]], &b->t->xy[2 * (size_t)q[1]], &b->t->xy[2 * (size_t)q[2]]};
     double sum = 0;
     bool outside = false;
     for (int k = 0; k < 3; k++) {
@@ -177,7 +178,7 @@ static void barycentric(const base *b, uint32_t i, const double p[2], double l[3
  * ends on any triangulation; a brute-force search if it runs long. */
 static uint32_t locate(base *b, const double p[2])
 {
-    const tsr_triangulation *t = &b->t;
+    const tsr_triangulation *t = b->t;
     uint32_t i = b->start[cell_of(b, p)];
     if (i == NONE)
         i = b->last;
@@ -231,7 +232,7 @@ static double dist(const double *a, const double *b)
  * lower-numbered segment through each, between the nearest input points. */
 static bool crossing_rows(const tsr_pslg *in, uint32_t n, const base *b, double *vals, const tsr_allocator *a)
 {
-    const tsr_triangulation *t = &b->t;
+    const tsr_triangulation *t = b->t;
     incid ce;
     if (!incid_build(&ce, t->nv, t->edge, t->nedge, 2, a)) {
         incid_free(&ce, a);
@@ -314,17 +315,19 @@ tsr_status tsr_tri_interpolate(const tsr_pslg *in, const double *in_vals, uint32
     p0.holes = NULL;
     p0.nholes = 0;
     tsr_tri_options o0 = {.method = TSR_TRI_DELAUNAY, .region = TSR_REGION_HULL};
-    tsr_status st = tsr_triangulate(&p0, &o0, &b.t, alloc, err);
+    tsr_triangulation t0;
+    tsr_status st = tsr_triangulate(&p0, &o0, &t0, alloc, err);
     if (st != TSR_OK)
         return st;
+    b.t = &t0;
     double *v0 = NULL;
-    if (b.t.nt == 0) {
+    if (t0.nt == 0) {
         nearest_rows(out, n, vals);
         goto done;
     }
-    v0 = tsr_alloc(alloc, (size_t)b.t.nv * n * sizeof *v0);
+    v0 = tsr_alloc(alloc, (size_t)t0.nv * n * sizeof *v0);
     if (v0)
-        input_rows(in, in_vals, n, &b.t, v0); /* before the crossings, which read them */
+        input_rows(in, in_vals, n, &t0, v0); /* before the crossings, which read them */
     if (!v0 || !build_adjacency(&b, alloc) || !build_start_grid(&b, alloc) || !crossing_rows(in, n, &b, v0, alloc)) {
         st = tsr_error_set(err, TSR_ERR_NOMEM, "values to interpolate: out of memory");
         goto done;
@@ -334,7 +337,7 @@ tsr_status tsr_tri_interpolate(const tsr_pslg *in, const double *in_vals, uint32
         uint32_t i = locate(&b, p);
         double l[3];
         barycentric(&b, i, p, l);
-        const uint32_t *q = &b.t.tri[3 * (size_t)i];
+        const uint32_t *q = &t0.tri[3 * (size_t)i];
         for (uint32_t c = 0; c < n; c++)
             vals[(size_t)v * n + c] =
                 l[0] * v0[(size_t)q[0] * n + c] + l[1] * v0[(size_t)q[1] * n + c] + l[2] * v0[(size_t)q[2] * n + c];
@@ -343,6 +346,79 @@ done:
     tsr_free(alloc, v0);
     tsr_free(alloc, b.adj);
     tsr_free(alloc, b.start);
-    tsr_triangulation_free(&b.t);
+    tsr_triangulation_free(&t0);
+    return st;
+}
+
+/* Does triangle i of t hold p (inside or on its boundary)? Exact. */
+static bool holds(const tsr_triangulation *t, uint32_t i, const double p[2])
+{
+    for (int k = 0; k < 3; k++)
+        if (tsr_orient2d(&t->xy[2 * (size_t)t->tri[3 * (size_t)i + k]],
+                         &t->xy[2 * (size_t)t->tri[3 * (size_t)i + (k + 1) % 3]], p) < 0)
+            return false;
+    return true;
+}
+
+/* Is u-w a constrained edge? (ce: the constrained edges at each vertex) */
+static bool constrained(const tsr_triangulation *t, const incid *ce, uint32_t u, uint32_t w)
+{
+    for (uint32_t j = ce->first[u]; j < ce->first[u + 1]; j++) {
+        const uint32_t *e = &t->edge[2 * (size_t)ce->list[j]];
+        if (e[0] == w || e[1] == w)
+            return true;
+    }
+    return false;
+}
+
+tsr_status tsr_tri_regions(const tsr_triangulation *t, const double *seeds, uint32_t nseeds, uint32_t *region,
+                           const tsr_allocator *alloc, tsr_error *err)
+{
+    for (uint32_t i = 0; i < t->nt; i++)
+        region[i] = NONE;
+    if (nseeds == 0 || t->nt == 0)
+        return TSR_OK;
+    base b;
+    memset(&b, 0, sizeof b);
+    b.t = t;
+    incid ce = {0};
+    uint32_t *stack = tsr_alloc(alloc, ((size_t)t->nt + 1) * sizeof *stack);
+    tsr_status st = TSR_OK;
+    if (!stack || !build_adjacency(&b, alloc) || !build_start_grid(&b, alloc) ||
+        !incid_build(&ce, t->nv, t->edge, t->nedge, 2, alloc)) {
+        st = tsr_error_set(err, TSR_ERR_NOMEM, "regions: out of memory");
+        goto done;
+    }
+    for (uint32_t s = 0; s < nseeds; s++) {
+        const double *p = &seeds[2 * (size_t)s];
+        if (!isfinite(p[0]) || !isfinite(p[1]))
+            continue;
+        uint32_t i = locate(&b, p);
+        if (!holds(t, i, p)) { /* the walk stops at a hole or beyond the hull: look everywhere */
+            for (i = 0; i < t->nt && !holds(t, i, p); i++)
+                ;
+            if (i == t->nt)
+                continue;
+        }
+        uint32_t n = 0;
+        region[i] = s;
+        stack[n++] = i;
+        while (n) {
+            uint32_t j = stack[--n];
+            for (int k = 0; k < 3; k++) {
+                uint32_t o = b.adj[3 * (size_t)j + k];
+                if (o == NONE || region[o] == s ||
+                    constrained(t, &ce, t->tri[3 * (size_t)j + k], t->tri[3 * (size_t)j + (k + 1) % 3]))
+                    continue;
+                region[o] = s;
+                stack[n++] = o;
+            }
+        }
+    }
+done:
+    tsr_free(alloc, stack);
+    tsr_free(alloc, b.adj);
+    tsr_free(alloc, b.start);
+    incid_free(&ce, alloc);
     return st;
 }

@@ -340,6 +340,37 @@ static tsr_status extract(const tsr_cdt *d, const uint8_t *keep, tsr_triangulati
     return TSR_OK;
 }
 
+/* The regions of the area bounds (refine.c's area_bound): the part of the
+ * domain reachable from each seed without crossing a constrained edge gets
+ * tf = CDT_REGION0 + its index, a later seed's over an earlier one's. */
+static bool mark_regions(tsr_cdt *d, const tsr_tri_options *opt)
+{
+    const tsr_allocator *a = tsr__cdt_alloc(d);
+    uint32_t *stack = tsr_alloc(a, ((size_t)d->nt + 1) * sizeof *stack);
+    if (!stack)
+        return false;
+    for (uint32_t r = 0; r < opt->nregions; r++) {
+        uint32_t h = tsr_cdt_locate_handle(d, opt->regions[3 * (size_t)r], opt->regions[3 * (size_t)r + 1]);
+        if (h == UINT32_MAX || d->tf[h] == CDT_OUTSIDE)
+            continue;
+        uint32_t f = CDT_REGION0 + r, n = 0;
+        d->tf[h] = f;
+        stack[n++] = h;
+        while (n) {
+            uint32_t t = stack[--n];
+            for (int k = 0; k < 3; k++) {
+                uint32_t s = d->tn[3 * (size_t)t + k];
+                if (d->tc[3 * (size_t)t + k] || d->tf[s] == CDT_OUTSIDE || d->tf[s] == f)
+                    continue;
+                d->tf[s] = f;
+                stack[n++] = s;
+            }
+        }
+    }
+    tsr_free(a, stack);
+    return true;
+}
+
 static tsr_status delaunay(const tsr_pslg *in, const tsr_tri_options *opt, tsr_triangulation *out, tsr_error *err)
 {
     const tsr_allocator *a = out->alloc.realloc ? &out->alloc : NULL;
@@ -347,6 +378,9 @@ static tsr_status delaunay(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
     uint8_t *keep = NULL;
     uint32_t *seeds = NULL;
     tsr_status st = TSR_ERR_NOMEM;
+    bool region_areas = false;
+    for (uint32_t r = 0; r < opt->nregions; r++)
+        region_areas = region_areas || opt->regions[3 * (size_t)r + 2] > 0;
     if (!d)
         goto fail;
     st = tsr_cdt_insert_points(d, in->xy, in->nv, out->vertex_of_input);
@@ -372,7 +406,7 @@ static tsr_status delaunay(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
             goto fail;
     }
     out->intersections = tsr_cdt_intersection_count(d);
-    bool refine = opt->conforming || opt->min_angle > 0 || opt->max_area > 0;
+    bool refine = opt->conforming || opt->min_angle > 0 || opt->max_area > 0 || region_areas;
     bool trivial_region = opt->region == TSR_REGION_HULL && in->nholes == 0;
     if (d->started && (refine || !trivial_region)) {
         st = TSR_ERR_NOMEM;
@@ -397,13 +431,15 @@ static tsr_status delaunay(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
             /* the domain's boundary becomes constrained, so that refinement
              * stays inside it */
             for (uint32_t t = 0; t < d->nt; t++) {
-                d->tf[t] = !keep[t];
+                d->tf[t] = keep[t] ? 0 : CDT_OUTSIDE;
                 for (int k = 0; k < 3; k++) {
                     uint32_t s = d->tn[3 * (size_t)t + k];
                     if (keep[t] && !keep[s] && !d->tc[3 * (size_t)t + k])
                         tsr__cdt_mark_edge(d, t, k, CDT_BOUNDARY);
                 }
             }
+            if (region_areas && !mark_regions(d, opt))
+                goto fail;
             uint32_t *ends = tsr_alloc(a, (2 * (size_t)in->nseg + 1) * sizeof *ends);
             if (!ends)
                 goto fail;
@@ -420,7 +456,7 @@ static tsr_status delaunay(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
                 goto fail;
             }
             for (uint32_t t = 0; t < d->nt; t++)
-                keep[t] = !d->tf[t];
+                keep[t] = d->tf[t] != CDT_OUTSIDE;
         }
     }
     st = extract(d, keep, out);
@@ -437,11 +473,17 @@ fail:
     tsr_free(a, keep);
     tsr_free(a, seeds);
     tsr_cdt_destroy(d);
-    if (st == TSR_ERR_TOO_LARGE)
+    if (st == TSR_ERR_TOO_LARGE && !region_areas)
         return tsr_error_set(err, st,
                              "a maximum triangle area of %g over the region's area of %g asks for more than %g "
                              "triangles: give a larger area, or a Steiner limit",
                              opt->max_area, out->refined_area, (double)TSR_TRI_MAX_AREA_TRIANGLES);
+    if (st == TSR_ERR_TOO_LARGE)
+        return tsr_error_set(err, st,
+                             "the maximum triangle areas (%g, and the regions') over the region's area of %g ask for "
+                             "%.3g triangles, more than %g: give larger areas, or a Steiner limit",
+                             opt->max_area, out->refined_area, out->asked_triangles,
+                             (double)TSR_TRI_MAX_AREA_TRIANGLES);
     return st == TSR_ERR_NOMEM ? tsr_error_set(err, st, "out of memory triangulating %u points", in->nv)
                                : tsr_error_set(err, st, "triangulation failed: %s", tsr_status_str(st));
 }
@@ -477,6 +519,14 @@ tsr_status tsr_triangulate(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
                                  in->nv);
     if (!(opt->min_angle >= 0 && opt->min_angle < 60) || !(opt->max_area >= 0) || !isfinite(opt->max_area))
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "minimum angle must be in [0, 60) degrees and maximum area >= 0");
+    for (uint32_t r = 0; r < opt->nregions; r++) {
+        const double *g = &opt->regions[3 * (size_t)r];
+        if (!coordinate_ok(g[0]) || !coordinate_ok(g[1]) || isnan(g[2]) || isinf(g[2]))
+            return tsr_error_set(err, TSR_ERR_ARGUMENT, "region %u has a %s (%g, %g, maximum area %g)", r,
+                                 isfinite(g[0]) && isfinite(g[1]) && isfinite(g[2]) ? "coordinate " COORDINATE_RANGE
+                                                                                    : "non-finite value",
+                                 g[0], g[1], g[2]);
+    }
     const tsr_allocator *a = alloc;
     tsr_status st;
     if (opt->method == TSR_TRI_QUADTREE) {

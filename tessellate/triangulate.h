@@ -74,6 +74,15 @@ typedef struct tsr_tri_options {
     double min_angle;
     /* maximum triangle area (0: none) */
     double max_area;
+    /* regional maximum areas (Delaunay method; Triangle's -a with a .poly's
+     * regions): 3 per region, x, y and its bound (0 or less: none). A
+     * region is the part of the domain reachable from its seed point
+     * without crossing a segment (a later seed in the same part wins; a
+     * seed on a segment or outside the domain names no part, or an
+     * unspecified one of those it touches); a triangle there is refined to
+     * the smaller of max_area and the region's bound. */
+    const double *regions;
+    uint32_t nregions;
     /* refinement stops after this many Steiner points (0: 20 * nv +
      * 100,000, plus 4 * domain area / max_area when max_area is set);
      * steiner_limited (and quality_limited) say so */
@@ -123,6 +132,9 @@ typedef struct tsr_triangulation {
                                   set quality_limited */
     double refined_area;       /* the area of the region refinement worked on
                                   (0 without min_angle or max_area) */
+    double asked_triangles;    /* the triangles the area bounds ask for at
+                                  least: the sum over the refined region of
+                                  each triangle's area over its bound */
     tsr_allocator alloc;
 } tsr_triangulation;
 
@@ -166,6 +178,16 @@ void tsr_triangulation_free(tsr_triangulation *t);
  * TSR_ERR_NOMEM. */
 tsr_status tsr_tri_interpolate(const tsr_pslg *in, const double *in_vals, uint32_t n, const tsr_triangulation *out,
                                double *vals, const tsr_allocator *alloc, tsr_error *err);
+
+/* The region of every triangle of t (region: t->nt entries) from seed
+ * points (seeds: 2 per seed), as Triangle's regional attributes: a seed's
+ * region is the triangles reachable from the one that contains it without
+ * crossing a constrained edge; a triangle in the regions of several seeds
+ * gets the last seed's index, one in none UINT32_MAX. A seed on an edge or
+ * a vertex starts from one of the triangles there; a seed in no triangle
+ * (outside, or in a hole) labels nothing. Errors: TSR_ERR_NOMEM. */
+tsr_status tsr_tri_regions(const tsr_triangulation *t, const double *seeds, uint32_t nseeds, uint32_t *region,
+                           const tsr_allocator *alloc, tsr_error *err);
 
 /* ---- Independent checker ------------------------------------------------ */
 

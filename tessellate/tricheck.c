@@ -97,8 +97,9 @@
  *    here); more than it reports all count as failing. The one definition
  *    is shared with refinement, which leaves them; the rule itself is
  *    plain geometry, so the check stays independent of how they arose.
- *  - Maximum area: triangles whose area exceeds opt->max_area by more than
- *    1e-9 relative.
+ *  - Maximum area: triangles whose area exceeds opt->max_area, or their
+ *    region's bound when smaller (the region grown over the output from
+ *    the seeds, tsr_tri_regions), by more than 1e-9 relative.
  *
  * The sweeps give up (NAN / LONG_MIN, noted in first_problem only when
  * something else fails) beyond about 4e8 elementary steps, so a check of a
@@ -1496,7 +1497,27 @@ static tsr_status run_check(ck *c, geom *g)
     double min_angle = nt ? 180 : 0;
     uint32_t below = 0, excused = 0, above = 0, first_below = UINT32_MAX, first_above = UINT32_MAX;
     uint32_t sub = 0, first_sub = UINT32_MAX; /* below the resolution of doubles */
-    double bound = opt->min_angle * (1 - 1e-9), area_bound = opt->max_area * (1 + 1e-9);
+    double bound = opt->min_angle * (1 - 1e-9), first_bound = opt->max_area;
+    /* the regions' bounds: each triangle's region grown from the seeds
+     * over the output (tsr_tri_regions), as the contract defines them */
+    uint32_t *region = NULL;
+    bool region_areas = false;
+    for (uint32_t r = 0; r < opt->nregions; r++)
+        region_areas = region_areas || opt->regions[3 * (size_t)r + 2] > 0;
+    if (region_areas) {
+        double *seeds = malloc(2 * (size_t)opt->nregions * sizeof *seeds);
+        region = malloc(((size_t)out->nt + 1) * sizeof *region);
+        for (uint32_t r = 0; seeds && r < opt->nregions; r++)
+            seeds[2 * r] = opt->regions[3 * (size_t)r], seeds[2 * r + 1] = opt->regions[3 * (size_t)r + 1];
+        bool ok = seeds && region && tsr_tri_regions(out, seeds, opt->nregions, region, NULL, NULL) == TSR_OK;
+        free(seeds);
+        if (!ok) {
+            free(region);
+            free(angsum);
+            free(hull_xy);
+            return TSR_ERR_NOMEM;
+        }
+    }
     uint32_t faces = 0;
     double bx0 = INFINITY, bx1 = -INFINITY, by0 = INFINITY, by1 = -INFINITY;
     for (uint32_t t = 0; t < nt; t++) {
@@ -1522,9 +1543,15 @@ static tsr_status run_check(ck *c, geom *g)
             tmin = fmin(tmin, ang);
         }
         min_angle = fmin(min_angle, tmin);
-        if (opt->max_area > 0 && ta > area_bound) {
+        double ab = opt->max_area;
+        if (region && region[t] != UINT32_MAX) {
+            double rb = opt->regions[3 * (size_t)region[t] + 2];
+            if (rb > 0 && !(ab > 0 && ab <= rb))
+                ab = rb;
+        }
+        if (ab > 0 && ta > ab * (1 + 1e-9)) {
             if (above++ == 0)
-                first_above = t;
+                first_above = t, first_bound = ab;
         }
         if (opt->min_angle > 0 && tmin < bound) {
             /* the shortest edge (k, k+1) */
@@ -1594,6 +1621,7 @@ static tsr_status run_check(ck *c, geom *g)
         problem(res, "the triangles around vertex %u (%.17g, %.17g) turn %.3f times around it (they overlap)",
                 first_wound, vxy(c, first_wound)[0], vxy(c, first_wound)[1], angsum[first_wound] / 360);
     free(angsum);
+    free(region);
     free(hull_xy);
 
     res->expected_area = expected;
@@ -1634,8 +1662,8 @@ static tsr_status run_check(ck *c, geom *g)
         problem(res,
                 "%u triangle%s an area above %g; first: triangle %u (%.17g, %.17g) (%.17g, %.17g) (%.17g, "
                 "%.17g)",
-                above, above == 1 ? " has" : "s have", opt->max_area, first_above, vxy(c, v[0])[0], vxy(c, v[0])[1], vxy(c, v[1])[0],
-                vxy(c, v[1])[1], vxy(c, v[2])[0], vxy(c, v[2])[1]);
+                above, above == 1 ? " has" : "s have", first_bound, first_above, vxy(c, v[0])[0], vxy(c, v[0])[1],
+                vxy(c, v[1])[0], vxy(c, v[1])[1], vxy(c, v[2])[0], vxy(c, v[2])[1]);
     }
     return TSR_OK;
 }

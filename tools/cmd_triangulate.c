@@ -18,8 +18,8 @@ static void help(FILE *f)
                "Delaunay triangulation, or a quadtree triangulation, optionally refined for quality.\n\n"
                "input (format from the extension, or --format):\n"
                "  .node, .poly          Triangle's formats (a .poly listing 0 points reads the .node\n"
-               "                        file of the same name); point attributes (up to 64) and\n"
-               "                        markers are carried to the output\n"
+               "                        file of the same name); point attributes (up to 64), markers\n"
+               "                        and a .poly's regional attributes are carried to the output\n"
                "  .json                 an array of rings, each an array of [x, y]; the first ring is\n"
                "                        the outer boundary, the others holes (earcut's test format)\n"
                "  .txt                  'nV nE', then nV lines 'x y', then nE lines 'i j' (0-based)\n\n"
@@ -30,7 +30,8 @@ static void help(FILE *f)
                "                        then the Steiner points; the input's attributes, interpolated\n"
                "                        linearly at Steiner points over the input's own triangulation;\n"
                "                        boundary markers: a point's own, else that of a segment it is\n"
-               "                        on, else 1 on the boundary), .ele (triangles), .poly\n"
+               "                        on, else 1 on the boundary), .ele (triangles; with a .poly's\n"
+               "                        regions, the attribute of the region each lies in), .poly\n"
                "                        (constrained edges; marker = the input segment's marker, or its\n"
                "                        number when the input gives none)\n"
                "  .obj, .ply, .stl, .glb  a mesh with z = 0, or an attribute (--z-attribute;\n"
@@ -47,6 +48,8 @@ static void help(FILE *f)
                "  -q ANGLE              refine until no angle is below ANGLE degrees (0 < ANGLE < 60;\n"
                "                        above about 34 termination is not guaranteed)\n"
                "  -a AREA               refine until no triangle is larger than AREA\n"
+               "  --region-areas        refine each region of a .poly to its own maximum area (Triangle's\n"
+               "                        -a without a number; with -a, the smaller bound applies)\n"
                "  --conforming          split segments until every edge is Delaunay (delaunay method)\n"
                "  --max-steiner N       stop refining after N Steiner points (default: 20 per input point\n"
                "                        plus 100,000, plus 4 per -a AREA of the region; an -a asking for\n"
@@ -113,9 +116,12 @@ static void print_check(FILE *f, const tsr_tri_options *opt, const tsr_triangula
                 "check: %u triangles below %g degrees excused as below the resolution of doubles (height under 8 "
                 "ulps; reported by the result: quality limited)\n",
                 c->below_resolution_excused, opt->min_angle);
-    else
+    if (!(opt->min_angle > 0))
         fprintf(f, "check: smallest angle %.6g degrees (no bound asked)\n", c->min_angle);
-    if (opt->max_area > 0)
+    if (opt->nregions)
+        fprintf(f, "check: %u triangles above their area bound (%s the regions' own): %s\n", c->above_max_area,
+                opt->max_area > 0 ? "-a or" : "", c->above_max_area ? "FAIL" : "ok");
+    else if (opt->max_area > 0)
         fprintf(f, "check: %u triangles above area %g: %s\n", c->above_max_area, opt->max_area,
                 c->above_max_area ? "FAIL" : "ok");
     if (c->ok)
@@ -151,6 +157,8 @@ static void print_json(const char *in_path, const cli_pslg *g, const tsr_tri_opt
     add_count(in, "points", g->nv);
     add_count(in, "segments", g->nseg);
     add_count(in, "holes", g->nholes);
+    add_count(in, "attributes", g->nattr);
+    add_count(in, "regions", g->nregions);
     if (g->format == CLI_PSLG_JSON)
         add_count(in, "rings", g->rings);
     cJSON_AddStringToObject(j, "method", opt->method == TSR_TRI_QUADTREE ? "quadtree" : "delaunay");
@@ -230,6 +238,7 @@ static int run(int argc, char **argv)
     bool check = false, json = false, quiet = false, region_given = false;
     cli_pslg_format fmt = CLI_PSLG_UNKNOWN;
     uint32_t z_attr = 0; /* 1-based; 0: z = 0 */
+    bool region_areas = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (cli_is_help(a)) {
@@ -296,6 +305,8 @@ static int run(int argc, char **argv)
             }
         } else if (!strcmp(a, "--conforming"))
             opt.conforming = true;
+        else if (!strcmp(a, "--region-areas"))
+            region_areas = true;
         else if (!strcmp(a, "--check"))
             check = true;
         else if (!strcmp(a, "--json"))
@@ -365,6 +376,30 @@ static int run(int argc, char **argv)
         cli_pslg_free(&g);
         return CLI_USAGE;
     }
+    /* the regions' maximum areas (Triangle's -a without a number) */
+    double *bounds = NULL;
+    bool has_bounds = false;
+    for (uint32_t r = 0; r < g.nregions; r++)
+        has_bounds = has_bounds || g.regions[4 * (size_t)r + 3] > 0;
+    if (region_areas && !has_bounds) {
+        cli_error("triangulate", "--region-areas: %s gives no region a maximum area", in_path);
+        cli_pslg_free(&g);
+        return CLI_USAGE;
+    }
+    if (region_areas) {
+        if (!(bounds = malloc(3 * (size_t)g.nregions * sizeof *bounds))) {
+            cli_error("triangulate", "out of memory");
+            cli_pslg_free(&g);
+            return CLI_FAIL;
+        }
+        for (uint32_t r = 0; r < g.nregions; r++)
+            for (int k = 0; k < 3; k++)
+                bounds[3 * (size_t)r + k] = g.regions[4 * (size_t)r + (k < 2 ? k : 3)];
+        opt.regions = bounds;
+        opt.nregions = g.nregions;
+    } else if (has_bounds && !quiet)
+        fprintf(stderr, "tessera triangulate: note: %s gives regions maximum areas; --region-areas applies them\n",
+                in_path);
     if (!region_given)
         opt.region = g.format == CLI_PSLG_JSON                   ? TSR_REGION_EVEN_ODD
                      : g.format == CLI_PSLG_POLY && g.nseg > 0 ? TSR_REGION_ENCLOSED
@@ -376,6 +411,7 @@ static int run(int argc, char **argv)
     double seconds = cli_now() - t0;
     if (s != TSR_OK) {
         cli_error("triangulate", "%s: %s", in_path, err.message[0] ? err.message : tsr_status_str(s));
+        free(bounds);
         cli_pslg_free(&g);
         return CLI_FAIL;
     }
@@ -385,6 +421,7 @@ static int run(int argc, char **argv)
         cli_error("triangulate", "%s: no triangle: %s", in_path,
                   t.input_vertices < 3 ? "fewer than 3 distinct points" : "the points are all on one line");
         tsr_triangulation_free(&t);
+        free(bounds);
         cli_pslg_free(&g);
         return CLI_FAIL;
     }
@@ -469,6 +506,7 @@ static int run(int argc, char **argv)
     }
     free(vals);
     tsr_triangulation_free(&t);
+    free(bounds);
     cli_pslg_free(&g);
     return rc;
 }

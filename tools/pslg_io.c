@@ -70,6 +70,7 @@ void cli_pslg_free(cli_pslg *p)
     free(p->attr);
     free(p->marker);
     free(p->seg_marker);
+    free(p->regions);
     memset(p, 0, sizeof *p);
 }
 
@@ -95,6 +96,7 @@ typedef struct text {
     const char *p, *end;
     uint32_t line;      /* line of the record last read */
     uint32_t next_line; /* line where p is */
+    int ntok;           /* values in the record record() read last */
 } text;
 
 /* The length of a UTF-8 byte order mark at the start (editors on Windows
@@ -225,7 +227,7 @@ static tsr_status fits(const text *t, uint64_t n, const char *what, tsr_error *e
 static tsr_status record(text *t, token *tok, int want_min, int want_max, uint32_t i, uint32_t n, const char *what,
                          const char *layout, tsr_error *err)
 {
-    int got = next_record(t, tok);
+    int got = t->ntok = next_record(t, tok);
     if (got < 0)
         return tsr_error_set(err, TSR_ERR_TRUNCATED, "%s:%u: the file ends after %u of %u %s", t->path, t->next_line,
                              i, n, what);
@@ -330,7 +332,7 @@ static tsr_status read_node_section(text *t, cli_pslg *g, uint32_t *base, bool a
 static tsr_status read_node_text(const char *path, const char *buf, size_t len, cli_pslg *g, uint32_t *base,
                                  tsr_error *err)
 {
-    text t = {path, buf + bom_length(buf, len), buf + len, 1, 1};
+    text t = {path, buf + bom_length(buf, len), buf + len, 1, 1, 0};
     bool none;
     tsr_status s = read_node_section(&t, g, base, false, &none, err);
     if (s != TSR_OK)
@@ -350,7 +352,7 @@ void cli_pslg_node_path(const char *poly, char *buf, size_t cap)
 
 static tsr_status read_poly_text(const char *path, const char *buf, size_t len, cli_pslg *g, tsr_error *err)
 {
-    text t = {path, buf + bom_length(buf, len), buf + len, 1, 1};
+    text t = {path, buf + bom_length(buf, len), buf + len, 1, 1, 0};
     uint32_t base = UINT32_MAX;
     bool none;
     tsr_status s = read_node_section(&t, g, &base, true, &none, err);
@@ -431,8 +433,35 @@ static tsr_status read_poly_text(const char *path, const char *buf, size_t len, 
             (s = parse_number(&t, &tok[1], "x", &g->holes[2 * (size_t)i], err)) != TSR_OK ||
             (s = parse_number(&t, &tok[2], "y", &g->holes[2 * (size_t)i + 1], err)) != TSR_OK)
             return s;
-    /* a regional attribute section may follow; it is not used */
     g->first_index = base;
+    /* the regional attributes (Triangle's -A and -a), if any */
+    if ((n = next_record(&t, tok)) < 0)
+        return TSR_OK;
+    if (n != 1)
+        return tsr_error_set(err, TSR_ERR_FORMAT, "%s:%u: expected the region count alone, found %d values", path,
+                             t.line, n);
+    uint32_t nr;
+    if ((s = parse_u32(&t, &tok[0], "region count", &nr, err)) != TSR_OK ||
+        (s = fits(&t, nr, "regions", err)) != TSR_OK)
+        return s;
+    g->regions = malloc((4 * (size_t)nr + 1) * sizeof *g->regions);
+    if (!g->regions)
+        return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory for %u regions", path, nr);
+    g->nregions = nr;
+    for (uint32_t i = 0; i < nr; i++) {
+        double *r = &g->regions[4 * (size_t)i];
+        r[3] = -1;
+        if ((s = record(&t, tok, 4, 5, i, nr, "regions", "index x y attribute [maximum-area]", err)) != TSR_OK ||
+            (s = check_index(&t, &tok[0], i, &base, "region", err)) != TSR_OK ||
+            (s = parse_number(&t, &tok[1], "x", &r[0], err)) != TSR_OK ||
+            (s = parse_number(&t, &tok[2], "y", &r[1], err)) != TSR_OK ||
+            (s = parse_number(&t, &tok[3], "attribute", &r[2], err)) != TSR_OK ||
+            (t.ntok == 5 && (s = parse_number(&t, &tok[4], "maximum area", &r[3], err)) != TSR_OK))
+            return s;
+    }
+    if (next_record(&t, tok) >= 0)
+        return tsr_error_set(err, TSR_ERR_FORMAT, "%s:%u: more records than the %u regions the count gives", path,
+                             t.line, nr);
     return TSR_OK;
 }
 
@@ -440,7 +469,7 @@ static tsr_status read_poly_text(const char *path, const char *buf, size_t len, 
 
 static tsr_status read_txt_text(const char *path, const char *buf, size_t len, cli_pslg *g, tsr_error *err)
 {
-    text t = {path, buf + bom_length(buf, len), buf + len, 1, 1};
+    text t = {path, buf + bom_length(buf, len), buf + len, 1, 1, 0};
     token tok[MAX_TOKENS];
     int n = next_record(&t, tok);
     if (n < 0)
@@ -746,13 +775,18 @@ static void write_node(FILE *f, const tsr_triangulation *t, const cli_pslg *g, c
                   na, vm[v]);
 }
 
-static void write_ele(FILE *f, const tsr_triangulation *t, const uint32_t *num, uint32_t base)
+static void write_ele(FILE *f, const tsr_triangulation *t, const uint32_t *num, const cli_pslg *g,
+                      const uint32_t *region)
 {
-    fprintf(f, "# Tessera triangulation: %u triangles, counter-clockwise, vertices of the .node\n%u 3 0\n", t->nt,
-            t->nt);
-    for (uint32_t i = 0; i < t->nt; i++)
-        fprintf(f, "%u %u %u %u\n", i + base, num[t->tri[3 * (size_t)i]], num[t->tri[3 * (size_t)i + 1]],
+    fprintf(f, "# Tessera triangulation: %u triangles, counter-clockwise, vertices of the .node%s\n%u 3 %d\n", t->nt,
+            region ? "; the regional attribute of each" : "", t->nt, region != NULL);
+    for (uint32_t i = 0; i < t->nt; i++) {
+        fprintf(f, "%u %u %u %u", i + g->first_index, num[t->tri[3 * (size_t)i]], num[t->tri[3 * (size_t)i + 1]],
                 num[t->tri[3 * (size_t)i + 2]]);
+        if (region)
+            fprintf(f, " %.17g", region[i] == UINT32_MAX ? 0.0 : g->regions[4 * (size_t)region[i] + 2]);
+        fputc('\n', f);
+    }
 }
 
 static void write_poly(FILE *f, const tsr_triangulation *t, const uint32_t *num, const cli_pslg *g, const int32_t *em)
@@ -768,6 +802,12 @@ static void write_poly(FILE *f, const tsr_triangulation *t, const uint32_t *num,
     fprintf(f, "%u\n", g->nholes);
     for (uint32_t h = 0; h < g->nholes; h++)
         fprintf(f, "%u %.17g %.17g\n", h + g->first_index, g->holes[2 * (size_t)h], g->holes[2 * (size_t)h + 1]);
+    if (g->nregions)
+        fprintf(f, "%u\n", g->nregions);
+    for (uint32_t r = 0; r < g->nregions; r++) {
+        const double *q = &g->regions[4 * (size_t)r];
+        fprintf(f, "%u %.17g %.17g %.17g %.17g\n", r + g->first_index, q[0], q[1], q[2], q[3]);
+    }
 }
 
 bool cli_tri_output_names(const char *path, char (*names)[4096])
@@ -788,12 +828,20 @@ tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, 
     tsr_status s = TSR_OK;
     if (!cli_tri_output_names(path, name))
         return tsr_error_set(err, TSR_ERR_ARGUMENT, "%s: output path too long", path);
-    uint32_t *num = file_numbers(t, g->nv, g->first_index);
+    uint32_t *num = file_numbers(t, g->nv, g->first_index), *region = NULL;
     int32_t *vm = malloc(((size_t)t->nv + 1) * sizeof *vm), *em = malloc(((size_t)t->nedge + 1) * sizeof *em);
-    if (!num || !vm || !em || !markers(t, g, vm, em)) {
+    double *seeds = g->nregions ? malloc(2 * (size_t)g->nregions * sizeof *seeds) : NULL;
+    for (uint32_t r = 0; seeds && r < g->nregions; r++)
+        seeds[2 * r] = g->regions[4 * (size_t)r], seeds[2 * r + 1] = g->regions[4 * (size_t)r + 1];
+    if (g->nregions && (!seeds || !(region = malloc(((size_t)t->nt + 1) * sizeof *region)) ||
+                        tsr_tri_regions(t, seeds, g->nregions, region, NULL, err) != TSR_OK))
+        s = TSR_ERR_NOMEM;
+    free(seeds);
+    if (s != TSR_OK || !num || !vm || !em || !markers(t, g, vm, em)) {
         free(num);
         free(vm);
         free(em);
+        free(region);
         return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
     }
     for (; begun < 3; begun++)
@@ -808,7 +856,7 @@ tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, 
         if (i == 0)
             write_node(f, t, g, vals, vm);
         else if (i == 1)
-            write_ele(f, t, num, g->first_index);
+            write_ele(f, t, num, g, region);
         else
             write_poly(f, t, num, g, em);
         bool bad = ferror(f) != 0;
@@ -839,6 +887,7 @@ done:
     free(num);
     free(vm);
     free(em);
+    free(region);
     return s;
 }
 

@@ -4,9 +4,11 @@
  * Readers (each gives one error line naming the file and the line, or the
  * JSON position, and the problem; nothing is returned on failure):
  *  - Triangle's .node (`n dim nattr nbound`, then `i x y [attrs] [bmark]`;
- *    up to 64 attributes, kept with integer markers) and .poly (a node section, which may say 0 points, meaning "read
- * the .node file of the same name"; `nseg nbound`, `i a b [bmark]`; `nholes`, `i x y`; a regional attribute section, if
- * any, is ignored; segment markers are kept).
+ *    up to 64 attributes, kept, and integer markers, kept) and .poly (a
+ *    node section, which may say 0 points, meaning "read the .node file of
+ *    the same name"; `nseg nbound`, `i a b [bmark]`, markers kept;
+ *    `nholes`, `i x y`; then, if present, the regional attributes:
+ *    `nregions`, `i x y attribute [maximum-area]`).
  *    `#` starts a comment, blank lines are skipped, and the index base (0
  *    or 1) is the first point's index; indices must then be consecutive.
  *  - JSON rings (an array of rings, each an array of [x, y]; the first
@@ -46,6 +48,8 @@ typedef struct cli_pslg {
     uint32_t nattr;
     int32_t *marker;     /* .node boundary markers, one per point, or NULL */
     int32_t *seg_marker; /* .poly segment markers, one per segment, or NULL */
+    double *regions;     /* .poly regional attributes: x, y, attribute, maximum area (< 0: none) each */
+    uint32_t nregions;
     uint32_t first_index; /* Triangle's files: the input's numbering base (0 or 1), kept by the output; else 1 */
     cli_pslg_format format;
     uint32_t rings; /* JSON: rings read (including one-point rings) */
@@ -91,8 +95,11 @@ void cli_pslg_node_path(const char *poly, char *buf, size_t cap);
  *    Triangle's rules: a point's own marker when not 0, else the marker
  *    (not 0) of an input segment it lies on, else 1 on the triangulation's
  *    boundary, else 0.
+ *  - BASE.ele: with g's regional attributes, one attribute per triangle:
+ *    that of the region it lies in (tsr_tri_regions; a later seed in the
+ *    same region wins), 0 in none.
  *  - BASE.poly: 0 points (meaning BASE.node), the constrained edges as
- *    segments, and g's hole seeds. An edge's marker is its input segment's
+ *    segments, g's hole seeds and g's regions. An edge's marker is its input segment's
  *    marker when g has segment markers (1 for a 0 on the boundary, as
  *    Triangle does), else the input segment's number (1-based).
  * Every section is numbered from g->first_index, as Triangle keeps its

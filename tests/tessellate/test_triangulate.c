@@ -1182,6 +1182,95 @@ TEST(values_at_a_crossing_follow_the_lower_segment)
     tsr_triangulation_free(&t);
 }
 
+/* A 10 x 4 rectangle split at x = 5 by a segment, with a 1 x 1 hole in the
+ * right half (seed at its centre). */
+static void two_rooms(build *b)
+{
+    uint32_t p[6] = {pt(b, 0, 0), pt(b, 5, 0), pt(b, 10, 0), pt(b, 10, 4), pt(b, 5, 4), pt(b, 0, 4)};
+    for (int i = 0; i < 6; i++)
+        sg(b, p[i], p[(i + 1) % 6]);
+    sg(b, p[1], p[4]);
+    square_ring(b, 7, 1.5, 8, 2.5);
+    hole(b, 7.5, 2);
+}
+
+static double tri_area_of(const tsr_triangulation *t, uint32_t i, double c[2])
+{
+    const double *p[3] = {t->xy + 2 * (size_t)t->tri[3 * i], t->xy + 2 * (size_t)t->tri[3 * i + 1],
+                          t->xy + 2 * (size_t)t->tri[3 * i + 2]};
+    c[0] = (p[0][0] + p[1][0] + p[2][0]) / 3;
+    c[1] = (p[0][1] + p[1][1] + p[2][1]) / 3;
+    return 0.5 * tsr_orient2d(p[0], p[1], p[2]);
+}
+
+TEST(regions_label_the_parts_between_segments)
+{
+    build b = {0};
+    two_rooms(&b);
+    tsr_tri_options o = {.min_angle = 25, .max_area = 0.3};
+    tsr_triangulation t = run(&b, &o, "two rooms");
+    /* seeds: left room, right room, the hole (labels nothing), outside
+     * (nothing), and the left room again (wins over the first) */
+    const double seeds[10] = {1, 1, 9, 3, 7.5, 2, 20, 20, 4, 3};
+    uint32_t *region = malloc(((size_t)t.nt + 1) * sizeof *region);
+    tsr_error err = {0};
+    CHECK(tsr_tri_regions(&t, seeds, 5, region, NULL, &err) == TSR_OK);
+    uint32_t left = 0, right = 0;
+    for (uint32_t i = 0; i < t.nt; i++) {
+        double c[2];
+        tri_area_of(&t, i, c);
+        uint32_t want = c[0] < 5 ? 4 : 1; /* by the centroid's side of x = 5 */
+        CHECK_MSG(region[i] == want, "triangle %u (centroid %g, %g): region %u, expected %u", i, c[0], c[1], region[i],
+                  want);
+        left += want == 4, right += want == 1;
+    }
+    CHECK(left > 10 && right > 10);
+    CHECK(tsr_tri_regions(&t, seeds, 0, region, NULL, &err) == TSR_OK && (t.nt == 0 || region[0] == UINT32_MAX));
+    free(region);
+    tsr_triangulation_free(&t);
+    build_free(&b);
+}
+
+TEST(regional_maximum_areas)
+{
+    build b = {0};
+    two_rooms(&b);
+    /* left room 0.05, right room 0.5 then (a later seed there) 0.2; -a 1
+     * everywhere; the checker (run) checks each triangle against its own
+     * bound through its own region labelling */
+    const double regions[9] = {1, 1, 0.05, 9, 3, 0.5, 6, 0.5, 0.2};
+    tsr_tri_options o = {.min_angle = 20, .max_area = 1, .regions = regions, .nregions = 3};
+    tsr_triangulation t = run(&b, &o, "regional areas");
+    double max_left = 0, max_right = 0, area_left = 0;
+    for (uint32_t i = 0; i < t.nt; i++) {
+        double c[2], a = tri_area_of(&t, i, c);
+        if (c[0] < 5)
+            max_left = fmax(max_left, a), area_left += a;
+        else
+            max_right = fmax(max_right, a);
+    }
+    CHECK_MSG(max_left <= 0.05 * (1 + 1e-9) && max_right <= 0.2 * (1 + 1e-9), "largest %g left, %g right", max_left,
+              max_right);
+    CHECK(max_right > 0.05);               /* the right room is not refined to the left's bound */
+    CHECK_NEAR(area_left, 20, 1e-9);       /* the left room covered */
+    CHECK(t.asked_triangles >= 20 / 0.05); /* at least the left room's share */
+    /* the checker fails a triangulation refined without the regions */
+    tsr_triangulation_free(&t);
+    tsr_tri_options plain = {.min_angle = 20, .max_area = 1};
+    tsr_pslg in = pslg_of(&b);
+    tsr_error err = {0};
+    CHECK(tsr_triangulate(&in, &plain, &t, NULL, &err) == TSR_OK);
+    tsr_tri_check c;
+    CHECK(tsr_triangulation_check(&in, &o, &t, &c) == TSR_OK);
+    CHECK_MSG(!c.ok && c.above_max_area > 0, "the checker passed triangles above the regions' bounds");
+    tsr_triangulation_free(&t);
+    /* a region with a non-finite bound is refused */
+    const double bad[3] = {1, 1, NAN};
+    tsr_tri_options ob = {.regions = bad, .nregions = 1};
+    CHECK(tsr_triangulate(&in, &ob, &t, NULL, &err) == TSR_ERR_ARGUMENT);
+    build_free(&b);
+}
+
 TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T(segments_crossing_at_one_point),
           T(overlapping_collinear_segments), T(points_on_segments), T(point_on_segment_beside_rounded_crossing),
           T(integer_grid_1000), T(hole_touching_outer_boundary), T(self_touching_ring), T(polygon_with_1024_holes),
@@ -1192,4 +1281,5 @@ TEST_MAIN(T(exact_duplicates), T(collinear_points), T(almost_collinear_chain), T
           T(near_vertex_beyond_the_segments_end), T(near_vertex_beside_the_pieces_end),
           T(crossing_fallbacks_terminate_forwards), T(conforming_delaunay), T(random_crossing_segments),
           T(bad_input_refused), T(incremental_changes), T(small_angle_beside_short_hull_edge),
-          T(values_carried_to_steiner_points), T(values_at_a_crossing_follow_the_lower_segment))
+          T(values_carried_to_steiner_points), T(values_at_a_crossing_follow_the_lower_segment),
+          T(regions_label_the_parts_between_segments), T(regional_maximum_areas))

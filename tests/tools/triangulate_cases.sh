@@ -121,6 +121,12 @@ tri_dimension)
   expect_error 1 "halfmark\.node:3: marker '1\.5' is not an integer" -- tri "$dir/halfmark.node"
   printf '3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n1 1\n1 1 2 3e10\n0\n' > "$dir/bigmark.poly"
   expect_error 1 "bigmark\.poly:6: marker '3e10' is not an integer of at most 2147483647" -- tri "$dir/bigmark.poly"
+  printf '3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n0 0\n0\n1\n1 0.2 0.2\n' > "$dir/shortregion.poly"
+  expect_error 1 "shortregion\.poly:8: expected 4 to 5 values \(index x y attribute \[maximum-area\]\), found 3" -- tri "$dir/shortregion.poly"
+  printf '3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n0 0\n0\n2\n1 0.2 0.2 1\n' > "$dir/fewregions.poly"
+  expect_error 1 "fewregions\.poly:[0-9]+: the file ends after 1 of 2 regions" -- tri "$dir/fewregions.poly"
+  printf '3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n0 0\n0\n1\n1 0.2 0.2 1 nan\n' > "$dir/nanregion.poly"
+  expect_error 1 "nanregion\.poly:8: maximum area 'nan' is not a finite number" -- tri "$dir/nanregion.poly"
   printf '3 2 65 0\n' > "$dir/attrs.node"
   expect_error 1 "attrs\.node:1: 65 attributes per point; at most 64 are read" -- tri "$dir/attrs.node" ;;
 tri_bad_options)
@@ -150,6 +156,7 @@ tri_bad_options)
   expect_error 2 "the input .*square\.node and the output .*square\.node name the same file" -- "$tessera" triangulate "$sq" -o "$dir/square.poly"
   cmp -s "$dir/tri.poly" "$dir/tri.poly.orig" || fail "tri.poly was overwritten"
   [ ! -e "$dir/tri.node" ] && [ ! -e "$dir/tri.ele" ] || fail "output files written beside tri.poly"
+  expect_error 2 "--region-areas: .*square\.node gives no region a maximum area" -- "$tessera" triangulate "$sq" --check --region-areas
   expect_error 2 "--z-attribute applies to a mesh output" -- "$tessera" triangulate "$dir/two_attr.node" -o "$dir/z.node" --z-attribute 1
   # --format overrides the extension
   "$tessera" triangulate "$dir/square.dat" --format node --check --quiet > /dev/null || fail "--format node"

@@ -198,6 +198,32 @@ EOF
   awk '$1 == "v" { n++; d = $4 - (1 + 2 * $2 + 3 * $3); if (d < 0) d = -d; if (d > 1e-4) { print "z at " $2, $3 ": " $4; bad = 1 } }
        END { if (n < 60) bad = 1; exit bad }' "$dir/attr.obj" || fail "z of --z-attribute 1"
   echo "ok attributes interpolated (affine exact), markers by Triangle's rules, --z-attribute"
+  # regional attributes and areas: two rooms split at x = 5 (attributes
+  # 10 left, 20 right; maximum area 0.5 right only); each triangle's
+  # attribute by its centroid's side, and with --region-areas the right
+  # room's triangles within 0.5 while the left room stays coarse
+  printf '6 2 0 0\n1 0 0\n2 5 0\n3 10 0\n4 10 4\n5 5 4\n6 0 4\n7 1\n1 1 2 0\n2 2 3 0\n3 3 4 0\n4 4 5 0\n5 5 6 0\n6 6 1 0\n7 2 5 0\n0\n2\n1 2 2 10\n2 8 2 20 0.5\n' > "$dir/rooms.poly"
+  note=$("$tessera" triangulate "$dir/rooms.poly" -o "$dir/rooms.1.node" -q 25 2>&1) || fail "rooms.poly: $note"
+  printf '%s\n' "$note" | grep -q "note: .*rooms.poly gives regions maximum areas; --region-areas applies them" ||
+    fail "no note on the unused regional areas: $note"
+  "$tessera" triangulate "$dir/rooms.poly" -o "$dir/rooms.2.node" -q 25 --region-areas --check --quiet > "$dir/rooms.check" ||
+    fail "--region-areas: $(cat "$dir/rooms.check")"
+  for k in 1 2; do
+    grep -v '^#' "$dir/rooms.$k.node" | sed 1d | awk '{ print $1, $2, $3 }' > "$dir/rooms.xy"
+    grep -v '^#' "$dir/rooms.$k.ele" | awk -v xy="$dir/rooms.xy" -v k=$k '
+      BEGIN { while ((getline l < xy) > 0) { split(l, f, " "); X[f[1]] = f[2]; Y[f[1]] = f[3] } }
+      NR == 1 { if ($3 != 1) { print "no triangle attribute: " $0; bad = 1 }; next }
+      { cx = (X[$2] + X[$3] + X[$4]) / 3; cy = (Y[$2] + Y[$3] + Y[$4]) / 3;
+        a = ((X[$3] - X[$2]) * (Y[$4] - Y[$2]) - (Y[$3] - Y[$2]) * (X[$4] - X[$2])) / 2;
+        want = cx < 5 ? 10 : 20; if ($5 != want) { print "triangle " $1 " at " cx ", " cy ": " $5 " not " want; bad = 1 }
+        if (cx > 5 && k == 2 && a > 0.5 * (1 + 1e-9)) { print "triangle " $1 " of area " a " above 0.5"; bad = 1 }
+        if (cx > 5) { nr++; if (a > big) big = a } else nl++ }
+      END { if (k == 1 && big <= 0.5) { print "refined without --region-areas"; bad = 1 }
+            if (k == 2 && (nr < 40 || nl > nr / 2)) { print nl " left and " nr " right triangles"; bad = 1 }; exit bad }' ||
+      fail "regions in rooms.$k.ele"
+  done
+  grep -q "check: 0 triangles above their area bound" "$dir/rooms.check" || fail "the check of the regions' areas: $(cat "$dir/rooms.check")"
+  echo "ok regional attributes on every triangle; --region-areas refines each room to its own bound"
   # JSON rings: the same square with its hole, even-odd by default
   printf '[[[0,0],[10,0],[10,10],[0,10],[0,0]],[[3,3],[7,3],[7,7],[3,7]]]' > "$dir/ring.json"
   "$tessera" triangulate "$dir/ring.json" --check --json > "$dir/ring.out" || fail "ring.json"
