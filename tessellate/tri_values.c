@@ -7,6 +7,8 @@
 #include "tessellate/tessellate.h"
 
 #include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* The input's own triangulation and what the walk needs of it. */
@@ -228,55 +230,117 @@ static double dist(const double *a, const double *b)
     return hypot(a[0] - b[0], a[1] - b[1]);
 }
 
+/* c = (1 - f) a + f b, kept within [a, b]: a constant stays exact, and
+ * huge values do not round beyond the largest double. */
+static double lerp(double a, double b, double f)
+{
+    double c = (1 - f) * a + f * b;
+    return c < fmin(a, b) ? fmin(a, b) : c > fmax(a, b) ? fmax(a, b) : c;
+}
+
+/* A vertex of the base triangulation on an input segment, at t along it. */
+typedef struct onseg {
+    uint32_t s, v;
+    double t;
+} onseg;
+
+static int onseg_cmp(const void *pa, const void *pb)
+{
+    const onseg *a = pa, *b = pb;
+    if (a->s != b->s)
+        return a->s < b->s ? -1 : 1;
+    if (a->t != b->t)
+        return a->t < b->t ? -1 : 1;
+    return (a->v > b->v) - (a->v < b->v);
+}
+
 /* The crossings of segments in the base triangulation: linear along the
- * lower-numbered segment through each, between the nearest input points. */
+ * lower-numbered segment through each, between the nearest input points on
+ * it (the segment's own ends at the latest). The vertices on each segment
+ * are sorted along it once, so this is O(E log E) however many crossings a
+ * segment has. */
 static bool crossing_rows(const tsr_pslg *in, uint32_t n, const base *b, double *vals, const tsr_allocator *a)
 {
     const tsr_triangulation *t = b->t;
-    incid ce;
-    if (!incid_build(&ce, t->nv, t->edge, t->nedge, 2, a)) {
-        incid_free(&ce, a);
+    uint32_t nin = t->input_vertices;
+    if (t->nv == nin)
+        return true;
+    size_t cap = 2 * (size_t)t->nedge + 2 * (size_t)in->nseg + 1;
+    onseg *e = tsr_alloc(a, cap * sizeof *e);
+    uint32_t *low = tsr_alloc(a, ((size_t)t->nv + 1) * sizeof *low);
+    uint8_t *done = tsr_alloc(a, (size_t)t->nv + 1);
+    if (!e || !low || !done) {
+        tsr_free(a, e);
+        tsr_free(a, low);
+        tsr_free(a, done);
         return false;
     }
-    for (uint32_t v = t->input_vertices; v < t->nv; v++) {
-        uint32_t s = NONE;
-        for (uint32_t j = ce.first[v]; j < ce.first[v + 1]; j++)
-            s = t->edge_segment[ce.list[j]] < s ? t->edge_segment[ce.list[j]] : s;
-        uint32_t end[2] = {NONE, NONE};
-        int side = 0;
-        /* walk each way along segment s's edges to an input vertex */
-        for (uint32_t j = ce.first[v]; j < ce.first[v + 1] && s != NONE && side < 2; j++) {
-            uint32_t e = ce.list[j];
-            if (t->edge_segment[e] != s)
-                continue;
-            uint32_t prev = v, cur = t->edge[2 * (size_t)e] == v ? t->edge[2 * (size_t)e + 1] : t->edge[2 * (size_t)e];
-            for (uint32_t guard = 0; cur != NONE && cur >= t->input_vertices && guard < t->nv; guard++) {
-                uint32_t nxt = NONE;
-                for (uint32_t k = ce.first[cur]; k < ce.first[cur + 1] && nxt == NONE; k++) {
-                    uint32_t f = ce.list[k],
-                             o = t->edge[2 * (size_t)f] == cur ? t->edge[2 * (size_t)f + 1] : t->edge[2 * (size_t)f];
-                    if (t->edge_segment[f] == s && o != prev)
-                        nxt = o;
-                }
-                prev = cur;
-                cur = nxt;
-            }
-            end[side++] = cur;
+    memset(done, 0, (size_t)t->nv + 1);
+    for (uint32_t v = 0; v < t->nv; v++)
+        low[v] = NONE;
+    size_t ne = 0;
+    for (uint32_t k = 0; k < t->nedge; k++)
+        for (int j = 0; j < 2; j++) {
+            uint32_t v = t->edge[2 * (size_t)k + j], sg = t->edge_segment[k];
+            low[v] = sg < low[v] ? sg : low[v];
+            e[ne++] = (onseg){sg, v, 0};
         }
-        if (s == NONE) /* not on a constrained edge: not expected; the nearest input point */
-            continue;
-        if (side < 2 || end[0] == NONE || end[1] == NONE) {
-            /* the chain breaks (segments overlapping along it): the ends
-             * of segment s itself */
-            end[0] = t->vertex_of_input[in->seg[2 * (size_t)s]];
-            end[1] = t->vertex_of_input[in->seg[2 * (size_t)s + 1]];
-        }
-        const double *p = &t->xy[2 * (size_t)v], *pa = &t->xy[2 * (size_t)end[0]], *pb = &t->xy[2 * (size_t)end[1]];
-        double da = dist(p, pa), db = dist(p, pb), f = da + db > 0 ? da / (da + db) : 0.5;
-        for (uint32_t c = 0; c < n; c++)
-            vals[(size_t)v * n + c] = (1 - f) * vals[(size_t)end[0] * n + c] + f * vals[(size_t)end[1] * n + c];
+    for (uint32_t sg = 0; sg < in->nseg; sg++) /* the ends: anchors even where overlaps relabel the chain */
+        for (int j = 0; j < 2; j++)
+            e[ne++] = (onseg){sg, t->vertex_of_input[in->seg[2 * (size_t)sg + j]], 0};
+    for (size_t i = 0; i < ne; i++) {
+        const double *pa = &in->xy[2 * (size_t)in->seg[2 * (size_t)e[i].s]];
+        const double *pb = &in->xy[2 * (size_t)in->seg[2 * (size_t)e[i].s + 1]], *p = &t->xy[2 * (size_t)e[i].v];
+        e[i].t = (p[0] - pa[0]) * (pb[0] - pa[0]) + (p[1] - pa[1]) * (pb[1] - pa[1]);
     }
-    incid_free(&ce, a);
+    qsort(e, ne, sizeof *e, onseg_cmp);
+    for (size_t g = 0; g < ne;) {
+        size_t h = g;
+        while (h < ne && e[h].s == e[g].s)
+            h++;
+        /* in [g, h): one segment's vertices in order; each crossing whose
+         * lowest segment this is, between the input vertices around it */
+        size_t prev = SIZE_MAX;
+        for (size_t i = g; i < h; i++) {
+            uint32_t v = e[i].v;
+            if (v < nin) {
+                prev = i;
+                continue;
+            }
+            if (low[v] != e[i].s || done[v] || prev == SIZE_MAX)
+                continue;
+            size_t next = i + 1;
+            while (next < h && e[next].v >= nin)
+                next++;
+            if (next == h)
+                continue;
+            uint32_t va = e[prev].v, vb = e[next].v;
+            const double *p = &t->xy[2 * (size_t)v];
+            double da = dist(p, &t->xy[2 * (size_t)va]), db = dist(p, &t->xy[2 * (size_t)vb]);
+            double f = da + db > 0 ? da / (da + db) : 0.5;
+            for (uint32_t c = 0; c < n; c++)
+                vals[(size_t)v * n + c] = lerp(vals[(size_t)va * n + c], vals[(size_t)vb * n + c], f);
+            done[v] = 1;
+        }
+        g = h;
+    }
+    /* not expected: a crossing on no segment, or with no input point on one
+     * side; the nearest input point's row */
+    for (uint32_t v = nin; v < t->nv; v++) {
+        if (done[v])
+            continue;
+        uint32_t best = 0;
+        double best_d = INFINITY;
+        for (uint32_t u = 0; u < nin; u++) {
+            double d = dist(&t->xy[2 * (size_t)v], &t->xy[2 * (size_t)u]);
+            if (d < best_d)
+                best_d = d, best = u;
+        }
+        memcpy(&vals[(size_t)v * n], &vals[(size_t)best * n], n * sizeof *vals);
+    }
+    tsr_free(a, e);
+    tsr_free(a, low);
+    tsr_free(a, done);
     return true;
 }
 
@@ -338,9 +402,13 @@ tsr_status tsr_tri_interpolate(const tsr_pslg *in, const double *in_vals, uint32
         double l[3];
         barycentric(&b, i, p, l);
         const uint32_t *q = &t0.tri[3 * (size_t)i];
-        for (uint32_t c = 0; c < n; c++)
-            vals[(size_t)v * n + c] =
-                l[0] * v0[(size_t)q[0] * n + c] + l[1] * v0[(size_t)q[1] * n + c] + l[2] * v0[(size_t)q[2] * n + c];
+        for (uint32_t c = 0; c < n; c++) {
+            /* kept within the three values: a constant stays exact, and
+             * huge values do not round beyond the largest double */
+            double x = v0[(size_t)q[0] * n + c], y = v0[(size_t)q[1] * n + c], z = v0[(size_t)q[2] * n + c];
+            double r = l[0] * x + l[1] * y + l[2] * z, lo = fmin(x, fmin(y, z)), hi = fmax(x, fmax(y, z));
+            vals[(size_t)v * n + c] = r < lo ? lo : r > hi ? hi : r;
+        }
     }
 done:
     tsr_free(alloc, v0);

@@ -168,10 +168,12 @@ void tsr_triangulation_free(tsr_triangulation *t);
  *    edge it lies on;
  *  - a crossing of two segments (a vertex of that triangulation too) takes
  *    the value linear along the lower-numbered segment between the nearest
- *    input points on it.
+ *    input points on it (its own ends at the latest).
  * The result does not depend on how refinement placed or ordered its
  * vertices. The barycentric coordinates come from nearly exact areas, so
- * an affine field comes out affine to rounding even in slivers. A vertex
+ * an affine field comes out affine to rounding even in slivers; each value
+ * is kept within those it interpolates (a constant stays exact, a value
+ * near the largest double does not round to infinity). A vertex
  * that rounding put just outside every triangle takes the values at the
  * nearest point of the nearest triangle's edges. n must be at least 1; in
  * must be the input out was made from. Errors: TSR_ERR_ARGUMENT (n = 0, or out not from in),

@@ -191,6 +191,70 @@ static bool make_dir(const char *dir)
     return S_ISDIR(sb.st_mode);
 }
 
+/* make_dir for --out, saying why when it fails. */
+static bool make_out_dir(const char *dir)
+{
+    if (make_dir(dir))
+        return true;
+    if (errno == ENOTDIR || errno == EEXIST)
+        cli_error("fly", "--out %s: a file of that name is in the way (--out names a folder for the frames)", dir);
+    else
+        cli_error("fly", "cannot create the output folder %s: %s", dir, strerror(errno));
+    return false;
+}
+
+/* path made absolute against the working folder, with repeated slashes,
+ * "." and ".." resolved by name (links are not followed), in buf; false
+ * when it does not fit. */
+static bool lexical_path(const char *path, char *buf, size_t cap)
+{
+    char in[8192];
+    if (path[0] == '/') {
+        if (snprintf(in, sizeof in, "%s", path) >= (int)sizeof in)
+            return false;
+    } else {
+        char cwd[4096];
+        if (!getcwd(cwd, sizeof cwd) || snprintf(in, sizeof in, "%s/%s", cwd, path) >= (int)sizeof in)
+            return false;
+    }
+    size_t n = 0;
+    for (const char *p = in; *p;) {
+        while (*p == '/')
+            p++;
+        const char *q = p;
+        while (*q && *q != '/')
+            q++;
+        size_t len = (size_t)(q - p);
+        if (len == 2 && p[0] == '.' && p[1] == '.') {
+            while (n > 0 && buf[n - 1] != '/')
+                n--;
+            if (n > 0)
+                n--; /* the slash before the dropped name */
+        } else if (len && !(len == 1 && p[0] == '.')) {
+            if (n + 1 + len + 1 > cap)
+                return false;
+            buf[n++] = '/';
+            memcpy(buf + n, p, len);
+            n += len;
+        }
+        p = q;
+    }
+    if (n == 0)
+        buf[n++] = '/';
+    buf[n] = 0;
+    return true;
+}
+
+/* Does path lie inside folder dir (by name)? */
+static bool inside_folder(const char *path, const char *dir)
+{
+    char p[4096], d[4096];
+    if (!lexical_path(path, p, sizeof p) || !lexical_path(dir, d, sizeof d))
+        return false;
+    size_t nd = strlen(d);
+    return !strncmp(p, d, nd) && (p[nd] == '/' || (nd == 1 && d[0] == '/'));
+}
+
 static bool have_program(const char *name)
 {
     const char *path = getenv("PATH");
@@ -356,12 +420,7 @@ static int run_headless(fly_args *a, const tsr_heightfield *hf)
         rc = CLI_FAIL;
         goto done;
     }
-    if (!make_dir(a->out_dir)) {
-        if (errno == ENOTDIR || errno == EEXIST)
-            cli_error("fly", "--out %s: a file of that name is in the way (--out names a folder for the frames)",
-                      a->out_dir);
-        else
-            cli_error("fly", "cannot create the output folder %s: %s", a->out_dir, strerror(errno));
+    if (!make_out_dir(a->out_dir)) {
         rc = CLI_FAIL;
         goto done;
     }
@@ -741,19 +800,22 @@ static int run(int argc, char **argv)
     if (!cli_paths_distinct("fly", 3, names, files))
         return CLI_USAGE;
     const char *outputs[2] = {a.stats, a.video}; /* checked before the flight, not after it */
-    /* a --stats or --video inside the frames' folder: the folder the
-     * flight would create is made now, so they can be checked */
-    size_t nd = strlen(a.out_dir);
-    while (nd > 1 && a.out_dir[nd - 1] == '/')
-        nd--;
+    /* a --stats or --video inside the frames' folder, which the flight
+     * creates: checked once the input has loaded and the folder is made
+     * (so a failed load leaves no folder); the others now */
+    const char *early[2] = {a.stats, a.video}, *later[2] = {NULL, NULL};
     for (int i = 0; i < 2 && a.headless; i++)
-        if (outputs[i] && !strncmp(outputs[i], a.out_dir, nd) && outputs[i][nd] == '/' && !make_dir(a.out_dir))
-            break; /* the check below names the problem */
-    if (!cli_outputs_writable("fly", 2, outputs))
+        if (outputs[i] && inside_folder(outputs[i], a.out_dir))
+            later[i] = outputs[i], early[i] = NULL;
+    if (!cli_outputs_writable("fly", 2, early))
         return CLI_FAIL;
     tsr_heightfield *hf = cli_load_heightfield("fly", a.in, &ho);
     if (!hf)
         return CLI_FAIL;
+    if ((later[0] || later[1]) && (!make_out_dir(a.out_dir) || !cli_outputs_writable("fly", 2, later))) {
+        tsr_heightfield_destroy(hf);
+        return CLI_FAIL;
+    }
     cli_georef_warnings("fly", a.in, hf, &ho); /* warnings: also with --quiet */
     int rc = a.headless ? run_headless(&a, hf) : run_window(&a, hf);
     tsr_heightfield_destroy(hf);

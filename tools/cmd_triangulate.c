@@ -6,6 +6,7 @@
 #include "tessellate/predicates.h"
 
 #include <cjson/cJSON.h>
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <stdlib.h>
@@ -19,7 +20,8 @@ static void help(FILE *f)
                "input (format from the extension, or --format):\n"
                "  .node, .poly          Triangle's formats (a .poly listing 0 points reads the .node\n"
                "                        file of the same name); point attributes (up to 64), markers\n"
-               "                        and a .poly's regional attributes are carried to the output\n"
+               "                        and a .poly's regional attributes are carried to a Triangle-\n"
+               "                        format output (a mesh takes one attribute, --z-attribute)\n"
                "  .json                 an array of rings, each an array of [x, y]; the first ring is\n"
                "                        the outer boundary, the others holes (earcut's test format)\n"
                "  .txt                  'nV nE', then nV lines 'x y', then nE lines 'i j' (0-based)\n\n"
@@ -340,21 +342,15 @@ static int run(int argc, char **argv)
         cli_error("triangulate", "%s: unknown input format (use .node, .poly, .json or .txt, or --format)", in_path);
         return CLI_USAGE;
     }
-    /* the input (and the .node a .poly may read) never among the outputs:
-     * Triangle's three files share OUT's base name */
-    {
-        char outs[3][4096], node[4096];
-        const char *names[5] = {"the input", "the points' file", "the output", "the output", "the output"};
-        const char *paths[5] = {in_path, NULL, out_path, NULL, NULL};
-        if (cli_pslg_format_from_path(in_path) == CLI_PSLG_POLY || fmt == CLI_PSLG_POLY) {
-            cli_pslg_node_path(in_path, node, sizeof node);
-            paths[1] = node;
-        }
-        if (out_kind == CLI_OUT_TRIANGLE && cli_tri_output_names(out_path, outs))
-            paths[2] = outs[0], paths[3] = outs[1], paths[4] = outs[2];
-        if (!cli_paths_distinct("triangulate", 5, names, paths))
-            return CLI_USAGE;
-    }
+    /* the input never among the outputs: Triangle's three files share
+     * OUT's base name (the .node a .poly of 0 points reads: below) */
+    char outs[3][4096];
+    const char *out_names[4] = {"the input", "the output", "the output", "the output"};
+    const char *out_paths[4] = {in_path, out_path, NULL, NULL};
+    if (out_kind == CLI_OUT_TRIANGLE && cli_tri_output_names(out_path, outs))
+        out_paths[1] = outs[0], out_paths[2] = outs[1], out_paths[3] = outs[2];
+    if (!cli_paths_distinct("triangulate", 4, out_names, out_paths))
+        return CLI_USAGE;
     if (z_attr && out_kind != CLI_OUT_MESH) {
         cli_error("triangulate", "--z-attribute applies to a mesh output (.obj, .ply, .stl, .glb)");
         return CLI_USAGE;
@@ -369,6 +365,14 @@ static int run(int argc, char **argv)
     if (cli_pslg_read(in_path, fmt, &g, &err) != TSR_OK) {
         cli_error("triangulate", "%s", err.message);
         return CLI_FAIL;
+    }
+    if (g.points_file) {
+        out_names[0] = "the points' file";
+        out_paths[0] = g.points_file;
+        if (!cli_paths_distinct("triangulate", 4, out_names, out_paths)) {
+            cli_pslg_free(&g);
+            return CLI_USAGE;
+        }
     }
     if (z_attr > g.nattr) {
         cli_error("triangulate", "--z-attribute %u: %s has %s%u attribute%s per point", z_attr, in_path,
@@ -443,6 +447,27 @@ static int run(int argc, char **argv)
                 rc = CLI_FAIL;
         }
     }
+    /* a point given again with other attributes: the first's are used */
+    if (out_path && g.nattr && (out_kind == CLI_OUT_TRIANGLE || z_attr)) {
+        uint32_t *first = malloc(((size_t)t.nv + 1) * sizeof *first), count = 0, fi = 0, fj = 0;
+        for (uint32_t v = 0; first && v < t.nv; v++)
+            first[v] = UINT32_MAX;
+        for (uint32_t i = 0; first && i < g.nv; i++) {
+            uint32_t *f = &first[t.vertex_of_input[i]];
+            if (*f == UINT32_MAX)
+                *f = i;
+            else if (memcmp(&g.attr[(size_t)i * g.nattr], &g.attr[(size_t)*f * g.nattr], g.nattr * sizeof *g.attr) &&
+                     !count++)
+                fi = i, fj = *f;
+        }
+        if (count)
+            fprintf(stderr,
+                    "tessera triangulate: warning: %s: %u point%s repeat%s an earlier point with other attributes (the "
+                    "first: point %u repeats point %u); the triangles use the earlier's\n",
+                    in_path, count, count == 1 ? "" : "s", count == 1 ? "s" : "", fi + g.first_index,
+                    fj + g.first_index);
+        free(first);
+    }
     double *vals = NULL; /* the attributes at every output vertex, when written */
     if (out_path && g.nattr && (out_kind == CLI_OUT_TRIANGLE || z_attr)) {
         vals = malloc(((size_t)t.nv * g.nattr + 1) * sizeof *vals);
@@ -452,6 +477,19 @@ static int run(int argc, char **argv)
             cli_error("triangulate", "%s: the attributes: %s", in_path, err.message);
             rc = CLI_FAIL;
             out_path = NULL;
+        }
+        /* z of a mesh is float32 */
+        for (uint32_t v = 0; s == TSR_OK && z_attr && v < t.nv; v++) {
+            double z = vals[(size_t)v * g.nattr + z_attr - 1];
+            if (fabs(z) > FLT_MAX) {
+                cli_error("triangulate",
+                          "%s: --z-attribute %u: %.17g at (%.17g, %.17g) is beyond float32, the mesh's "
+                          "precision (scale the attribute)",
+                          in_path, z_attr, z, t.xy[2 * (size_t)v], t.xy[2 * (size_t)v + 1]);
+                rc = CLI_FAIL;
+                out_path = NULL;
+                break;
+            }
         }
     }
     if (out_path) {

@@ -18,10 +18,12 @@
 
 /* ---- Formats ---------------------------------------------------------------- */
 
+/* The extension of path (from its last dot), or its end: a pointer into
+ * path either way. */
 static const char *extension(const char *path)
 {
     const char *slash = strrchr(path, '/'), *dot = strrchr(path, '.');
-    return dot && (!slash || dot > slash) ? dot : "";
+    return dot && (!slash || dot > slash) ? dot : path + strlen(path);
 }
 
 cli_pslg_format cli_pslg_format_from_path(const char *path)
@@ -71,6 +73,7 @@ void cli_pslg_free(cli_pslg *p)
     free(p->marker);
     free(p->seg_marker);
     free(p->regions);
+    free(p->points_file);
     memset(p, 0, sizeof *p);
 }
 
@@ -203,10 +206,10 @@ static tsr_status parse_marker(const text *t, const token *k, int32_t *m, tsr_er
     tsr_status s = parse_number(t, k, "marker", &v, err);
     if (s != TSR_OK)
         return s;
-    if (v != floor(v) || fabs(v) > INT32_MAX) {
+    if (v != floor(v) || v < INT32_MIN || v > INT32_MAX) {
         char shownbuf[128];
-        return tsr_error_set(err, TSR_ERR_VALUE, "%s:%u: marker '%s' is not an integer of at most 2147483647", t->path,
-                             t->line, shown(k, shownbuf, sizeof shownbuf));
+        return tsr_error_set(err, TSR_ERR_VALUE, "%s:%u: marker '%s' is not an integer from -2147483648 to 2147483647",
+                             t->path, t->line, shown(k, shownbuf, sizeof shownbuf));
     }
     *m = (int32_t)v;
     return TSR_OK;
@@ -373,6 +376,8 @@ static tsr_status read_poly_text(const char *path, const char *buf, size_t len, 
         tsr_free(NULL, nb);
         if (s != TSR_OK)
             return s;
+        if (!(g->points_file = strdup(node)))
+            return tsr_error_set(err, TSR_ERR_NOMEM, "%s: out of memory", path);
     }
     token tok[MAX_TOKENS];
     int n = next_record(&t, tok);

@@ -50,6 +50,7 @@ typedef struct cli_pslg {
     int32_t *seg_marker; /* .poly segment markers, one per segment, or NULL */
     double *regions;     /* .poly regional attributes: x, y, attribute, maximum area (< 0: none) each */
     uint32_t nregions;
+    char *points_file;    /* the .node a .poly of 0 points read its points from, or NULL */
     uint32_t first_index; /* Triangle's files: the input's numbering base (0 or 1), kept by the output; else 1 */
     cli_pslg_format format;
     uint32_t rings; /* JSON: rings read (including one-point rings) */
@@ -78,7 +79,7 @@ typedef enum cli_tri_output { CLI_OUT_UNKNOWN = 0, CLI_OUT_TRIANGLE, CLI_OUT_MES
 cli_tri_output cli_tri_output_from_path(const char *path);
 
 /* The three files cli_tri_write_triangle writes for path (BASE.node,
- * BASE.ele, BASE.poly); false when a name does not fit in cap bytes. */
+ * BASE.ele, BASE.poly); false when a name does not fit in 4096 bytes. */
 bool cli_tri_output_names(const char *path, char (*names)[4096]);
 
 /* The .node file a .poly of 0 points reads its points from (BASE.node). */
@@ -101,7 +102,8 @@ void cli_pslg_node_path(const char *poly, char *buf, size_t cap);
  *  - BASE.poly: 0 points (meaning BASE.node), the constrained edges as
  *    segments, g's hole seeds and g's regions. An edge's marker is its input segment's
  *    marker when g has segment markers (1 for a 0 on the boundary, as
- *    Triangle does), else the input segment's number (1-based).
+ *    Triangle does), else the input segment's index + 1 (whatever the
+ *    numbering base: a marker of 0 means none).
  * Every section is numbered from g->first_index, as Triangle keeps its
  * input's numbering. */
 tsr_status cli_tri_write_triangle(const char *path, const tsr_triangulation *t, const cli_pslg *g, const double *vals,

@@ -127,6 +127,7 @@ void fuzz_check_triangulation(const tsr_pslg *in, const tsr_tri_options *opt, co
     if (t->steiner_limited || t->unrefined) {
         judged.min_angle = judged.max_area = 0;
         judged.conforming = false;
+        judged.nregions = 0;
     }
     tsr_tri_check c;
     if (tsr_triangulation_check(in, &judged, t, &c) == TSR_OK && !c.ok)

@@ -9,7 +9,11 @@
  *   1  min_angle = (b % 61) / 2 degrees (0 .. 30)
  *   2  max_area from a table (1/16 .. 64); b >> 4 the quadtree max_depth
  *   3  points (b % 48), 4 segments (b % 64), 5 hole seeds (b % 4)
- *   then 2 bytes per point (x, y), 2 per segment (a, b), 2 per hole (x, y).
+ *   then 2 bytes per point (x, y), 2 per segment (a, b), 2 per hole (x, y),
+ *   then regions (b % 4), 3 bytes each: x, y, and the maximum area from
+ *   the table (b & 15; none when b & 16); a seed exactly on a segment or
+ *   a point is dropped (its side is unspecified, so kernel and checker may
+ *   rightly take different ones).
  * A coordinate byte: low 5 bits k give k - 16 (-16 .. 15), the top 3 a
  * form: integer (0-3), k/2, k/4, k/1024, or k * (1 + 2^-40) (almost
  * collinear). So duplicates, collinear runs, crossing and overlapping
@@ -38,6 +42,7 @@
 #define MAX_POINTS 48
 #define MAX_SEGMENTS 64
 #define MAX_HOLES 4
+#define MAX_REGIONS 3
 
 typedef struct reader {
     const uint8_t *p;
@@ -78,22 +83,29 @@ static double coordinate(uint8_t b, bool invalid, bool *bad)
     }
 }
 
+/* Is q exactly on a segment or an input point? */
+static bool on_feature(const tsr_pslg *in, const double *q)
+{
+    for (uint32_t i = 0; i < in->nv; i++)
+        if (in->xy[2 * (size_t)i] == q[0] && in->xy[2 * (size_t)i + 1] == q[1])
+            return true;
+    for (uint32_t s = 0; s < in->nseg; s++) {
+        const double *a = in->xy + 2 * (size_t)in->seg[2 * (size_t)s],
+                     *b = in->xy + 2 * (size_t)in->seg[2 * (size_t)s + 1];
+        if (tsr_orient2d(a, b, q) == 0 && fmin(a[0], b[0]) <= q[0] && q[0] <= fmax(a[0], b[0]) &&
+            fmin(a[1], b[1]) <= q[1] && q[1] <= fmax(a[1], b[1]))
+            return true;
+    }
+    return false;
+}
+
 /* A hole seed exactly on a segment or an input point: its region is
  * unspecified (triangulate.h), so the methods may rightly differ. */
 static bool seed_on_feature(const tsr_pslg *in)
 {
-    for (uint32_t h = 0; h < in->nholes; h++) {
-        const double *q = in->holes + 2 * (size_t)h;
-        for (uint32_t i = 0; i < in->nv; i++)
-            if (in->xy[2 * (size_t)i] == q[0] && in->xy[2 * (size_t)i + 1] == q[1])
-                return true;
-        for (uint32_t s = 0; s < in->nseg; s++) {
-            const double *a = in->xy + 2 * (size_t)in->seg[2 * (size_t)s], *b = in->xy + 2 * (size_t)in->seg[2 * (size_t)s + 1];
-            if (tsr_orient2d(a, b, q) == 0 && fmin(a[0], b[0]) <= q[0] && q[0] <= fmax(a[0], b[0]) &&
-                fmin(a[1], b[1]) <= q[1] && q[1] <= fmax(a[1], b[1]))
-                return true;
-        }
-    }
+    for (uint32_t h = 0; h < in->nholes; h++)
+        if (on_feature(in, in->holes + 2 * (size_t)h))
+            return true;
     return false;
 }
 
@@ -165,6 +177,18 @@ int fuzz_triangulate(const uint8_t *data, size_t size)
         holes[i] = coordinate(byte(&r), invalid, &bad);
 
     tsr_pslg in = {xy, nv, seg, ns, holes, nh};
+    double regions[3 * MAX_REGIONS + 1];
+    uint32_t nr = byte(&r) % (MAX_REGIONS + 1);
+    o.regions = regions;
+    for (uint32_t i = 0; i < nr; i++) {
+        double *g = &regions[3 * o.nregions];
+        g[0] = coordinate(byte(&r), false, &bad);
+        g[1] = coordinate(byte(&r), false, &bad);
+        uint8_t b = byte(&r);
+        g[2] = b & 16 ? 0 : areas[b & 15];
+        if (bad || !on_feature(&in, g)) /* (bad: the segments are not checked, so neither is this) */
+            o.nregions++;
+    }
     tsr_triangulation t;
     tsr_error err = {0};
     size_t limit = (size_t)256 << 20; /* far above what 48 points and 4000 Steiner points need */

@@ -168,9 +168,13 @@ echo "ok an interrupted flight leaves the earlier one's frames as they were"
 # a terrain a few units across (2.56 x 2.56, 0.1 high) is drawn as the
 # same terrain in metres is: its frames show tiles (the near plane and the
 # cameras' clearance scale with the terrain); its --stats go inside the
-# frames' folder, which does not exist yet
+# frames' folder, which does not exist yet (named another way); a run whose
+# input fails to load leaves no such folder
+"$tessera" fly "$dir/none.png" --headless --out "$dir/small/" --stats "$dir/small/stats.json" --quiet 2>/dev/null &&
+  fail "a missing input flew"
+[ ! -e "$dir/small" ] || fail "a failed run left the frames' folder"
 "$tessera" fly "$dir/t.png" --dx 0.01 --dz 0.0003 --headless --frames 2 --width 64 --height 48 --out "$dir/small/" \
-  --stats "$dir/small/stats.json" --quiet 2>"$dir/small.err" || fail "small terrain: $(cat "$dir/small.err")"
+  --stats "$dir/./small/../small//stats.json" --quiet 2>"$dir/small.err" || fail "small terrain: $(cat "$dir/small.err")"
 python3 - "$dir/small/stats.json" <<'PY' || fail "small terrain: no tiles drawn"
 import json, sys
 frames = json.load(open(sys.argv[1]))["frames"]

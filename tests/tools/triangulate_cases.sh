@@ -119,8 +119,10 @@ tri_dimension)
   expect_error 1 "marks\.node:1: marker count 2; it is 0 or 1" -- tri "$dir/marks.node"
   printf '3 2 0 1\n1 0 0 1\n2 1 0 1.5\n3 0 1 0\n' > "$dir/halfmark.node"
   expect_error 1 "halfmark\.node:3: marker '1\.5' is not an integer" -- tri "$dir/halfmark.node"
+  printf '3 2 0 1\n1 0 0 -2147483648\n2 1 0 2147483647\n3 0 1 0\n' > "$dir/extrememarks.node"
+  tri "$dir/extrememarks.node" --quiet > /dev/null || fail "the int32 extremes as markers refused"
   printf '3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n1 1\n1 1 2 3e10\n0\n' > "$dir/bigmark.poly"
-  expect_error 1 "bigmark\.poly:6: marker '3e10' is not an integer of at most 2147483647" -- tri "$dir/bigmark.poly"
+  expect_error 1 "bigmark\.poly:6: marker '3e10' is not an integer from -2147483648 to 2147483647" -- tri "$dir/bigmark.poly"
   printf '3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n0 0\n0\n1\n1 0.2 0.2\n' > "$dir/shortregion.poly"
   expect_error 1 "shortregion\.poly:8: expected 4 to 5 values \(index x y attribute \[maximum-area\]\), found 3" -- tri "$dir/shortregion.poly"
   printf '3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n0 0\n0\n2\n1 0.2 0.2 1\n' > "$dir/fewregions.poly"
@@ -155,6 +157,13 @@ tri_bad_options)
   expect_error 2 "the input .*tri\.poly and the output .*tri\.poly name the same file" -- "$tessera" triangulate "$dir/tri.poly" -o "$dir/tri.ele"
   expect_error 2 "the input .*square\.node and the output .*square\.node name the same file" -- "$tessera" triangulate "$sq" -o "$dir/square.poly"
   cmp -s "$dir/tri.poly" "$dir/tri.poly.orig" || fail "tri.poly was overwritten"
+  # a .poly with points of its own reads no .node: an output of that name is fine
+  cp "$dir/tri.poly" "$dir/own.dat"
+  "$tessera" triangulate "$dir/own.dat" --format poly -o "$dir/own.ele" --quiet || fail "own.dat --format poly -o own.ele"
+  # but one whose points are in a .node of its name may not replace it
+  printf '0 2 0 0\n3 0\n1 1 2\n2 2 3\n3 3 1\n0\n' > "$dir/pts.dat"
+  printf '3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n' > "$dir/pts.node"
+  expect_error 2 "the points' file .*pts\.node and the output .*pts\.node name the same file" -- "$tessera" triangulate "$dir/pts.dat" --format poly -o "$dir/pts.ele"
   [ ! -e "$dir/tri.node" ] && [ ! -e "$dir/tri.ele" ] || fail "output files written beside tri.poly"
   expect_error 2 "--region-areas: .*square\.node gives no region a maximum area" -- "$tessera" triangulate "$sq" --check --region-areas
   expect_error 2 "--z-attribute applies to a mesh output" -- "$tessera" triangulate "$dir/two_attr.node" -o "$dir/z.node" --z-attribute 1

@@ -197,7 +197,21 @@ EOF
   "$tessera" triangulate "$dir/attr.poly" -o "$dir/attr.obj" -q 30 -a 1 --z-attribute 1 --quiet || fail "--z-attribute"
   awk '$1 == "v" { n++; d = $4 - (1 + 2 * $2 + 3 * $3); if (d < 0) d = -d; if (d > 1e-4) { print "z at " $2, $3 ": " $4; bad = 1 } }
        END { if (n < 60) bad = 1; exit bad }' "$dir/attr.obj" || fail "z of --z-attribute 1"
-  echo "ok attributes interpolated (affine exact), markers by Triangle's rules, --z-attribute"
+  # a point given again with another attribute: a warning naming both
+  printf '4 2 1 0\n1 0 0 1\n2 4 0 2\n3 0 4 3\n4 0 0 99\n' > "$dir/dupz.node"
+  warn=$("$tessera" triangulate "$dir/dupz.node" -o "$dir/dupz.1.node" --quiet 2>&1) || fail "dupz.node: $warn"
+  printf '%s\n' "$warn" | grep -q "warning: .*dupz.node: 1 point repeats an earlier point with other attributes (the first: point 4 repeats point 1)" ||
+    fail "no warning for a repeated point's other attribute: '$warn'"
+  # a constant attribute stays exact, and values near the largest double
+  # stay finite (each value is kept within those it interpolates)
+  printf '4 2 2 0\n1 0 0 0.1 1.7976931348623157e308\n2 7 0 0.1 1.7976931348623157e308\n3 7 5 0.1 1.7976931348623157e308\n4 0 5 0.1 1.7976931348623157e308\n' > "$dir/const.node"
+  "$tessera" triangulate "$dir/const.node" -o "$dir/const.1.node" -q 30 -a 0.05 --quiet || fail "const.node"
+  grep -v '^#' "$dir/const.1.node" | awk 'NR > 1 { n++; if ($4 != 0.1 || $5 != "1.7976931348623157e+308") { print; bad = 1 } }
+    END { if (n < 100) bad = 1; exit bad }' || fail "a constant attribute changed at a Steiner point"
+  expect_z=$("$tessera" triangulate "$dir/const.node" -o "$dir/const.obj" --z-attribute 2 2>&1)
+  [ $? -eq 1 ] && printf '%s\n' "$expect_z" | grep -q "z-attribute 2: .* is beyond float32" && [ ! -e "$dir/const.obj" ] ||
+    fail "a z beyond float32: '$expect_z'"
+  echo "ok attributes interpolated (affine exact, constants exact), markers by Triangle's rules, --z-attribute"
   # regional attributes and areas: two rooms split at x = 5 (attributes
   # 10 left, 20 right; maximum area 0.5 right only); each triangle's
   # attribute by its centroid's side, and with --region-areas the right
