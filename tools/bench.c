@@ -3,7 +3,10 @@
 
 #include <pthread.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 /* The mesher calls it from several threads (tsr_tin_options.threads). */
 static pthread_mutex_t counting_lock = PTHREAD_MUTEX_INITIALIZER;
@@ -56,6 +59,24 @@ static void *counting_alloc_dense(void *user, size_t size)
 tsr_allocator bench_counting_allocator(bench_counting *c)
 {
     return (tsr_allocator){counting_realloc, c, counting_alloc_dense};
+}
+
+const char *bench_data_dir(const char *cmd)
+{
+    const char *data = getenv("TESSERA_DATA");
+    bool given = data && *data;
+    if (!given)
+        data = "../shared/data";
+    struct stat st;
+    if (stat(data, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        char cwd[4096];
+        fprintf(stderr,
+                "tessera %s: note: no data folder %s%s%s%s: its inputs are skipped (set TESSERA_DATA to the shared "
+                "data folder)\n",
+                cmd, data, given ? " (TESSERA_DATA)" : "", data[0] != '/' && getcwd(cwd, sizeof cwd) ? " from " : "",
+                data[0] != '/' && getcwd(cwd, sizeof cwd) ? cwd : "");
+    }
+    return data;
 }
 
 int bench_cmp_double(const void *a, const void *b)

@@ -16,6 +16,11 @@ typedef struct bench_counting {
  * the maximum in c->peak (c must outlive every block). */
 tsr_allocator bench_counting_allocator(bench_counting *c);
 
+/* The shared data folder: $TESSERA_DATA, else ../shared/data (relative
+ * to the working folder). When it is not a folder, a note on stderr (from
+ * cmd) says so and how to name it: the inputs in it are skipped. */
+const char *bench_data_dir(const char *cmd);
+
 /* qsort's comparison of doubles, ascending. */
 int bench_cmp_double(const void *a, const void *b);
 

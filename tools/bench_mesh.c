@@ -18,38 +18,39 @@
 
 static void help(FILE *f)
 {
-    fprintf(f, "usage: tessera bench mesh [options]\n\n"
-               "Benchmarks tessera mesh's methods (delaunay, quadtree; grid as the baseline) over a\n"
-               "ladder of error bounds (fractions of each input's height range) and prints a table:\n"
-               "triangles, the measured max error, seconds (best of R) and peak heap memory; quadtree's\n"
-               "triangles and time as ratios to delaunay's at the same bound; then delaunay without its\n"
-               "data-dependent flips (--no-flip: plain greedy Delaunay insertion) and delaunay's\n"
-               "triangles and time as ratios to that; then delaunay as one block on one thread (the\n"
-               "window not cut into blocks, --block larger than the input) and delaunay's triangles and\n"
-               "speed-up against that. With --peers, other meshers instead (below).\n\n"
-               "inputs: the demo terrain (generated, 1025 x 1025, seed 1, 1200 m relief, dx 30) and every\n"
-               "file of $TESSERA_DATA/terrain (default ../shared/data; skipped when absent).\n\n"
-               "options:\n"
-               "  --size S          also a generated S x S fractal terrain (e.g. 4097)\n"
-               "  --errors LIST     bounds as fractions of the height range (default\n"
-               "                    0.0005,0.001,0.002,0.01)\n"
-               "  --input FILE      only this heightfield (heightfield options apply)\n"
-               "  --repeat R        best of R runs (default 1)\n"
-               "  --threads N       threads for delaunay's blocks (default: one per processor this\n"
-               "                    process may use, by its CPU affinity and cgroup CPU limit)\n"
-               "  --peers           instead of the usual columns, other meshers on the same input, each\n"
-               "                    mesh measured as ours: delatin (Garland-Heckbert greedy insertion, the\n"
-               "                    JavaScript port of hmm) against delaunay at the same bound (delaunay\n"
-               "                    also on one thread: the peers run on one), and martini (RTIN)\n"
-               "                    against the quadtree: at the bound as its error parameter, and at the\n"
-               "                    largest parameter whose measured max error is within the bound; on\n"
-               "                    inputs that are not (2^k+1)^2 (martini's only size) also the largest\n"
-               "                    such window. Needs node and the npm packages delatin and\n"
-               "                    @mapbox/martini, which tools/install-deps.sh puts in build/node_modules\n"
-               "                    ($TSR_NODE_MODULES overrides); the peers' seconds are their own timing\n"
-               "                    of their mesher, in node, best of R; no-data inputs skip them\n"
-               "  --json FILE       also write the rows as JSON\n" CLI_HEIGHTFIELD_HELP
-               "  -h, --help        this help\n");
+    fprintf(f,
+            "usage: tessera bench mesh [options]\n\n"
+            "Benchmarks tessera mesh's methods (delaunay, quadtree; grid as the baseline) over a\n"
+            "ladder of error bounds (fractions of each input's height range) and prints a table:\n"
+            "triangles, the measured max error, seconds (best of R) and peak heap memory; quadtree's\n"
+            "triangles and time as ratios to delaunay's at the same bound; then delaunay without its\n"
+            "data-dependent flips (--no-flip: plain greedy Delaunay insertion) and delaunay's\n"
+            "triangles and time as ratios to that; then delaunay as one block on one thread (the\n"
+            "window not cut into blocks, --block larger than the input) and delaunay's triangles and\n"
+            "speed-up against that. With --peers, other meshers instead (below).\n\n"
+            "inputs: the demo terrain (generated, 1025 x 1025, seed 1, 1200 m relief, dx 30) and every\n"
+            "file of $TESSERA_DATA/terrain (default ../shared/data, from the working folder; skipped when\n"
+            "absent).\n\n"
+            "options:\n"
+            "  --size S          also a generated S x S fractal terrain (e.g. 4097)\n"
+            "  --errors LIST     bounds as fractions of the height range (default\n"
+            "                    0.0005,0.001,0.002,0.01)\n"
+            "  --input FILE      only this heightfield (heightfield options apply)\n"
+            "  --repeat R        best of R runs (default 1)\n"
+            "  --threads N       threads for delaunay's blocks (default: one per processor this\n"
+            "                    process may use, by its CPU affinity and cgroup CPU limit)\n"
+            "  --peers           instead of the usual columns, other meshers on the same input, each\n"
+            "                    mesh measured as ours: delatin (Garland-Heckbert greedy insertion, the\n"
+            "                    JavaScript port of hmm) against delaunay at the same bound (delaunay\n"
+            "                    also on one thread: the peers run on one), and martini (RTIN)\n"
+            "                    against the quadtree: at the bound as its error parameter, and at the\n"
+            "                    largest parameter whose measured max error is within the bound; on\n"
+            "                    inputs that are not (2^k+1)^2 (martini's only size) also the largest\n"
+            "                    such window. Needs node and the npm packages delatin and\n"
+            "                    @mapbox/martini, which tools/install-deps.sh puts in build/node_modules\n"
+            "                    ($TSR_NODE_MODULES overrides); the peers' seconds are their own timing\n"
+            "                    of their mesher, in node, best of R; no-data inputs skip them\n"
+            "  --json FILE       also write the rows as JSON\n" CLI_HEIGHTFIELD_HELP "  -h, --help        this help\n");
 }
 
 typedef struct row {
@@ -422,9 +423,7 @@ static int run_inputs(const char *input, const cli_heightfield_options *o, uint3
     bench_input("demo terrain 1025x1025", hf, fr, nfr, repeat);
     tsr_heightfield_destroy(hf);
     /* the shared data */
-    const char *data = getenv("TESSERA_DATA");
-    if (!data || !*data)
-        data = "../shared/data";
+    const char *data = bench_data_dir("bench mesh");
     static const struct {
         const char *file;
         bool rgb;

@@ -69,7 +69,8 @@ static void help(FILE *f)
             "     points and triangles, as in 2) and the time ratio adaptive / Bfr (the target: < 1).\n\n"
             "inputs: $TESSERA_DATA/patches/teapot.bpt and the cages catmark_cube_creases1,\n"
             "catmark_cubes_semisharp, catmark_gregory_test1, catmark_edgecorner and catmark_fan of\n"
-            "$TESSERA_DATA/patches/osd (TESSERA_DATA defaults to ../shared/data; absent files are skipped).\n\n"
+            "$TESSERA_DATA/patches/osd (TESSERA_DATA defaults to ../shared/data, from the working folder;\n"
+            "absent files are skipped).\n\n"
             "options:\n"
             "  --input FILE      only this model: .bpt or free-form .obj (Bezier/NURBS patches), else a\n"
             "                    polygon .obj cage (Catmull-Clark; bilinear when the name starts with\n"
@@ -1090,9 +1091,7 @@ int cli_bench_patch(int argc, char **argv)
     }
     if (!cli_outputs_writable("bench patch", 1, &json_path)) /* before the runs, not after them */
         return CLI_FAIL;
-    const char *data = getenv("TESSERA_DATA");
-    if (!data || !*data)
-        data = "../shared/data";
+    const char *data = input ? NULL : bench_data_dir("bench patch");
     static const char *const cages[] = {"catmark_cube_creases1.obj", "catmark_cubes_semisharp.obj",
                                         "catmark_gregory_test1.obj", "catmark_edgecorner.obj", "catmark_fan.obj"};
     char paths[8][4096];
@@ -1419,7 +1418,7 @@ int cli_bench_patch(int argc, char **argv)
                    "Bfr's (u, v) = the patch's (s, t), checked at 7 x 7 points per patch: off by %.2g of the "
                    "diagonal), at the smallest rate in 1..%u whose measured pixel error (same camera, on an "
                    "equivalent mesh with Bfr's points and triangles as in table 2) is <= the adaptive one. "
-                   "Time adaptive / Bfr is the target of issue 7 (< 1).\n\n",
+                   "Time adaptive / Bfr is the target (< 1).\n\n",
                    repeat, m->bez_count, bdev, max_rate);
         else
             printf("Bfr columns skipped: %s.\n\n", bnote);

@@ -48,11 +48,19 @@ static void extent(const tsr_terrain *t, double *sx, double *sy, double *zmin, d
     *zmax = mx * dz;
 }
 
+double terrain_unit(const tsr_terrain *t)
+{
+    double sx, sy, zmin, zmax;
+    extent(t, &sx, &sy, &zmin, &zmax);
+    double size = fmax(fmax(sx, sy), zmax - zmin);
+    return size > 0 && 1e-3 * size < 1 ? 1e-3 * size : 1;
+}
+
 void random_camera(const tsr_terrain *t, uint64_t *rng, int index, const view_options *v, tsr_camera *c)
 {
     double sx, sy, zmin, zmax;
     extent(t, &sx, &sy, &zmin, &zmax);
-    double relief = zmax - zmin > 1e-6 ? zmax - zmin : 1;
+    double relief = zmax - zmin > 1e-6 ? zmax - zmin : 1, unit = terrain_unit(t);
     for (int tries = 0; tries < 1000; tries++) {
         memset(c, 0, sizeof *c);
         setup(c, v);
@@ -62,7 +70,8 @@ void random_camera(const tsr_terrain *t, uint64_t *rng, int index, const view_op
         double g = ground_height(t, c->eye[0], c->eye[1]);
         if (isnan(g))
             g = zmax;
-        double alt = low ? 2 + urand(rng) * 0.02 * relief : 0.05 * relief + urand(rng) * (relief + 0.3 * (sx > sy ? sx : sy));
+        double alt = low ? 2 * unit + urand(rng) * 0.02 * relief
+                         : 0.05 * relief + urand(rng) * (relief + 0.3 * (sx > sy ? sx : sy));
         c->eye[2] = g + alt;
         double yaw = urand(rng) * 6.283185307179586;
         double pitch = low ? -(0.005 + urand(rng) * 0.1) : -(0.05 + urand(rng) * 1.3);
@@ -89,7 +98,7 @@ void flight_camera(const tsr_terrain *t, int f, int n, const view_options *v, ts
         g = zmax;
     c->eye[0] = px;
     c->eye[1] = py;
-    c->eye[2] = g + 0.08 * relief + 20;
+    c->eye[2] = g + 0.08 * relief + 20 * terrain_unit(t);
     double hx = qx - px, hy = qy - py, hl = hypot(hx, hy);
     if (hl == 0) {
         hx = 1;

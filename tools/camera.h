@@ -13,9 +13,15 @@ typedef struct view_options {
  * down; NAN over a hole or outside. */
 double ground_height(const tsr_terrain *t, double x, double y);
 
+/* The terrain's unit of clearance: one (a metre), or a thousandth of the
+ * terrain's size (its width, depth or relief) where that is less, so a
+ * terrain a few units across, or in kilometres, gets the same views and
+ * near plane as one in metres. */
+double terrain_unit(const tsr_terrain *t);
+
 /* A random camera: over the terrain, above the ground by a random
  * altitude, looking in a random direction downwards; every third one is a
- * low, grazing view (a few metres up, nearly horizontal). */
+ * low, grazing view (a few terrain units up, nearly horizontal). */
 void random_camera(const tsr_terrain *t, uint64_t *rng, int index, const view_options *v, tsr_camera *c);
 
 /* Frame f of n of a smooth closed flight over the terrain (a Lissajous

@@ -13,13 +13,14 @@
 static void help(FILE *f)
 {
     fprintf(f, "usage: tessera bench terrain [options]\n"
-               "       tessera bench cdt [--points N] [--grid S]   (Delaunay kernel; see tessera bench cdt --help)\n"
+               "       tessera bench cdt [--points N] [--grid S] [--polygon V]   (Delaunay kernel; see tessera bench\n"
+               "                     cdt --help)\n"
                "       tessera bench mesh [options]   (heightmap to mesh; see tessera bench mesh --help)\n"
                "       tessera bench fly [options]    (the flyover's frame times; see tessera bench fly --help)\n"
                "       tessera bench patch [options]  (patch tessellation against OpenSubdiv; see tessera bench patch "
                "--help)\n\n"
-               "Benchmarks terrain level of detail on a generated heightfield (fast midpoint displacement)\n"
-               "or on a file, and prints a table.\n\n"
+               "bench terrain benchmarks terrain level of detail on a generated heightfield (fast midpoint\n"
+               "displacement; by default 16385 x 16385 samples, 1 GiB) or on a file, and prints a table.\n\n"
                "options:\n"
                "  --size S          generated heightfield of S x S samples (default 16385)\n"
                "  --input FILE      benchmark this heightfield instead (heightfield options apply)\n"
@@ -86,7 +87,8 @@ static void help_cdt(FILE *f)
 {
     fprintf(f, "usage: tessera bench cdt [--points N] [--grid S] [--polygon V]\n\n"
                "Times Delaunay triangulation of N uniform random points and of an S x S integer grid,\n"
-               "with peak memory per point; then triangulates a polygon of V vertices with 100 holes by\n"
+               "with peak memory per point; then triangulates a polygon of V vertices with 100 square\n"
+               "holes (V + 400 points) by\n"
                "both methods (delaunay and quadtree), plain and with a maximum area, each the best of 3\n"
                "runs alternating with the other method, and prints the ratio of their times. A qsort of\n"
                "the points is timed in the same run as a baseline.\n\n"

@@ -34,7 +34,8 @@ static void help_terrain(FILE *f)
                "  --tile N              tile size: 2, 4, ..., 128 quads (default 16)\n"
                "  --width W, --height H viewport in pixels (default 1920 x 1080)\n"
                "  --fov DEG             vertical field of view (default 60)\n"
-               "  --near D              near plane distance (default 1)\n"
+               "  --near D              near plane distance (default 1, or a thousandth of the terrain's\n"
+               "                        size where that is less)\n"
                "  --export-mesh F.ply   write the selected mesh of the (single) given camera\n"
                "  --criterion C         exact (default): the conservative screen error of tessera; naive: the\n"
                "                        textbook delta*K/z, which the check shows failing near the viewport's edges\n"
@@ -85,7 +86,7 @@ static void help(FILE *f)
 static int run_terrain(int argc, char **argv)
 {
     cli_heightfield_options o = {0};
-    view_options v = {60, 1920, 1080, 1, 1};
+    view_options v = {60, 1920, 1080, 0, 1}; /* near 0: terrain_unit */
     const char *in = NULL, *export_mesh = NULL;
     uint32_t ncams = 20, seed = 1, tile = 16;
     bool json = false, naive = false, geomorph = false;
@@ -186,6 +187,8 @@ static int run_terrain(int argc, char **argv)
         free(cam_args);
         return CLI_FAIL;
     }
+    if (!(v.near_dist > 0))
+        v.near_dist = terrain_unit(t);
     int n = ncam_args ? ncam_args : (int)ncams;
     tsr_camera *cams = calloc((size_t)n, sizeof *cams);
     cam_result *res = calloc((size_t)n, sizeof *res);
@@ -316,15 +319,15 @@ static void help_patches(FILE *f)
     fprintf(
         f,
         "usage: tessera check patches IN [options]\n\n"
-        "Tessellates a patch model (patches/ptess.h) view-independently and for each camera, and measures every\n"
-        "mesh independently (tsr_ptess_measure): the largest distance between the surface S(u, v), as the patch\n"
+        "Tessellates a patch model as tessera patch does, view-independently and for each camera, and measures\n"
+        "every mesh independently of the tessellator: the largest distance between the surface S(u, v), as the patch\n"
         "itself evaluates it, and the mesh's point at the same (u, v), over a grid of samples per piece and the\n"
         "midpoint of every triangle edge; for a camera, in pixels between their projections. Every mesh is also\n"
         "validated (oriented, edge-manifold, no bad, degenerate or duplicate triangles, no T-junctions) and\n"
         "searched for cracks: boundary edges lying along another boundary edge (within 1e-6 of the model's\n"
         "diagonal), where surfaces that should be joined are not. Along a patch edge without neighbour (for a\n"
-        "subdivision cage, as tsr_subd_patch_neighbours says: the boundary, a hole, a non-manifold edge),\n"
-        "which ptess.h joins to nothing, such edges count as seams, not cracks, and a T-junction (a vertex,\n"
+        "subdivision cage, as OpenSubdiv's topology says: the boundary, a hole, a non-manifold edge),\n"
+        "which the tessellator joins to nothing, such edges count as seams, not cracks, and a T-junction (a vertex,\n"
         "of any sheet, inside an open edge) is no failure: it is reported as unlinked-edge-t-junctions\n"
         "(JSON: unlinked_edge_t_junctions), apart from the T-junctions that fail (JSON: t_junctions), those on\n"
         "any other open edge, such as a linked patch edge left open. A patch set's links are not known to the\n"
@@ -361,13 +364,15 @@ static void help_patches(FILE *f)
         "  --samples N           measurement samples per piece side (default 64)\n"
         "  --retries N           re-tessellate the pieces of patches whose error is estimated, not bounded\n"
         "                        (subdivision and trimmed patches) and measured beyond the tolerance, with at\n"
-        "                        most half their tolerance, up to N times (default 6; 0: never), as ptess.h\n"
-        "                        prescribes; Bezier pieces are never retried, their bound is a proof\n"
+        "                        most half their tolerance, up to N times (default 6; 0: never), as tessera\n"
+        "                        patch does; Bezier pieces are never retried, their bound is a proof\n"
         "  --scheme S            catmark or bilinear: the subdivision scheme of a polygon OBJ\n" CLI_WELD_HELP
             CLI_ORIENT_HELP
         "  --assume-linked       take every patch edge as linked: nothing counts as a seam and every\n"
         "                        T-junction fails (what a crack between joined patches would give)\n"
-        "  --json                print the results as JSON\n"
+        "  --json                print the results as JSON (each run's watertight: no crack where\n"
+        "                        surfaces meet, an open surface's rim being none; closed: no open\n"
+        "                        edge at all; bound: null for a subdivision surface)\n"
         "  -h, --help            this help\n");
 }
 
@@ -599,7 +604,8 @@ typedef struct patch_run {
     tsr_camera cam;
     double tol; /* max_error (model units) or pixel_error */
     tsr_ptess_measure_result meas;
-    double bound, seconds;
+    double bound, seconds; /* bound: of the Bezier pieces; none for a subdivision surface (no_bound) */
+    bool no_bound;
     uint32_t triangles, vertices, leaves, rounds, rescaled;
     boundary_report bnd;
     uint32_t t_junctions;            /* counted: failures */
@@ -690,6 +696,7 @@ static int patch_run_do(const tsr_pmodel *m, const tsr_pmodel_info *info, const 
     pr->vertices = res.mesh.vertex_count;
     pr->leaves = res.leaves;
     pr->bound = res.bound;
+    pr->no_bound = subd != NULL; /* its pieces' errors are estimates */
     pr->seconds = res.seconds;
     tsr_validation val;
     tsr_validate_options vo = {0};
@@ -781,7 +788,10 @@ static cJSON *patch_run_json(const patch_run *pr)
         cJSON_AddNumberToObject(c, "max_error", pr->meas.max_error);
         cJSON_AddNumberToObject(c, "rms_error", pr->meas.rms_error);
         cJSON_AddNumberToObject(c, "tolerance", pr->tol);
-        cJSON_AddNumberToObject(c, "bound", pr->bound);
+        if (pr->no_bound)
+            cJSON_AddNullToObject(c, "bound");
+        else
+            cJSON_AddNumberToObject(c, "bound", pr->bound);
     }
     /* watertight: no crack where surfaces join (an open surface's rim is
      * no crack); closed: no open edge at all */
@@ -1048,12 +1058,14 @@ static int run_patches(int argc, char **argv)
                      r->t_junctions_discounted);
         if (r->gaps_open)
             snprintf(retried + strlen(retried), sizeof retried - strlen(retried), "  unjoined-gaps %u", r->gaps_open);
+        char bound[64] = "no bound: estimates";
+        if (!r->no_bound)
+            snprintf(bound, sizeof bound, "bound %.6g", r->bound);
         if (k == 0)
-            printf(
-                "view-independent  max_error %.6g (tolerance %.6g, bound %.6g)  rms %.3g  triangles %u  vertices %u  "
-                "seconds %.3f%s  %s%s\n",
-                r->meas.max_error, r->tol, r->bound, r->meas.rms_error, r->triangles, r->vertices, r->seconds, retried,
-                r->ok ? "ok" : "FAIL", why);
+            printf("view-independent  max_error %.6g (tolerance %.6g, %s)  rms %.3g  triangles %u  vertices %u  "
+                   "seconds %.3f%s  %s%s\n",
+                   r->meas.max_error, r->tol, bound, r->meas.rms_error, r->triangles, r->vertices, r->seconds, retried,
+                   r->ok ? "ok" : "FAIL", why);
         else
             printf("camera %3d  eye %.3g,%.3g,%.3g  max_pixel_error %.4f  triangles %7u  seconds %.3f%s  %s%s\n", k - 1,
                    r->cam.eye[0], r->cam.eye[1], r->cam.eye[2], r->meas.max_error, r->triangles, r->seconds, retried,
@@ -1070,7 +1082,7 @@ static int run_patches(int argc, char **argv)
             cJSON *mo = cJSON_AddObjectToObject(j, "model");
             cJSON_AddNumberToObject(mo, "patches", info.sources);
             cJSON_AddNumberToObject(mo, "pieces", info.pieces);
-            cJSON_AddNumberToObject(mo, "links", info.links);
+            cJSON_AddNumberToObject(mo, "linked_edges", info.links); /* as tessera patch --stats names them */
             cJSON_AddNumberToObject(mo, "collapsed_edges", info.collapsed_edges);
             cJSON_AddNumberToObject(mo, "mirrored", info.mirrored);
             cJSON_AddNumberToObject(mo, "trimmed", info.trimmed_sources);
@@ -1089,6 +1101,10 @@ static int run_patches(int argc, char **argv)
             }
             cJSON *vj = patch_run_json(vi);
             cJSON_AddNumberToObject(vj, "patches", info.sources);
+            /* the model this run tessellates, as tessera patch does for a
+             * bound (pieces cut for it): the same counts as patch --stats */
+            cJSON_AddNumberToObject(vj, "pieces", vi_info.pieces);
+            cJSON_AddNumberToObject(vj, "linked_edges", vi_info.links);
             cJSON_AddItemToObject(j, "view_independent", vj);
             cJSON *arr = cJSON_AddArrayToObject(j, "cameras");
             for (int k = 1; k <= n; k++)

@@ -28,7 +28,7 @@ static void help(FILE *f)
                "                        (default: 0.1%% of the heightfield's height range, also with\n"
                "                        --window, unless a budget is given)\n"
                "  --triangles N         a budget: at most N triangles (stops when reached; the error\n"
-               "                        achieved is reported)\n"
+               "                        achieved is reported; with --max-error as for --vertices)\n"
                "  --vertices N          a budget: at most N vertices (with --max-error too, both must\n"
                "                        hold: exit 1, nothing written, when the budget is reached\n"
                "                        above the bound; exit 2 when it cannot hold even the border\n"
@@ -39,7 +39,7 @@ static void help(FILE *f)
                "                        quadtree: a restricted quadtree, each leaf two triangles\n"
                "                        on its better diagonal or four from its centre, plus side\n"
                "                        midpoints, kept only where every sample is within the\n"
-               "                        bound: 2-10x faster, 1.2-3x the triangles;\n"
+               "                        bound: 2.4-11x faster, 1.2-3x the triangles;\n"
                "                        grid: every --step-th sample\n"
                "  --no-flip             delaunay: no data-dependent flips: a Delaunay triangulation,\n"
                "                        1.3-2x faster, about a quarter more triangles for the bound\n"
@@ -48,9 +48,10 @@ static void help(FILE *f)
                "  --block N             delaunay with a bound: mesh blocks of about N x N cells on\n"
                "                        their own, their seams fixed like window borders (default\n"
                "                        256, at least 16; the mesh depends on N, not on --threads)\n"
-               "  --threads N           delaunay: blocks meshed at once; quadtree: nodes tested at\n"
-               "                        once (default: one per processor this process may use, by its\n"
-               "                        CPU affinity and cgroup CPU limit; the mesh is the same)\n"
+               "  --threads N           delaunay: blocks meshed at once; quadtree (without --tile):\n"
+               "                        nodes tested at once (default: one per processor this process\n"
+               "                        may use, by its CPU affinity and cgroup CPU limit; the mesh is\n"
+               "                        the same)\n"
                "  --step N              grid: keep every N-th column and row (default 1)\n"
                "  --tile N              quadtree: draw each leaf as an N x N grid tile instead (2, 4,\n"
                "                        8, ..., 128; the terrain LOD's tiles and error pyramid: more\n"
@@ -84,7 +85,8 @@ static void help(FILE *f)
                "  --uvs                 texture coordinates that put those images' pixel centres on the\n"
                "                        samples (u across the columns; v down the rows in .glb, whose uv\n"
                "                        origin is the image's top-left, up in .obj and .ply); given with\n"
-               "                        --normal-map or --hillshade unless the output is .stl\n"
+               "                        --normal-map or --hillshade unless the output is .stl (which\n"
+               "                        has none: --uvs with .stl is refused)\n"
                "  --stats FILE.json     vertices, triangles, measured max_error and rms_error, seconds,\n"
                "                        peak_bytes, method, the input's size, range, no-data count and\n"
                "                        dz (with --nodata, its value), and the window's own range\n"
@@ -480,6 +482,10 @@ static int run(int argc, char **argv)
         cli_error("mesh", "%s: unknown mesh format (use .obj, .ply, .stl or .glb)", out);
         return CLI_USAGE;
     }
+    if (want_uvs && tsr_mesh_format_from_path(out) == TSR_FORMAT_STL) {
+        cli_error("mesh", "--uvs: %s: STL has no texture coordinates (use .obj, .ply or .glb)", out);
+        return CLI_USAGE;
+    }
     if (to.grid_step && to.method != TSR_TIN_GRID) {
         cli_error("mesh", "--step applies to --method grid only");
         return CLI_USAGE;
@@ -709,7 +715,7 @@ static int run(int argc, char **argv)
         if (cli_spacing(hf, &o, &dx, &dy)) {
             char sp[256];
             cli_georef_describe(hf, &o, sp, sizeof sp);
-            fprintf(stderr, "tessera mesh: spacing %s (--dx, --dy set another)\n", sp);
+            fprintf(stderr, "tessera mesh: spacing %s (--dx and --dy override it)\n", sp);
         }
         if (er.uncovered)
             fprintf(stderr,

@@ -49,7 +49,8 @@ static void help(FILE *f)
             "  --no-verify           skip the measurement (and the re-tessellation it may ask for);\n"
             "                        warns when the Bezier patches' bound is above the tolerance\n"
             "  --stats FILE.json     patches, pieces, triangles, vertices, measured max_error and\n"
-            "                        rms_error, bound (model units, also with a camera), seconds,\n"
+            "                        rms_error, bound (model units, also with a camera; null for a\n"
+            "                        subdivision surface, whose pieces have estimates), seconds,\n"
             "                        the options used, the mesh's boundary_edges, t_junctions,\n"
             "                        degenerate_triangles and gaps (open edges along another within\n"
             "                        the tolerance: a crack), linked_edges (piece edges sampled\n"
@@ -105,7 +106,10 @@ static int write_stats(const char *path, const char *in, const cli_patch_model *
         cJSON_AddNumberToObject(j, "pixel_error", opt->camera->pixel_error);
     else
         cJSON_AddNumberToObject(j, "requested_max_error", opt->max_error);
-    cJSON_AddNumberToObject(j, "bound", r->bound); /* model units, also with a camera */
+    if (pm->is_subd) /* a subdivision surface's pieces have estimates, no bound */
+        cJSON_AddNullToObject(j, "bound");
+    else
+        cJSON_AddNumberToObject(j, "bound", r->bound); /* model units, also with a camera */
     cJSON_AddStringToObject(j, "bound_units", "model");
     cJSON_AddNumberToObject(j, "tile", opt->tile_n);
     cJSON_AddNumberToObject(j, "seconds", secs);

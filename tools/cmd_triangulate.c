@@ -518,12 +518,15 @@ static int run(int argc, char **argv)
                                   t.below_resolution, t.below_resolution == 1 ? "" : "s");
         if (check && n < sizeof extra)
             snprintf(extra + n, sizeof extra - n, "; check %s", c.ok ? "passed" : "FAILED");
+        char dups[64] = ""; /* a point given again is one vertex (Triangle's files keep its number) */
+        if (t.duplicates)
+            snprintf(dups, sizeof dups, " (%u repeated)", t.duplicates);
         fprintf(stderr,
-                "tessera triangulate: %s: %u points, %u segments -> %u vertices (%u Steiner), %u triangles, %u "
+                "tessera triangulate: %s: %u points%s, %u segments -> %u vertices (%u Steiner), %u triangles, %u "
                 "constrained edges, min angle %.3g deg, %.3f s (%s, %s)%s%s%s\n",
-                in_path, g.nv, g.nseg, t.nv, t.steiner, t.nt, t.nedge, check ? c.min_angle : smallest_angle(&t),
-                seconds, opt.method == TSR_TRI_QUADTREE ? "quadtree" : "delaunay", region_name(opt.region), extra,
-                out_path ? "; wrote " : "", out_path ? out_path : "");
+                in_path, g.nv, dups, g.nseg, t.nv, t.steiner, t.nt, t.nedge, check ? c.min_angle : smallest_angle(&t),
+                seconds, opt.method == TSR_TRI_QUADTREE && !t.fell_back ? "quadtree" : "delaunay",
+                region_name(opt.region), extra, out_path ? "; wrote " : "", out_path ? out_path : "");
     }
     /* bounds asked for and not met (refinement stopped at the Steiner
      * limit, or stuck): a warning, even with --quiet, and exit 3; the

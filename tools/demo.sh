@@ -4,7 +4,7 @@
 # PNG, converts it into a mesh within the default error bound (and a
 # printable solid), checks the view-dependent tessellation, renders a
 # short headless flyover, and tessellates the Utah teapot (from the shared
-# data folder, TSR_DATA or ../shared/data, when it is there) to a .glb.
+# data folder, TESSERA_DATA or ../shared/data, when it is there) to a .glb.
 set -euo pipefail
 tessera=$1 out=$2
 mkdir -p "$out"
@@ -33,14 +33,14 @@ else
   status=1
 fi
 echo
-data=${TSR_DATA:-../shared/data}
+data=${TESSERA_DATA:-../shared/data}
 teapot=""
 if [ -f "$data/patches/teapot.bpt" ]; then
   echo "tessellating the Utah teapot (32 bicubic patches) within 1e-3 of its size, crack-free..."
   "$tessera" patch "$data/patches/teapot.bpt" --normals -o "$out/teapot.glb" --stats "$out/teapot.json"
   teapot="teapot.glb teapot.json"
 else
-  echo "no $data/patches/teapot.bpt (set TSR_DATA to the shared data folder): the teapot is skipped"
+  echo "no $data/patches/teapot.bpt (set TESSERA_DATA to the shared data folder): the teapot is skipped"
 fi
 echo
 echo "wrote:"

@@ -41,15 +41,9 @@ tsr_status fly_init(fly_ctx *f, const tsr_heightfield *hf, tsr_hw_backend *backe
     tsr_terrain_node_range(f->terrain, (tsr_qnode){0, 0, 0}, &mn, &mx);
     f->zmin = mn <= mx ? mn * f->dz : 0;
     f->zmax = mn <= mx ? mx * f->dz : 1;
-    if (!(f->o.near_dist > 0)) {
-        /* one unit (a metre), or a thousandth of the terrain's size where
-         * that is less: a terrain in kilometres, or a few units across,
-         * would otherwise sit inside the near plane and the cameras'
-         * clearance above the ground */
-        double w = (tsr_heightfield_width(hf) - 1) * f->dx, h = (tsr_heightfield_height(hf) - 1) * f->dy;
-        double size = fmax(fmax(w, h), f->zmax - f->zmin);
-        f->o.near_dist = size > 0 && 1e-3 * size < 1 ? 1e-3 * size : 1;
-    }
+    if (!(f->o.near_dist > 0)) /* a terrain in kilometres, or a few units across, would otherwise sit
+                                  inside the near plane and the cameras' clearance above the ground */
+        f->o.near_dist = terrain_unit(f->terrain);
     if (!f->o.cache_bytes)
         f->o.cache_bytes = (uint64_t)256 << 20; /* the renderer's default, named for the notes */
     tsr_hw_renderer_options ro = {.tile_n = f->o.tile_n, .cache_bytes = f->o.cache_bytes};

@@ -21,7 +21,7 @@ static void usage(FILE *f)
                "Tessera turns heightfields and parametric surfaces into watertight triangle meshes.\n\n"
                "commands:\n");
     for (int i = 0; i < NCOMMANDS; i++)
-        fprintf(f, "  %-10s %s\n", commands[i]->name, commands[i]->summary);
+        fprintf(f, "  %-12s %s\n", commands[i]->name, commands[i]->summary);
     fprintf(f, "\n'tessera COMMAND --help' describes a command's options.\n"
                "'tessera --version' prints the version.\n");
 }

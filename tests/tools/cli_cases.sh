@@ -535,6 +535,7 @@ bad_options)
   "$tessera" generate --size 16 -o "$dir/g.png" 2>/dev/null || fail "generate failed"
   expect_error 2 "--dx abc: not a finite number" -- "$tessera" mesh "$dir/g.png" -o "$out" --dx abc
   expect_error 2 "unknown mesh format" -- "$tessera" mesh "$dir/g.png" -o "$dir/out.xyz"
+  expect_error 2 "--uvs: .*out\.stl: STL has no texture coordinates" -- "$tessera" mesh "$dir/g.png" -o "$dir/out.stl" --uvs
   expect_error 2 "unknown option '--frobnicate'" -- "$tessera" info "$dir/g.png" --frobnicate
   expect_error 2 "unknown command 'nosuch'" -- "$tessera" nosuch
   # (--block 1 ran for minutes; a border beyond the bound could not be met)
