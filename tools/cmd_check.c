@@ -266,6 +266,7 @@ static int run_terrain(int argc, char **argv)
             cJSON_AddStringToObject(j, "input", in);
             cJSON_AddNumberToObject(j, "pixel_error", v.pixel_error);
             cJSON_AddBoolToObject(j, "geomorph", geomorph);
+            cJSON_AddNumberToObject(j, "near", v.near_dist);
             cJSON_AddNumberToObject(j, "bound", bound);
             cJSON *arr = cJSON_AddArrayToObject(j, "cameras");
             for (int k = 0; k < n; k++) {

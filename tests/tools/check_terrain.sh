@@ -27,6 +27,21 @@ echo "ok naive criterion caught: $(tail -1 "$dir/naive.txt")"
 "$tessera" check terrain "$dir/t.png" --pixel-error 0 2>/dev/null; [ $? -eq 2 ] || fail "--pixel-error 0 accepted"
 echo "ok generated: $(tail -1 "$dir/out.txt")"
 
+# the same terrain 3000 times smaller (5 units across): the low, grazing
+# cameras (every third) fly a few terrain units up, not 2 units, and the
+# near plane shrinks with it, so each sees a good part of the terrain (at
+# a fixed 2 units up they saw 1 tile and measured 0 px: a vacuous pass)
+"$tessera" check terrain "$dir/t.png" --dx 0.01 --dz 0.0001 --cameras 12 --seed 3 --json > "$dir/small.json" ||
+  fail "small terrain: $(head -c 300 "$dir/small.json")"
+python3 - "$dir/small.json" <<'PY' || fail "small terrain's low cameras"
+import json, sys
+j = json.load(open(sys.argv[1]))
+low = [c for k, c in enumerate(j["cameras"]) if k % 3 == 0]
+assert j["failures"] == 0 and all(c["tiles"] > 10 for c in low), [(c["tiles"], c["eye"]) for c in low]
+assert j["near"] < 0.01, j["near"]
+PY
+echo "ok a terrain 5 units across: every low camera sees more than 10 tiles"
+
 # the geomorphed mesh (as fly draws it mid-blend) holds 1.25 tau, and is
 # not the plain cut: some camera measures a different worst error
 "$tessera" check terrain "$dir/t.png" --dx 30 --dz 0.3 --cameras 6 --seed 3 --geomorph --json > "$dir/morph.json" \
