@@ -230,6 +230,20 @@ static double dist(const double *a, const double *b)
     return hypot(a[0] - b[0], a[1] - b[1]);
 }
 
+/* Vertex v of t takes the row of the input vertex nearest it (brute
+ * force: for the cases no triangle or segment can value). */
+static void nearest_input_row(const tsr_triangulation *t, uint32_t v, uint32_t n, double *vals)
+{
+    uint32_t best = 0;
+    double best_d = INFINITY;
+    for (uint32_t u = 0; u < t->input_vertices; u++) {
+        double d = dist(&t->xy[2 * (size_t)v], &t->xy[2 * (size_t)u]);
+        if (d < best_d)
+            best_d = d, best = u;
+    }
+    memcpy(&vals[(size_t)v * n], &vals[(size_t)best * n], n * sizeof *vals);
+}
+
 /* c = (1 - f) a + f b, kept within [a, b]: a constant stays exact, and
  * huge values do not round beyond the largest double. */
 static double lerp(double a, double b, double f)
@@ -325,38 +339,14 @@ static bool crossing_rows(const tsr_pslg *in, uint32_t n, const base *b, double 
         g = h;
     }
     /* not expected: a crossing on no segment, or with no input point on one
-     * side; the nearest input point's row */
-    for (uint32_t v = nin; v < t->nv; v++) {
-        if (done[v])
-            continue;
-        uint32_t best = 0;
-        double best_d = INFINITY;
-        for (uint32_t u = 0; u < nin; u++) {
-            double d = dist(&t->xy[2 * (size_t)v], &t->xy[2 * (size_t)u]);
-            if (d < best_d)
-                best_d = d, best = u;
-        }
-        memcpy(&vals[(size_t)v * n], &vals[(size_t)best * n], n * sizeof *vals);
-    }
+     * side */
+    for (uint32_t v = nin; v < t->nv; v++)
+        if (!done[v])
+            nearest_input_row(t, v, n, vals);
     tsr_free(a, e);
     tsr_free(a, low);
     tsr_free(a, done);
     return true;
-}
-
-/* Without a triangle (all points on a line): the nearest input point's row. */
-static void nearest_rows(const tsr_triangulation *out, uint32_t n, double *vals)
-{
-    for (uint32_t v = out->input_vertices; v < out->nv; v++) {
-        uint32_t best = 0;
-        double best_d = INFINITY;
-        for (uint32_t u = 0; u < out->input_vertices; u++) {
-            double d = dist(&out->xy[2 * (size_t)v], &out->xy[2 * (size_t)u]);
-            if (d < best_d)
-                best_d = d, best = u;
-        }
-        memcpy(&vals[(size_t)v * n], &vals[(size_t)best * n], n * sizeof *vals);
-    }
 }
 
 tsr_status tsr_tri_interpolate(const tsr_pslg *in, const double *in_vals, uint32_t n, const tsr_triangulation *out,
@@ -385,8 +375,9 @@ tsr_status tsr_tri_interpolate(const tsr_pslg *in, const double *in_vals, uint32
         return st;
     b.t = &t0;
     double *v0 = NULL;
-    if (t0.nt == 0) {
-        nearest_rows(out, n, vals);
+    if (t0.nt == 0) { /* all points on a line */
+        for (uint32_t v = out->input_vertices; v < out->nv; v++)
+            nearest_input_row(out, v, n, vals);
         goto done;
     }
     v0 = tsr_alloc(alloc, (size_t)t0.nv * n * sizeof *v0);
