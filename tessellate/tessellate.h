@@ -407,12 +407,14 @@ tsr_status tsr_mesh_find_inward_shells(const tsr_mesh *m, uint8_t *flip, uint32_
 
 /* Gaps: open edges facing each other. A boundary half-edge (one with no
  * twin) is in a gap when its two ends and its midpoint each lie within eps
- * of some boundary half-edge that runs the other way (their directions'
- * dot product below -1/2) and shares no vertex with it: two surfaces
- * meeting along a curve with different vertices leave such a crack up to
- * eps wide (a long chord of one side against the short chords of the
- * other, or both sides cut at interleaved points). Consecutive edges of
- * one rim run the same way and are never counted; a strip narrower than
+ * of some boundary half-edge that shares no vertex with it and runs the
+ * other way (their directions' dot product below -1/2), or the same way
+ * (above 1/2) on another sheet (triangles joined through shared edges; as
+ * where two surfaces facing opposite ways meet): two surfaces meeting
+ * along a curve with different vertices leave such a crack up to eps wide
+ * (a long chord of one side against the short chords of the other, or
+ * both sides cut at interleaved points). Consecutive edges of one rim run
+ * the same way on one sheet and are never counted; a strip narrower than
  * eps is a gap by this definition. hit (3 *
  * triangle_count entries, may be NULL) receives true at half-edge 3 t + k
  * (from corner k to k + 1 of triangle t) for those in a gap, false at the

@@ -741,6 +741,7 @@ bool tsr_mesh_boundary_is_rect(const tsr_mesh *m, double x0, double y0, double x
 
 typedef struct gap_edge {
     uint32_t h, a, b; /* half-edge, its start and end vertices */
+    uint32_t sheet;   /* its connected piece of surface (through shared edges) */
     float lo[3], hi[3];
 } gap_edge;
 
@@ -768,7 +769,8 @@ double tsr_point_segment_dist2(const float p[3], const float a[3], const float b
 }
 
 /* Which of open edge e's ends and midpoint (bits 0, 1, 2) lie within eps
- * of f, when the two run opposite ways (0 otherwise). */
+ * of f, when the two run opposite ways, or the same way on different sheets
+ * (0 otherwise). */
 static unsigned gap_along(const tsr_mesh *m, const gap_edge *e, const gap_edge *f, double eps2)
 {
     const float *a0 = m->positions + 3 * (size_t)e->a, *a1 = m->positions + 3 * (size_t)e->b;
@@ -782,7 +784,7 @@ static unsigned gap_along(const tsr_mesh *m, const gap_edge *e, const gap_edge *
         lb += v * v;
         mid[k] = (float)(0.5 * ((double)a0[k] + a1[k]));
     }
-    if (!(dot < -0.5 * sqrt(la * lb)))
+    if (!(dot < -0.5 * sqrt(la * lb)) && !(e->sheet != f->sheet && dot > 0.5 * sqrt(la * lb)))
         return 0;
     return (tsr_point_segment_dist2(a0, b0, b1) <= eps2 ? 1u : 0u) | (tsr_point_segment_dist2(a1, b0, b1) <= eps2 ? 2u : 0u) |
            (tsr_point_segment_dist2(mid, b0, b1) <= eps2 ? 4u : 0u);
@@ -804,11 +806,24 @@ tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t
         nb += he.twin[h] == TSR_NO_TWIN;
     gap_edge *e = malloc((nb ? nb : 1) * sizeof *e);
     uint8_t *in = calloc(nb ? nb : 1, sizeof *in); /* gap_along's bits, over all opposite edges */
-    if (!e || !in) {
+    uint32_t *sheet = malloc(((size_t)m->triangle_count + 1) * sizeof *sheet);
+    if (!e || !in || !sheet) {
         free(e);
         free(in);
+        free(sheet);
         tsr_halfedges_free(&he);
         return TSR_ERR_NOMEM;
+    }
+    /* the sheets: triangles joined through shared (twinned) edges */
+    for (uint32_t t = 0; t < m->triangle_count; t++)
+        sheet[t] = t;
+    for (uint32_t h = 0; h < he.count; h++) {
+        uint32_t tw = he.twin[h];
+        if (tw == TSR_NO_TWIN || tw == TSR_NONMANIFOLD)
+            continue;
+        uint32_t x = tsr__uf_find(sheet, h / 3), y = tsr__uf_find(sheet, tw / 3);
+        if (x != y)
+            sheet[x] = y;
     }
     nb = 0;
     for (uint32_t h = 0; h < he.count; h++) {
@@ -816,7 +831,7 @@ tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t
         if (he.twin[h] != TSR_NO_TWIN || a == b || a >= m->vertex_count || b >= m->vertex_count)
             continue;
         gap_edge *g = &e[nb++];
-        *g = (gap_edge){h, a, b, {0}, {0}};
+        *g = (gap_edge){h, a, b, tsr__uf_find(sheet, h / 3), {0}, {0}};
         for (int k = 0; k < 3; k++) {
             float pa = m->positions[3 * (size_t)a + k], pb = m->positions[3 * (size_t)b + k];
             g->lo[k] = (float)((pa < pb ? pa : pb) - eps);
@@ -824,6 +839,7 @@ tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t
         }
     }
     tsr_halfedges_free(&he);
+    free(sheet);
     qsort(e, nb, sizeof *e, cmp_gap_edge);
     double eps2 = eps * eps;
     uint32_t n = 0;

@@ -388,6 +388,16 @@ TEST(gaps_between_open_edges)
     /* the same vertices on the line: still a gap (of width 0), not welded */
     gap_strips(&m, 0);
     CHECK(tsr_mesh_find_gaps(&m, 1e-6, NULL, &n) == TSR_OK && n == 12);
+    /* the upper strip facing the other way (its triangles reversed): its
+     * rim runs the same way as the lower strip's, on another sheet: the
+     * same crack */
+    for (uint32_t t = 8; t < m.triangle_count; t++) {
+        uint32_t x = m.indices[3 * t + 1];
+        m.indices[3 * t + 1] = m.indices[3 * t + 2];
+        m.indices[3 * t + 2] = x;
+    }
+    CHECK(tsr_mesh_find_gaps(&m, 1e-6, NULL, &n) == TSR_OK);
+    CHECK_MSG(n == 12, "%u gap edges against a strip facing the other way", n);
     tsr_mesh_free(&m);
     /* both sides cut at interleaved points (0 2 4 6 below, 0 1 3 5 6 above,
      * 0.001 apart): no edge lies along any one edge of the other side, all
