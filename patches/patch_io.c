@@ -358,6 +358,8 @@ typedef struct builder {
     vec segments; /* tsr_trim_segment */
     uint32_t skipped, first_skipped;
     uint32_t polygons, first_polygon;
+    uint32_t unknown, first_unknown_line, unused, first_unused;
+    char first_unknown[40];
 } builder;
 
 static void builder_free(builder *b)
@@ -452,6 +454,9 @@ static tsr_status finish_set(builder *b, const lexer *L, tsr_patch_set *out)
     out->num_curves = nc, out->curves = curves;
     out->num_skipped = b->skipped, out->first_skipped_line = b->first_skipped;
     out->num_polygons = b->polygons, out->first_polygon_line = b->first_polygon;
+    out->num_unknown = b->unknown, out->first_unknown_line = b->first_unknown_line;
+    memcpy(out->first_unknown, b->first_unknown, sizeof out->first_unknown);
+    out->num_unused_freeform = b->unused, out->first_unused_freeform_line = b->first_unused;
     out->values = b->values.data, out->num_values = b->values.n;
     out->alloc = a ? *a : (tsr_allocator){NULL, NULL, NULL};
     b->loops.data = b->segments.data = b->values.data = NULL;
@@ -807,6 +812,23 @@ static tsr_status finish_curv2(lexer *L, obj_state *o)
     return TSR_OK;
 }
 
+/* Is kw a statement of the OBJ format (geometry, free-form, grouping,
+ * display and rendering attributes)? Those we do not use are read past;
+ * any other word is a misspelling worth a warning. */
+static bool obj_keyword(const token *kw)
+{
+    static const char *const words[] = {"v",        "vt",   "vn",     "vp",     "cstype",     "deg",       "bmat",
+                                        "step",     "p",    "l",      "f",      "fo",         "curv",      "curv2",
+                                        "surf",     "parm", "trim",   "hole",   "scrv",       "sp",        "end",
+                                        "con",      "g",    "s",      "mg",     "o",          "bevel",     "c_interp",
+                                        "d_interp", "lod",  "usemtl", "mtllib", "shadow_obj", "trace_obj", "ctech",
+                                        "stech",    "call", "csh",    "maplib", "usemap",     "res"};
+    for (size_t i = 0; i < sizeof words / sizeof words[0]; i++)
+        if (tok_is(kw, words[i]))
+            return true;
+    return false;
+}
+
 /* surf / curv2 / curv: opens an element. */
 static tsr_status begin_element(lexer *L, obj_state *o, const token *kw, int kind)
 {
@@ -823,6 +845,8 @@ static tsr_status begin_element(lexer *L, obj_state *o, const token *kw, int kin
     e->du = o->du, e->dv = o->dv;
     if (kind == EL_SKIP) {
         skipped(o->b, L->stmt_line);
+        if (o->b->unused++ == 0)
+            o->b->first_unused = L->stmt_line;
         skip_statement(L);
         return TSR_OK;
     }
@@ -1114,6 +1138,12 @@ static tsr_status obj_statement(lexer *L, obj_state *o)
         skipped(b, L->stmt_line);
         if ((tok_is(&kw, "f") || tok_is(&kw, "fo") || tok_is(&kw, "l") || tok_is(&kw, "p")) && b->polygons++ == 0)
             b->first_polygon = L->stmt_line;
+        if ((tok_is(&kw, "scrv") || tok_is(&kw, "sp") || tok_is(&kw, "con")) && b->unused++ == 0)
+            b->first_unused = L->stmt_line;
+        if (!obj_keyword(&kw) && b->unknown++ == 0) {
+            b->first_unknown_line = L->stmt_line;
+            shown(&kw, b->first_unknown, sizeof b->first_unknown);
+        }
         skip_statement(L);
     }
     return TSR_OK;

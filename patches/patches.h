@@ -305,6 +305,16 @@ typedef struct tsr_patch_set {
      * out, and the line of the first. */
     uint32_t num_polygons;
     uint32_t first_polygon_line;
+    /* Of those, statements no OBJ keyword names (a misspelling: `hol` for
+     * `hole`), the line of the first and its keyword (quoted, cut to fit);
+     * and free-form geometry that is read past, not tessellated (OBJ 3D
+     * curves `curv`, special curves `scrv` and points `sp`, connectivity
+     * `con`), the line of the first. */
+    uint32_t num_unknown;
+    uint32_t first_unknown_line;
+    char first_unknown[40];
+    uint32_t num_unused_freeform;
+    uint32_t first_unused_freeform_line;
     double *values; /* storage of every control point, weight and knot */
     size_t num_values;
     tsr_allocator alloc;

@@ -346,6 +346,21 @@ void cli_patch_model_notes(const char *cmd, const char *path, const cli_patch_mo
                 "tessera %s: %s: warning: %u part%s of the cage cannot be oriented (a Moebius band): the edges where "
                 "faces disagree are left open\n",
                 cmd, path, pm->cage_unorientable, pm->cage_unorientable == 1 ? "" : "s");
+    if (pm->is_subd)
+        return;
+    const tsr_patch_set *s = &pm->set;
+    if (s->num_unknown)
+        fprintf(stderr,
+                "tessera %s: %s:%u: warning: '%s' is no OBJ statement; ignored%s (a misspelling drops what it "
+                "meant: a hole, a trim)\n",
+                cmd, path, s->first_unknown_line, s->first_unknown,
+                s->num_unknown > 1 ? ", as are the other unknown statements after it" : "");
+    if (s->num_unused_freeform)
+        fprintf(stderr,
+                "tessera %s: %s: note: %u free-form statement%s tessera does not use (3D curves curv, special curves "
+                "scrv and points sp, connectivity con) read past, the first at line %u\n",
+                cmd, path, s->num_unused_freeform, s->num_unused_freeform == 1 ? "" : "s",
+                s->first_unused_freeform_line);
 }
 
 void cli_patch_partial_warning(const char *cmd, const char *path, const tsr_pmodel *m)

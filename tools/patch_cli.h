@@ -67,7 +67,10 @@ uint32_t cli_patch_flat_warnings(const char *cmd, const char *path, const cli_pa
  * after printing an error (the old model kept). */
 /* Prints on stderr what loading changed or found: cage faces against
  * their neighbours (reversed: a note; else a warning naming the first and
- * --orient-faces), parts that cannot be oriented (a warning). */
+ * --orient-faces), parts that cannot be oriented (a warning); in a
+ * free-form OBJ, statements no OBJ keyword names (a warning with the
+ * first's line: a misspelt `hole` drops a hole) and free-form geometry
+ * read past untessellated (curv, scrv, sp, con: a note). */
 void cli_patch_model_notes(const char *cmd, const char *path, const cli_patch_model *pm);
 
 /* Gaps of r's mesh within eps (tsr_mesh_find_gaps), split into *gaps

@@ -270,7 +270,14 @@ patch_skipped_statements)
   "$tessera" patch "$dir/mixed.obj" -o "$dir/mixed.ply" --quiet 2> "$cap/stderr" || fail "quiet failed"
   [ ! -s "$cap/stderr" ] || fail "--quiet printed: $(cat "$cap/stderr")"
   rm "$dir/mixed.ply"
-  echo "ok [$case]: polygons noted" ;;
+  # a misspelt statement (hol for hole) is warned of with its line; free-form
+  # geometry read past (scrv, sp) is noted
+  printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvp 0.2 0.2\nvp 0.4 0.4\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nhol 0 1 1\nend\nsp 1 2\n' > "$dir/typo.obj"
+  "$tessera" patch "$dir/typo.obj" -o "$dir/typo.ply" 2> "$cap/stderr" || fail "typo: $(cat "$cap/stderr")"
+  grep -q "typo\.obj:10: warning: 'hol' is no OBJ statement; ignored" "$cap/stderr" || fail "no warning: $(cat "$cap/stderr")"
+  grep -q "typo\.obj: note: 1 free-form statement tessera does not use .* the first at line 12" "$cap/stderr" ||
+    fail "no note on sp: $(cat "$cap/stderr")"
+  echo "ok [$case]: polygons noted, a misspelt statement warned of" ;;
 patch_trim_warnings)
   # trim loops the file may not mean are warned of, with their line
   surf='deg 1 1\nsurf 0 1 0 1 1 2 3 4\nparm u 0 0 1 1\nparm v 0 0 1 1\n'
