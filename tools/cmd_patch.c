@@ -393,8 +393,8 @@ static int run(int argc, char **argv)
      * another sheet's vertices may lie on them: no T-junction counts there */
     uint32_t tj = validated && !pm.is_subd ? val.t_junctions : 0, zero = validated ? val.degenerate_triangles : 0;
     /* gaps: open edges along another within the tolerance, running the
-     * other way (a crack narrower than the tolerance where surfaces meet
-     * with different vertices); on untrimmed patches of a set only (a
+     * other way, or the same way on another sheet (a crack narrower than the
+     * tolerance where surfaces meet with different vertices); on untrimmed patches of a set only (a
      * cage's open edges are open by contract, trim curves are not joined) */
     uint32_t gaps = 0, trim_seams = 0;
     if (validated && !pm.is_subd && !opt.camera)
@@ -463,6 +463,12 @@ static int run(int argc, char **argv)
                     "tolerance: trim curves are not joined to the patches they meet, so the mesh is open there "
                     "(tessera check patches counts them as unjoined-gaps)\n",
                     in, trim_seams);
+        if (validated && val.misoriented_edges)
+            fprintf(stderr,
+                    "tessera patch: %s: warning: %u edges where the triangles on the two sides face opposite ways: "
+                    "joined surfaces disagree on which side is out (a Moebius band cannot agree; otherwise reverse "
+                    "a patch's u or v, or --orient-faces for a cage); tessera check patches locates them\n",
+                    in, val.misoriented_edges);
         if (tj || zero || gaps)
             fprintf(stderr,
                     "tessera patch: %s: warning: %u T-junctions, %u open edges along another within the tolerance "

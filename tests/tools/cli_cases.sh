@@ -523,6 +523,18 @@ assert all(sum(n[k] * (p[k] - 0.5) for k in range(3)) > 0 for p, n in zip(v, vn)
 PY
   done
   echo "ok [$case]" ;;
+patch_unorientable)
+  # three bilinear patches closed into a twisted loop (a Moebius band): no
+  # orientation agrees, and tessera patch says so (it exited 0 in silence)
+  printf 'v 0 0 0\nv 0 0 1\nv 2 0 0\nv 2 0.2 1\nv 1 2 0.3\nv 1 2.2 0.7\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 3 2 4\nend\nsurf 0 1 0 1 3 5 4 6\nend\nsurf 0 1 0 1 5 2 6 1\nend\n' > "$dir/mobius.obj"
+  "$tessera" patch "$dir/mobius.obj" -o "$dir/mobius.ply" 2> "$cap/stderr" || fail "mobius: $(cat "$cap/stderr")"
+  grep -q "mobius\.obj: warning: [0-9]* edges where the triangles on the two sides face opposite ways" "$cap/stderr" ||
+    fail "no warning: $(cat "$cap/stderr")"
+  # the same loop without the twist: no warning
+  printf 'v 0 0 0\nv 0 0 1\nv 2 0 0\nv 2 0.2 1\nv 1 2 0.3\nv 1 2.2 0.7\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 3 2 4\nend\nsurf 0 1 0 1 3 5 4 6\nend\nsurf 0 1 0 1 5 1 6 2\nend\n' > "$dir/band.obj"
+  "$tessera" patch "$dir/band.obj" -o "$dir/band.ply" 2> "$cap/stderr" || fail "band: $(cat "$cap/stderr")"
+  grep -q warning "$cap/stderr" && fail "an orientable band warned: $(cat "$cap/stderr")"
+  echo "ok [$case]: a Moebius band is warned of" ;;
 generate_spacing)
   # generate stores its spacing (30 m unless --spacing): info reads it from
   # the file, --dx overrides it, and a mesh's vertices lie that far apart
