@@ -1068,7 +1068,7 @@ static int run_patches(int argc, char **argv)
                    r->meas.max_error, r->tol, bound, r->meas.rms_error, r->triangles, r->vertices, r->seconds, retried,
                    r->ok ? "ok" : "FAIL", why);
         else
-            printf("camera %3d  eye %.3g,%.3g,%.3g  max_pixel_error %.4f  triangles %7u  seconds %.3f%s  %s%s\n", k - 1,
+            printf("camera %3d  eye %.9g,%.9g,%.9g  max_pixel_error %.4f  triangles %7u  seconds %.3f%s  %s%s\n", k - 1,
                    r->cam.eye[0], r->cam.eye[1], r->cam.eye[2], r->meas.max_error, r->triangles, r->seconds, retried,
                    r->ok ? "ok" : "FAIL", why);
     }

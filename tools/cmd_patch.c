@@ -218,6 +218,13 @@ static int run(int argc, char **argv)
         cli_error("patch", "--crease-angle needs --normals");
         return CLI_USAGE;
     }
+    tsr_camera cam_syntax;
+    view_options vs = v; /* the syntax alone: the near plane is not known yet */
+    vs.near_dist = vs.pixel_error = 1;
+    if (cam_arg && !parse_camera(cam_arg, &vs, &cam_syntax)) { /* before the pairing, which it would hide */
+        cli_error("patch", "--camera %s: expected EX,EY,EZ,TX,TY,TZ with eye != target", cam_arg);
+        return CLI_USAGE;
+    }
     if ((v.pixel_error > 0) != (cam_arg != NULL)) {
         cli_error("patch", "--pixel-error and --camera go together");
         return CLI_USAGE;

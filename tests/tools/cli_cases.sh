@@ -329,6 +329,7 @@ patch_crease_normals)
   "$tessera" patch "$dir/box.obj" -o "$dir/box.stl" --normals --stats "$dir/s2.json" --quiet || fail "stl failed"
   ! grep -q vertices_written "$dir/s2.json" || fail "stl stats: $(cat "$dir/s2.json")"
   expect_error 2 "--crease-angle needs --normals" -- "$tessera" patch "$dir/box.obj" -o "$out" --crease-angle 10
+  expect_error 2 "--camera 1,2,3: expected EX,EY,EZ,TX,TY,TZ" -- "$tessera" patch "$dir/box.obj" -o "$out" --camera 1,2,3
   expect_error 2 "--crease-angle 200: must be an angle in 0\.\.180 degrees" -- \
     "$tessera" patch "$dir/box.obj" -o "$out" --normals --crease-angle 200
   rm -f "$dir/box_n.obj" "$dir/box_w.obj" "$dir/box.stl" "$dir/s.json" "$dir/s2.json"
