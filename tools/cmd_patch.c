@@ -367,6 +367,13 @@ static int run(int argc, char **argv)
                          "camera: move the model nearer the origin",
                          maxabs, step, px);
         }
+        /* a weld as wide as the error moved vertices that far: refining
+         * cannot undo it */
+        if (!opt.camera && weld > 0 && weld >= 0.5 * meas.max_error)
+            snprintf(why, sizeof why,
+                     "; --weld %g joins patch edges up to that far apart, moving their vertices by as much: give "
+                     "--weld below the tolerance to keep the mesh within it",
+                     weld);
         cli_error("patch",
                   "%s: measured error %.6g is above %.6g even after re-tessellating %u patch%s finer "
                   "(down to --max-level %u%s)%s",

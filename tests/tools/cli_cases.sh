@@ -423,6 +423,11 @@ PY
   awk '/^f /{for (i = 2; i <= 4; i++) { split($i, a, "/"); split($(i == 4 ? 2 : i + 1), b, "/"); e[a[1] " " b[1]]++ } }
        END { for (k in e) { split(k, v, " "); if (e[k] != 1 || e[v[2] " " v[1]] != 1) bad++ } exit bad > 0 }' \
     "$dir/cube_out.obj" || fail "cube: the mesh is not closed"
+  # a weld wider than the tolerance moves vertices beyond it: the error
+  # names --weld, not the depth
+  printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 1.05 0 0\nv 2 0 0\nv 1.05 1 0\nv 2 1 0\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nend\nsurf 0 1 0 1 5 6 7 8\nend\n' > "$dir/gap05.obj"
+  expect_error 1 "gap05\.obj: measured error .* --weld 0\.1 joins patch edges up to that far apart" -- \
+    "$tessera" patch "$dir/gap05.obj" -o "$dir/gap05_out.obj" --weld 0.1 --max-error 0.001 --quiet
   rm -f "$dir"/*.obj "$dir"/*.bpt
   echo "ok [$case]" ;;
 gis_warnings)
