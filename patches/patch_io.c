@@ -723,6 +723,15 @@ static tsr_status finish_surf(lexer *L, obj_state *o)
         if (e->range[2 * a] < lo[a] || e->range[2 * a + 1] > hi[a])
             return fail(L, e->line, TSR_ERR_VALUE, "surf's %s range [%g, %g] leaves the parameter range [%g, %g]",
                         a ? "t" : "s", e->range[2 * a], e->range[2 * a + 1], lo[a], hi[a]);
+    /* a range below a billionth of the parameters': a surface with (next
+     * to) no area, which the float32 mesh cannot hold apart (it gave half a
+     * million zero-area triangles) */
+    for (int a = 0; a < 2; a++)
+        if (e->range[2 * a + 1] - e->range[2 * a] < 1e-9 * (hi[a] - lo[a]))
+            return fail(L, e->line, TSR_ERR_VALUE,
+                        "surf's %s range [%.17g, %.17g] is under a billionth of the parameter range [%g, %g]: the "
+                        "surface has no area to tessellate",
+                        a ? "t" : "s", e->range[2 * a], e->range[2 * a + 1], lo[a], hi[a]);
     /* a knot repeated degree + 1 times inside the range ends one run of
      * control points and starts the next: the surface breaks apart there
      * unless the two runs' last and first rows coincide (exporters write

@@ -423,6 +423,11 @@ PY
   awk '/^f /{for (i = 2; i <= 4; i++) { split($i, a, "/"); split($(i == 4 ? 2 : i + 1), b, "/"); e[a[1] " " b[1]]++ } }
        END { for (k in e) { split(k, v, " "); if (e[k] != 1 || e[v[2] " " v[1]] != 1) bad++ } exit bad > 0 }' \
     "$dir/cube_out.obj" || fail "cube: the mesh is not closed"
+  # a surf range under a billionth of its parameters': refused, not half a
+  # million zero-area triangles
+  printf 'v 0 0 0\nv 1 0 0.2\nv 2 0 0\nv 0 1 0\nv 1 1 1\nv 2 1 0\nv 0 2 0\nv 1 2 0.3\nv 2 2 0\ncstype bspline\ndeg 2 2\nsurf 0.5 0.500000000001 0 1 1 2 3 4 5 6 7 8 9\nparm u 0 0 0 1 1 1\nparm v 0 0 0 1 1 1\nend\n' > "$dir/sliver.obj"
+  expect_error 1 "sliver\.obj:12: surf's s range \[0\.5, 0\.5000000000009.*\] is under a billionth of the parameter range \[0, 1\]" -- \
+    "$tessera" patch "$dir/sliver.obj" -o "$dir/sliver_out.obj"
   # a weld wider than the tolerance moves vertices beyond it: the error
   # names --weld, not the depth
   printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 1.05 0 0\nv 2 0 0\nv 1.05 1 0\nv 2 1 0\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nend\nsurf 0 1 0 1 5 6 7 8\nend\n' > "$dir/gap05.obj"
