@@ -928,6 +928,18 @@ static tsr_status obj_parm(lexer *L, obj_state *o)
     }
     if (pv->n == 0)
         return fail(L, L->stmt_line, TSR_ERR_FORMAT, "parm %s without values", axis ? "v" : "u");
+    /* an interior knot repeated beyond degree + 1 leaves the basis a gap
+     * (runs at the ends are the control point count's business) */
+    int deg = e->kind == EL_SURF && axis ? e->dv : e->du;
+    const double *k = F64(*pv);
+    for (size_t i = 0, j; e->type == CS_BSPLINE && deg > 0 && i < pv->n; i = j) {
+        for (j = i + 1; j < pv->n && k[j] == k[i]; j++)
+            ;
+        if (i > 0 && j < pv->n && j - i > (size_t)deg + 1)
+            return fail(L, L->stmt_line, TSR_ERR_VALUE,
+                        "parm %s: knot %g appears %zu times, more than degree + 1 (%d): the basis has a gap there",
+                        axis ? "v" : "u", k[i], j - i, deg + 1);
+    }
     return TSR_OK;
 }
 

@@ -584,6 +584,10 @@ static const bad_case bad_cases[] = {
     {"obj_bspline_wrong_knot_count", OBJ,
      "v 0 0 0\ncstype bspline\ndeg 1 1\nsurf 0 1 0 1 1 1 1 1\nparm u 0 0 1 1 1\nparm v 0 0 1 1\nend\n", TSR_ERR_FORMAT,
      4},
+    {"obj_interior_knot_beyond_degree", OBJ,
+     "v 0 0 0\ncstype bspline\ndeg 2 1\nsurf 0 1 0 1 1 1 1 1 1 1 1 1 1 1 1 1\nparm u 0 0 0 0.5 0.5 0.5 0.5 1 1 "
+     "1\nparm v 0 0 1 1\nend\n",
+     TSR_ERR_VALUE, 5},
     {"obj_domain_outside_knots", OBJ,
      "v 0 0 0\ncstype bspline\ndeg 1 1\nsurf 0 2 0 1 1 1 1 1\nparm u 0 0 1 1\nparm v 0 0 1 1\nend\n", TSR_ERR_VALUE, 4},
     {"obj_inverted_domain", OBJ, "v 0 0 0\ncstype bezier\ndeg 1 1\nsurf 1 0 0 1 1 1 1 1\nend\n", TSR_ERR_VALUE, 4},
