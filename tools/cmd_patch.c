@@ -393,7 +393,12 @@ static int run(int argc, char **argv)
         rc = CLI_FAIL;
     }
     if (rc == CLI_OK && r.mesh.triangle_count == 0) {
-        cli_error("patch", "%s: the tessellation has no triangle", in);
+        tsr_pmodel_info ni;
+        tsr_pmodel_get_info(pm.model, &ni);
+        cli_error("patch", "%s: the tessellation has no triangle%s", in,
+                  ni.trimmed_sources ? ": the trim loops and holes leave no part of any patch (a hole around a "
+                                       "whole patch, or an outer loop around nothing)"
+                                     : "");
         rc = CLI_FAIL;
     }
     /* What the measurement does not see: vertices left unwelded where

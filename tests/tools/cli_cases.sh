@@ -428,6 +428,10 @@ PY
   printf 'v 0 0 0\nv 1 0 0.2\nv 2 0 0\nv 0 1 0\nv 1 1 1\nv 2 1 0\nv 0 2 0\nv 1 2 0.3\nv 2 2 0\ncstype bspline\ndeg 2 2\nsurf 0.5 0.500000000001 0 1 1 2 3 4 5 6 7 8 9\nparm u 0 0 0 1 1 1\nparm v 0 0 0 1 1 1\nend\n' > "$dir/sliver.obj"
   expect_error 1 "sliver\.obj:12: surf's s range \[0\.5, 0\.5000000000009.*\] is under a billionth of the parameter range \[0, 1\]" -- \
     "$tessera" patch "$dir/sliver.obj" -o "$dir/sliver_out.obj"
+  # a hole around the whole patch: no triangle, and the message says why
+  printf 'vp -1 -1\nvp 2 -1\nvp 2 2\nvp -1 2\nvp -1 -1\ncstype bspline\ndeg 1\ncurv2 1 2 3 4 5\nparm u 0 0 1 2 3 4 4\nend\nv -1 -1 0\nv 1 -1 0\nv -1 1 0\nv 1 1 0\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nhole 0 4 1\nend\n' > "$dir/holeall.obj"
+  expect_error 1 "holeall\.obj: the tessellation has no triangle: the trim loops and holes leave no part of any patch" -- \
+    "$tessera" patch "$dir/holeall.obj" -o "$dir/holeall_out.obj" --quiet
   # a weld wider than the tolerance moves vertices beyond it: the error
   # names --weld, not the depth
   printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 1.05 0 0\nv 2 0 0\nv 1.05 1 0\nv 2 1 0\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 1 2 3 4\nend\nsurf 0 1 0 1 5 6 7 8\nend\n' > "$dir/gap05.obj"
