@@ -790,6 +790,23 @@ static unsigned gap_along(const tsr_mesh *m, const gap_edge *e, const gap_edge *
            (tsr_point_segment_dist2(mid, b0, b1) <= eps2 ? 4u : 0u);
 }
 
+/* The sheets of nt triangles: union-find parents (parent: nt entries)
+ * joining triangles through shared (twinned, manifold) edges; find a
+ * triangle's sheet with tsr__uf_find. */
+static void join_sheets(const tsr_halfedges *he, uint32_t nt, uint32_t *parent)
+{
+    for (uint32_t t = 0; t < nt; t++)
+        parent[t] = t;
+    for (uint32_t h = 0; h < he->count; h++) {
+        uint32_t tw = he->twin[h];
+        if (tw == TSR_NO_TWIN || tw == TSR_NONMANIFOLD)
+            continue;
+        uint32_t a = tsr__uf_find(parent, h / 3), b = tsr__uf_find(parent, tw / 3);
+        if (a != b)
+            parent[a] = b;
+    }
+}
+
 tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t *count)
 {
     if (count)
@@ -814,17 +831,7 @@ tsr_status tsr_mesh_find_gaps(const tsr_mesh *m, double eps, bool *hit, uint32_t
         tsr_halfedges_free(&he);
         return TSR_ERR_NOMEM;
     }
-    /* the sheets: triangles joined through shared (twinned) edges */
-    for (uint32_t t = 0; t < m->triangle_count; t++)
-        sheet[t] = t;
-    for (uint32_t h = 0; h < he.count; h++) {
-        uint32_t tw = he.twin[h];
-        if (tw == TSR_NO_TWIN || tw == TSR_NONMANIFOLD)
-            continue;
-        uint32_t x = tsr__uf_find(sheet, h / 3), y = tsr__uf_find(sheet, tw / 3);
-        if (x != y)
-            sheet[x] = y;
-    }
+    join_sheets(&he, m->triangle_count, sheet);
     nb = 0;
     for (uint32_t h = 0; h < he.count; h++) {
         uint32_t a = m->indices[h], b = m->indices[3 * (h / 3) + (h % 3 + 1) % 3];
@@ -888,18 +895,10 @@ tsr_status tsr_mesh_find_inward_shells(const tsr_mesh *m, uint8_t *flip, uint32_
         goto done;
     }
     for (uint32_t t = 0; t < nt; t++) {
-        parent[t] = t;
         open[t] = 0;
         vol[t] = 0;
     }
-    for (uint32_t h = 0; h < he.count; h++) {
-        uint32_t tw = he.twin[h];
-        if (tw == TSR_NO_TWIN || tw == TSR_NONMANIFOLD)
-            continue;
-        uint32_t a = tsr__uf_find(parent, h / 3), b = tsr__uf_find(parent, tw / 3);
-        if (a != b)
-            parent[a] = b;
-    }
+    join_sheets(&he, nt, parent);
     for (uint32_t h = 0; h < he.count; h++)
         if (he.twin[h] == TSR_NO_TWIN || he.twin[h] == TSR_NONMANIFOLD)
             open[tsr__uf_find(parent, h / 3)] = 1;

@@ -70,11 +70,11 @@ const char *bench_data_dir(const char *cmd)
     struct stat st;
     if (stat(data, &st) != 0 || !S_ISDIR(st.st_mode)) {
         char cwd[4096];
+        bool relative = data[0] != '/' && getcwd(cwd, sizeof cwd);
         fprintf(stderr,
                 "tessera %s: note: no data folder %s%s%s%s: its inputs are skipped (set TESSERA_DATA to the shared "
                 "data folder)\n",
-                cmd, data, given ? " (TESSERA_DATA)" : "", data[0] != '/' && getcwd(cwd, sizeof cwd) ? " from " : "",
-                data[0] != '/' && getcwd(cwd, sizeof cwd) ? cwd : "");
+                cmd, data, given ? " (TESSERA_DATA)" : "", relative ? " from " : "", relative ? cwd : "");
     }
     return data;
 }
