@@ -2644,9 +2644,8 @@ static tsr_status quadtree(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
         return unsupported(&q, why_not, "conforming Delaunay refinement belongs to the Delaunay method", err);
     if (opt->min_angle > 0)
         return unsupported(&q, why_not, "a minimum angle needs the Delaunay method's quality refinement", err);
-    for (uint32_t r = 0; r < opt->nregions; r++)
-        if (opt->regions[3 * (size_t)r + 2] > 0)
-            return unsupported(&q, why_not, "regional maximum areas need the Delaunay method's refinement", err);
+    if (tsr__tri_region_areas(opt))
+        return unsupported(&q, why_not, "regional maximum areas need the Delaunay method's refinement", err);
 
     uint32_t *voi = tsr_alloc(alloc, ((size_t)in->nv + 1) * sizeof *voi);
     if (!voi)

@@ -378,9 +378,7 @@ static tsr_status delaunay(const tsr_pslg *in, const tsr_tri_options *opt, tsr_t
     uint8_t *keep = NULL;
     uint32_t *seeds = NULL;
     tsr_status st = TSR_ERR_NOMEM;
-    bool region_areas = false;
-    for (uint32_t r = 0; r < opt->nregions; r++)
-        region_areas = region_areas || opt->regions[3 * (size_t)r + 2] > 0;
+    bool region_areas = tsr__tri_region_areas(opt);
     if (!d)
         goto fail;
     st = tsr_cdt_insert_points(d, in->xy, in->nv, out->vertex_of_input);

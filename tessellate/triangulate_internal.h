@@ -33,4 +33,13 @@ tsr_status tsr__tri_quadtree_region(const tsr_pslg *in, const tsr_tri_options *o
  * border a kept triangle. */
 tsr_status tsr__tri_apply_region(tsr_triangulation *t, const tsr_pslg *in, const tsr_tri_options *opt);
 
+/* Does some region of opt give a maximum area (one above 0)? */
+static inline bool tsr__tri_region_areas(const tsr_tri_options *opt)
+{
+    for (uint32_t r = 0; r < opt->nregions; r++)
+        if (opt->regions[3 * (size_t)r + 2] > 0)
+            return true;
+    return false;
+}
+
 #endif

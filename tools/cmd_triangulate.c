@@ -447,8 +447,10 @@ static int run(int argc, char **argv)
                 rc = CLI_FAIL;
         }
     }
+    /* the attributes are written (Triangle's files) or give z */
+    bool with_attrs = out_path && g.nattr && (out_kind == CLI_OUT_TRIANGLE || z_attr);
     /* a point given again with other attributes: the first's are used */
-    if (out_path && g.nattr && (out_kind == CLI_OUT_TRIANGLE || z_attr)) {
+    if (with_attrs) {
         uint32_t *first = malloc(((size_t)t.nv + 1) * sizeof *first), count = 0, fi = 0, fj = 0;
         for (uint32_t v = 0; first && v < t.nv; v++)
             first[v] = UINT32_MAX;
@@ -469,7 +471,7 @@ static int run(int argc, char **argv)
         free(first);
     }
     double *vals = NULL; /* the attributes at every output vertex, when written */
-    if (out_path && g.nattr && (out_kind == CLI_OUT_TRIANGLE || z_attr)) {
+    if (with_attrs) {
         vals = malloc(((size_t)t.nv * g.nattr + 1) * sizeof *vals);
         s = vals ? tsr_tri_interpolate(&in, g.attr, g.nattr, &t, vals, NULL, &err)
                  : tsr_error_set(&err, TSR_ERR_NOMEM, "out of memory");
