@@ -1059,6 +1059,34 @@ static double clipped_area(const double *pts, uint32_t n, const double dom[4], c
     return 0.5 * area;
 }
 
+/* The largest depth (tsr_trim_loop_info) of the points of segment a-b:
+ * the minimum of four functions linear along it is concave, so its
+ * maximum is at an end or where two of them cross. */
+static double edge_depth(const double *a, const double *b, const double dom[4])
+{
+    double W = dom[1] - dom[0], H = dom[3] - dom[2];
+    /* depth_k(t) = c[k] + d[k] t */
+    double c[4] = {(a[0] - dom[0]) / W, (dom[1] - a[0]) / W, (a[1] - dom[2]) / H, (dom[3] - a[1]) / H};
+    double d[4] = {(b[0] - a[0]) / W, -(b[0] - a[0]) / W, (b[1] - a[1]) / H, -(b[1] - a[1]) / H};
+    double ts[8] = {0, 1};
+    int nt = 2;
+    for (int i = 0; i < 4; i++)
+        for (int j = i + 1; j < 4; j++)
+            if (d[i] != d[j]) {
+                double t = (c[j] - c[i]) / (d[i] - d[j]);
+                if (t > 0 && t < 1 && nt < 8)
+                    ts[nt++] = t;
+            }
+    double best = -INFINITY;
+    for (int k = 0; k < nt; k++) {
+        double m = INFINITY;
+        for (int i = 0; i < 4; i++)
+            m = fmin(m, c[i] + d[i] * ts[k]);
+        best = fmax(best, m);
+    }
+    return best;
+}
+
 tsr_status tsr_trim_loop_check(const tsr_patch_set *set, uint32_t loop, double tol, const tsr_allocator *alloc,
                                tsr_trim_loop_info *info)
 {
@@ -1127,6 +1155,17 @@ tsr_status tsr_trim_loop_check(const tsr_patch_set *set, uint32_t loop, double t
             }
         }
     }
+    /* depth, and the centre's crossing number */
+    double cu = 0.5 * (dom[0] + dom[1]), cv = 0.5 * (dom[2] + dom[3]);
+    bool in = false;
+    info->depth = -INFINITY;
+    for (uint32_t k = 0; k < n; k++) {
+        const double *a = pts + 2 * k, *b = pts + 2 * ((k + 1) % n);
+        info->depth = fmax(info->depth, edge_depth(a, b, dom));
+        if ((a[1] > cv) != (b[1] > cv) && cu < a[0] + (cv - a[1]) / (b[1] - a[1]) * (b[0] - a[0]))
+            in = !in;
+    }
+    info->encloses_centre = in;
     /* a simple polygon's area inside the domain; a crossing one's signed
      * area is no area of its inside: left unknown */
     info->area = info->crosses ? -1 : fabs(clipped_area(pts, n, dom, alloc));

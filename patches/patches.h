@@ -411,6 +411,12 @@ typedef struct tsr_trim_loop_info {
     bool crosses;         /* two of its edges cross (not at a shared end) */
     double cross_uv[2];   /* where, when they do */
     uint32_t points;      /* of its polyline */
+    /* how far the polyline reaches into the domain: the largest, over its
+     * points, of min((u - u0) / (u1 - u0), (u1 - u) / (u1 - u0), (v - v0) /
+     * (v1 - v0), (v1 - v) / (v1 - v0)); 0 along the border, negative when
+     * it stays outside the domain */
+    double depth;
+    bool encloses_centre; /* the domain's centre is inside it (crossing-number rule) */
 } tsr_trim_loop_info;
 
 /* Fills *info for trim loop `loop` of s (sampled at tol: positive and

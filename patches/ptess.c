@@ -89,6 +89,7 @@ struct tsr_pmodel {
     double *values; /* control points and weights of the pieces */
     double lo[3], hi[3];
     uint32_t links, collapsed, mirrored, trimmed;
+    uint32_t void_loops;     /* loops along their patch's whole border: no trim */
     uint32_t flat;           /* subd patches without area, left out */
     uint32_t conform_breaks; /* breakpoints a patch took from a neighbour */
     uint32_t partial_unlinked; /* partial overlaps left unlinked (the breakpoint budget) */
@@ -1142,18 +1143,18 @@ static void free_breaks(brk *brks, uint32_t np, const tsr_allocator *a)
  * rows spread every row's breakpoints through all: rows^2 of them), it
  * starts again with whole edges only, as before they were linked, and
  * *dropped (may be NULL) counts the partial pairs so left unlinked. */
-static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms, const edge_pairs *ep, double tol,
-                                    double split_error, double N, const tsr_allocator *a, brk **out, uint32_t *split,
-                                    uint32_t *shared, bool *full);
+static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms, const uint8_t *trimmed,
+                                    const edge_pairs *ep, double tol, double split_error, double N,
+                                    const tsr_allocator *a, brk **out, uint32_t *split, uint32_t *shared, bool *full);
 
-static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, const edge_pairs *ep, double tol,
-                              double split_error, double N, const tsr_allocator *a, brk **out, uint32_t *split,
-                              uint32_t *shared, uint32_t *dropped)
+static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, const uint8_t *trimmed,
+                              const edge_pairs *ep, double tol, double split_error, double N, const tsr_allocator *a,
+                              brk **out, uint32_t *split, uint32_t *shared, uint32_t *dropped)
 {
     bool full = false;
     if (dropped)
         *dropped = 0;
-    tsr_status st = make_breaks_pairs(set, doms, ep, tol, split_error, N, a, out, split, shared, &full);
+    tsr_status st = make_breaks_pairs(set, doms, trimmed, ep, tol, split_error, N, a, out, split, shared, &full);
     if (st != TSR_OK || !full || ep->nwhole == ep->npairs)
         return st;
     free_breaks(*out, set->num_patches, a);
@@ -1162,12 +1163,12 @@ static tsr_status make_breaks(const tsr_patch_set *set, const double *doms, cons
     whole.npairs = ep->nwhole;
     if (dropped)
         *dropped = ep->npairs - ep->nwhole;
-    return make_breaks_pairs(set, doms, &whole, tol, split_error, N, a, out, split, shared, &full);
+    return make_breaks_pairs(set, doms, trimmed, &whole, tol, split_error, N, a, out, split, shared, &full);
 }
 
-static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms, const edge_pairs *ep, double tol,
-                                    double split_error, double N, const tsr_allocator *a, brk **out, uint32_t *split,
-                                    uint32_t *shared, bool *full)
+static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms, const uint8_t *trimmed,
+                                    const edge_pairs *ep, double tol, double split_error, double N,
+                                    const tsr_allocator *a, brk **out, uint32_t *split, uint32_t *shared, bool *full)
 {
     uint32_t np = set->num_patches, nsplit = 0;
     brk *brks = tsr_alloc(a, (size_t)np * 2 * sizeof *brks);
@@ -1190,8 +1191,7 @@ static tsr_status make_breaks_pairs(const tsr_patch_set *set, const double *doms
             br->n = n;
             tsr_patch_spans(p, axis, br->b, n);
         }
-        bool trimmed = set->first_loop && set->first_loop[i + 1] > set->first_loop[i];
-        if (st == TSR_OK && split_error > 0 && !trimmed)
+        if (st == TSR_OK && split_error > 0 && !trimmed[i])
             st = split_patch(p, doms + 4 * i, &brks[2 * i], &brks[2 * i + 1], split_error, N, a, &nsplit);
         nbreaks += brks[2 * i].n + brks[2 * i + 1].n;
         if (st == TSR_OK)
@@ -1235,6 +1235,32 @@ static double breaks_cost(const tsr_patch_set *set, const brk *brks, double E, d
             }
     }
     return total;
+}
+
+/* Whether patch i's trim loops trim nothing (*nothing): one outer loop
+ * and no hole, the loop around the domain's centre and nowhere farther
+ * into the domain than TSR_PMODEL_VOID_TRIM of its sides (CAD files trim
+ * faces by their whole border; such a patch is meshed as untrimmed, cut
+ * and linked as the others). A coarse sampling first: a loop that
+ * reaches deeper than its tolerance is no such loop; then one fine enough
+ * that the curve's depth is within the hair. */
+static tsr_status trims_nothing(const tsr_patch_set *set, uint32_t i, const double dom[4], const tsr_allocator *a,
+                                bool *nothing)
+{
+    *nothing = false;
+    uint32_t l0 = set->first_loop[i];
+    if (set->first_loop[i + 1] != l0 + 1 || set->loops[l0].hole)
+        return TSR_OK;
+    double side = fmin(dom[1] - dom[0], dom[3] - dom[2]);
+    const double coarse = 1e-3, fine = 0.25 * TSR_PMODEL_VOID_TRIM;
+    tsr_trim_loop_info info;
+    tsr_status st = tsr_trim_loop_check(set, l0, coarse * side, a, &info);
+    if (st != TSR_OK || !info.encloses_centre || info.points < 3 || !(info.depth <= coarse + TSR_PMODEL_VOID_TRIM))
+        return st == TSR_ERR_NOMEM ? st : TSR_OK;
+    if ((st = tsr_trim_loop_check(set, l0, fine * side, a, &info)) != TSR_OK)
+        return st == TSR_ERR_NOMEM ? st : TSR_OK;
+    *nothing = info.encloses_centre && info.points >= 3 && info.depth <= TSR_PMODEL_VOID_TRIM - fine;
+    return TSR_OK;
 }
 
 tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err)
@@ -1292,6 +1318,19 @@ tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_s
         box_add(lo, hi, phi);
         tsr_patch_domain(p, doms + 4 * i);
     }
+    /* which patches their loops trim (a CAD file's loop along a face's
+     * whole border trims nothing) */
+    uint8_t *trimmed = st == TSR_OK ? tsr_alloc(a, np) : NULL;
+    if (st == TSR_OK && !trimmed)
+        st = TSR_ERR_NOMEM;
+    for (uint32_t i = 0; i < np && st == TSR_OK; i++) {
+        bool nothing = false;
+        trimmed[i] = set->first_loop && set->first_loop[i + 1] > set->first_loop[i];
+        if (trimmed[i] && (st = trims_nothing(set, i, doms + 4 * i, a, &nothing)) == TSR_OK && nothing) {
+            trimmed[i] = 0;
+            m->void_loops++;
+        }
+    }
     /* the breakpoints: knots, those of neighbours sharing an edge, and, for
      * split_error, cuts across curves where the whole model's estimate
      * says they save quads (a neighbour curved the other way that takes
@@ -1303,19 +1342,18 @@ tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_s
         edge_pairs ep = {0};
         st = find_edge_pairs(set, doms, tol, a, &ep);
         if (st == TSR_OK)
-            st = make_breaks(set, doms, &ep, tol, 0, split_tile, a, &brks, NULL, &m->conform_breaks,
+            st = make_breaks(set, doms, trimmed, &ep, tol, 0, split_tile, a, &brks, NULL, &m->conform_breaks,
                              &m->partial_unlinked);
         if (st == TSR_OK && split_error > 0) {
             brk *cut = NULL;
             uint32_t split = 0, shared = 0;
             uint32_t dropped = 0;
-            st = make_breaks(set, doms, &ep, tol, split_error, split_tile, a, &cut, &split, &shared, &dropped);
+            st = make_breaks(set, doms, trimmed, &ep, tol, split_error, split_tile, a, &cut, &split, &shared, &dropped);
             /* trimmed patches are triangulated in (u, v) from their pieces'
              * lattice points; cuts make those far from evenly spread */
             bool trims_cut = false;
             for (uint32_t i = 0; st == TSR_OK && split && i < np && !trims_cut; i++)
-                trims_cut = set->first_loop && set->first_loop[i + 1] > set->first_loop[i] &&
-                            (cut[2 * i].n != brks[2 * i].n || cut[2 * i + 1].n != brks[2 * i + 1].n);
+                trims_cut = trimmed[i] && (cut[2 * i].n != brks[2 * i].n || cut[2 * i + 1].n != brks[2 * i + 1].n);
             if (st == TSR_OK && split && !trims_cut &&
                 breaks_cost(set, cut, split_error, split_tile) < 0.9 * breaks_cost(set, brks, split_error, split_tile)) {
                 free_breaks(brks, np, a);
@@ -1340,6 +1378,7 @@ tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_s
     if (st == TSR_OK && npieces >= (1u << 24)) {
         free_breaks(brks, np, a);
         tsr_free(a, doms);
+        tsr_free(a, trimmed);
         tsr_pmodel_destroy(m);
         return tsr_error_set(err, TSR_ERR_TOO_LARGE, "patch model: %llu Bézier pieces, more than 2^24",
                              (unsigned long long)npieces);
@@ -1368,7 +1407,7 @@ tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_s
         s->first_piece = next;
         s->pu = bu->n - 1;
         s->pv = bv->n - 1;
-        s->trimmed = set->first_loop && set->first_loop[i + 1] > set->first_loop[i];
+        s->trimmed = trimmed[i];
         m->trimmed += s->trimmed;
         for (uint32_t b = 0; b < s->pv && st == TSR_OK; b++)
             for (uint32_t a2 = 0; a2 < s->pu; a2++) {
@@ -1411,6 +1450,7 @@ tsr_status tsr_pmodel_from_set_opts(const tsr_patch_set *set, const tsr_pmodel_s
     }
     free_breaks(brks, np, a);
     tsr_free(a, doms);
+    tsr_free(a, trimmed);
     if (st == TSR_OK)
         st = link_set_edges(m, link_tol);
     if (st == TSR_OK)
@@ -1627,6 +1667,7 @@ void tsr_pmodel_get_info(const tsr_pmodel *m, tsr_pmodel_info *info)
     info->collapsed_edges = m->collapsed;
     info->mirrored = m->mirrored;
     info->trimmed_sources = m->trimmed;
+    info->void_loops = m->void_loops;
     info->flat_patches = m->flat;
     info->conform_breaks = m->conform_breaks;
     info->partial_unlinked = m->partial_unlinked;

@@ -127,7 +127,8 @@
  * triangles with a repeated vertex are dropped, so a closed model gives a
  * closed, oriented, conforming mesh.
  *
- * Trimmed sources (patches with trim loops) are meshed differently: the
+ * Trimmed sources (patches with trim loops, but for a lone loop along the
+ * whole border: TSR_PMODEL_VOID_TRIM) are meshed differently: the
  * lattice points of their pieces' leaves that lie inside the trimmed
  * region, the linked neighbours' samples along linked edges, and the trim
  * loops, sampled so that the loop lies within
@@ -165,6 +166,12 @@ typedef struct tsr_pmodel tsr_pmodel;
  * Links, above), and an edge whose control points all lie that close
  * together is collapsed. */
 #define TSR_PMODEL_LINK_TOL 1e-6
+/* A patch whose trim loops are one outer loop around its whole domain,
+ * nowhere farther inside than this fraction of the domain's sides (a CAD
+ * file trims every face by its own border), and no hole is untrimmed: cut,
+ * linked and meshed as the others (tsr_pmodel_info.void_loops counts
+ * them). */
+#define TSR_PMODEL_VOID_TRIM 1e-9
 tsr_status tsr_pmodel_from_set(const tsr_patch_set *set, const tsr_allocator *alloc, tsr_pmodel **out, tsr_error *err);
 /* The same with another distance for linking and collapsing, in model
  * units (CAD files leave gaps of 1e-6 to 1e-3 between faces that meet);
@@ -229,6 +236,7 @@ typedef struct tsr_pmodel_info {
     uint32_t collapsed_edges; /* piece edges collapsed to a point */
     uint32_t mirrored;        /* pieces flipped to agree with their neighbours */
     uint32_t trimmed_sources;
+    uint32_t void_loops;   /* trim loops that trim nothing (TSR_PMODEL_VOID_TRIM): their patches untrimmed */
     uint32_t flat_patches; /* subd patches left out: their limit has no area */
     uint32_t conform_breaks;   /* breakpoints added to patches of a set where a neighbour
                                   sharing all or part of an edge has them (Links, above) */

@@ -1861,14 +1861,46 @@ TEST(trim_loop_shapes)
         double gap, area;    /* of the check: gap, area inside the domain (-1: crosses) */
         double cross_uv[2];
         double kept;         /* the mesh's area */
+        double depth;        /* how far into the domain (by hand) */
+        int encloses;        /* the centre inside (-1: on the loop, either) */
     } cases[] = {
-        {"square", "0.1 0.1,0.9 0.1,0.9 0.9,0.1 0.9,0.1 0.1", "0 0 1 2 3 4 4", "trim 0 4 1", 0, 0.64, {0, 0}, 64},
-        {"open", "0.1 0.1,0.9 0.1,0.9 0.9,0.1 0.9", "0 0 1 2 3 3", "trim 0 3 1", 0.8, 0.64, {0, 0}, 64},
-        {"bowtie", "0.1 0.1,0.9 0.9,0.9 0.1,0.1 0.9,0.1 0.1", "0 0 1 2 3 4 4", "trim 0 4 1", 0, -1, {0.5, 0.5}, 32},
-        {"outside", "2 2,3 2,3 3,2 3,2 2", "0 0 1 2 3 4 4", "trim 0 4 1", 0, 0, {0, 0}, 0},
-        {"flat", "0.1 0.1,0.9 0.1,0.5 0.1,0.1 0.1", "0 0 1 2 3 3", "trim 0 3 1", 0, 0, {0, 0}, 0},
-        {"half out", "0.5 0.5,1.5 0.5,1.5 1.5,0.5 1.5,0.5 0.5", "0 0 1 2 3 4 4", "trim 0 4 1", 0, 0.25, {0, 0}, 25},
-        {"hole out", "2 2,3 2,3 3,2 3,2 2", "0 0 1 2 3 4 4", "hole 0 4 1", 0, 0, {0, 0}, 100},
+        {"square",
+         "0.1 0.1,0.9 0.1,0.9 0.9,0.1 0.9,0.1 0.1",
+         "0 0 1 2 3 4 4",
+         "trim 0 4 1",
+         0,
+         0.64,
+         {0, 0},
+         64,
+         0.1,
+         1},
+        {"open", "0.1 0.1,0.9 0.1,0.9 0.9,0.1 0.9", "0 0 1 2 3 3", "trim 0 3 1", 0.8, 0.64, {0, 0}, 64, 0.1, 1},
+        {"bowtie",
+         "0.1 0.1,0.9 0.9,0.9 0.1,0.1 0.9,0.1 0.1",
+         "0 0 1 2 3 4 4",
+         "trim 0 4 1",
+         0,
+         -1,
+         {0.5, 0.5},
+         32,
+         0.5,
+         -1},
+        {"outside", "2 2,3 2,3 3,2 3,2 2", "0 0 1 2 3 4 4", "trim 0 4 1", 0, 0, {0, 0}, 0, -1, 0},
+        {"flat", "0.1 0.1,0.9 0.1,0.5 0.1,0.1 0.1", "0 0 1 2 3 3", "trim 0 3 1", 0, 0, {0, 0}, 0, 0.1, 0},
+        {"half out",
+         "0.5 0.5,1.5 0.5,1.5 1.5,0.5 1.5,0.5 0.5",
+         "0 0 1 2 3 4 4",
+         "trim 0 4 1",
+         0,
+         0.25,
+         {0, 0},
+         25,
+         0.5,
+         -1},
+        {"hole out", "2 2,3 2,3 3,2 3,2 2", "0 0 1 2 3 4 4", "hole 0 4 1", 0, 0, {0, 0}, 100, -1, 0},
+        /* a corner cut: deepest where the cut's middle is */
+        {"corner cut", "0 0,1 0,1 0.6,0.6 1,0 1,0 0", "0 0 1 2 3 4 5 5", "trim 0 5 1", 0, 0.92, {0, 0}, 92, 0.2, 1},
+        {"around", "-1 -1,2 -1,2 2,-1 2,-1 -1", "0 0 1 2 3 4 4", "trim 0 4 1", 0, 1, {0, 0}, 100, -1, 1},
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         sbuf b = {0};
@@ -1905,6 +1937,9 @@ TEST(trim_loop_shapes)
         if (crosses)
             CHECK_MSG(hypot(in.cross_uv[0] - cases[c].cross_uv[0], in.cross_uv[1] - cases[c].cross_uv[1]) <= 1e-12,
                       "%s: crossing at %g %g", cases[c].name, in.cross_uv[0], in.cross_uv[1]);
+        CHECK_MSG(fabs(in.depth - cases[c].depth) <= 1e-12 &&
+                      (cases[c].encloses < 0 || in.encloses_centre == (cases[c].encloses == 1)),
+                  "%s: depth %.17g encloses %d", cases[c].name, in.depth, in.encloses_centre);
         tsr_pmodel *m = NULL;
         if (make_model(&set, &m)) {
             tsr_ptess_options o = {0};
@@ -1928,6 +1963,105 @@ TEST(trim_loop_shapes)
         tsr_patch_set_free(&set);
         free(b.s);
     }
+}
+
+/* Trim loops along a patch's whole border (CAD files trim every face by
+ * its own boundary) trim nothing: the patch is meshed as untrimmed, the
+ * same mesh to the byte as without the loop (the oracle: the untrimmed
+ * run), cut across its curve as an untrimmed patch is. Loops that reach
+ * into the domain beyond TSR_PMODEL_VOID_TRIM, or come with a hole, or do
+ * not go around the domain, still trim. A bicubic over [2, 5] x [1, 3]. */
+TEST(border_loops_trim_nothing)
+{
+    static const struct {
+        const char *name, *curves; /* vp lines and curv2 statements */
+        const char *trim;          /* trim / hole statements */
+        bool nothing;
+    } cases[] = {
+        {"rectangle", "vp 2 1\nvp 5 1\nvp 5 3\nvp 2 3\nvp 2 1\ndeg 1\ncurv2 1 2 3 4 5\nparm u 0 0 1 2 3 4 4\nend\n",
+         "trim 0 4 1\n", true},
+        {"clockwise", "vp 2 1\nvp 2 3\nvp 5 3\nvp 5 1\nvp 2 1\ndeg 1\ncurv2 1 2 3 4 5\nparm u 0 0 1 2 3 4 4\nend\n",
+         "trim 0 4 1\n", true},
+        {"points along the sides",
+         "vp 2 1\nvp 3.5 1\nvp 5 1\nvp 5 2\nvp 5 3\nvp 2 3\nvp 2 1\ndeg 1\ncurv2 1 2 3 4 5 6 7\n"
+         "parm u 0 0 1 2 3 4 5 6 6\nend\n",
+         "trim 0 6 1\n", true},
+        /* four quadratic curves whose control points lie on the sides, one
+         * run backwards */
+        {"curves on the sides",
+         "vp 2 1\nvp 3 1\nvp 5 1\nvp 5 2.5\nvp 5 3\nvp 4 3\nvp 2 3\nvp 2 2\nvp 2 1\ndeg 2\n"
+         "curv2 1 2 3\nparm u 0 0 0 1 1 1\nend\ncurv2 3 4 5\nparm u 0 0 0 1 1 1\nend\n"
+         "curv2 7 6 5\nparm u 0 0 0 1 1 1\nend\ncurv2 7 8 9\nparm u 0 0 0 1 1 1\nend\n",
+         "trim 0 1 1 0 1 2 1 0 3 0 1 4\n", true},
+        {"around", "vp 1 0\nvp 6 0\nvp 6 4\nvp 1 4\nvp 1 0\ndeg 1\ncurv2 1 2 3 4 5\nparm u 0 0 1 2 3 4 4\nend\n",
+         "trim 0 4 1\n", true},
+        {"a hair inside",
+         "vp 2.000001 1.000001\nvp 4.999999 1.000001\nvp 4.999999 2.999999\nvp 2.000001 2.999999\n"
+         "vp 2.000001 1.000001\ndeg 1\ncurv2 1 2 3 4 5\nparm u 0 0 1 2 3 4 4\nend\n",
+         "trim 0 4 1\n", false},
+        {"corner cut",
+         "vp 2 1\nvp 5 1\nvp 5 2.99\nvp 4.99 3\nvp 2 3\nvp 2 1\ndeg 1\ncurv2 1 2 3 4 5 6\n"
+         "parm u 0 0 1 2 3 4 5 5\nend\n",
+         "trim 0 5 1\n", false},
+        {"with a hole",
+         "vp 2 1\nvp 5 1\nvp 5 3\nvp 2 3\nvp 2 1\nvp 3 1.5\nvp 4 1.5\nvp 4 2.5\nvp 3 2.5\nvp 3 1.5\ndeg 1\n"
+         "curv2 1 2 3 4 5\nparm u 0 0 1 2 3 4 4\nend\ncurv2 6 7 8 9 10\nparm u 0 0 1 2 3 4 4\nend\n",
+         "trim 0 4 1\nhole 0 4 2\n", false},
+        {"along one side only", "vp 2 1\nvp 5 1\nvp 5 1\nvp 2 1\ndeg 1\ncurv2 1 2 3 4\nparm u 0 0 1 2 3 3\nend\n",
+         "trim 0 3 1\n", false},
+    };
+    tsr_mesh plain = {0};
+    for (int c = -1; c < (int)(sizeof cases / sizeof cases[0]); c++) {
+        sbuf b = {0};
+        if (c >= 0)
+            sb_printf(&b, "cstype bspline\n%s", cases[c].curves);
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 4; i++)
+                sb_printf(&b, "v %d %d %.17g\n", 10 * i, 10 * j, 12 * sin(1.7 * i) + 0.5 * j);
+        sb_printf(&b, "cstype bezier\ndeg 3 3\nsurf 2 5 1 3");
+        for (int k = 1; k <= 16; k++)
+            sb_printf(&b, " %d", k);
+        sb_printf(&b, "\nparm u 2 5\nparm v 1 3\n%send\n", c >= 0 ? cases[c].trim : "");
+        const char *name = c >= 0 ? cases[c].name : "untrimmed";
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        tsr_error e = {0};
+        tsr_pmodel_set_options so = {0, 0.01, 0};
+        if (!parse_set(&b, name, &set)) {
+            free(b.s);
+            continue;
+        }
+        CHECK_MSG(tsr_pmodel_from_set_opts(&set, &so, NULL, &m, &e) == TSR_OK, "%s: %s", name, e.message);
+        tsr_pmodel_info info;
+        tsr_ptess_options o = {0};
+        o.max_error = 0.01;
+        tsr_ptess_result r;
+        tsr_status st = m ? tsr_ptess_run(m, &o, NULL, &r, &e) : TSR_ERR_ARGUMENT;
+        CHECK_MSG(st == TSR_OK, "%s: %s", name, e.message);
+        if (st == TSR_OK) {
+            tsr_pmodel_get_info(m, &info);
+            bool nothing = c < 0 || cases[c].nothing;
+            CHECK_MSG(info.trimmed_sources == (nothing ? 0u : 1u) && info.void_loops == (c >= 0 && nothing ? 1u : 0u),
+                      "%s: %u trimmed, %u void loops", name, info.trimmed_sources, info.void_loops);
+            if (c < 0) {
+                /* the model was cut across the curve: the oracle is no single piece */
+                CHECK(info.pieces > 1);
+                plain = r.mesh;
+                memset(&r.mesh, 0, sizeof r.mesh);
+            } else if (nothing) {
+                CHECK_MSG(r.mesh.vertex_count == plain.vertex_count && r.mesh.triangle_count == plain.triangle_count &&
+                              !memcmp(r.mesh.positions, plain.positions, 3 * sizeof(float) * plain.vertex_count) &&
+                              !memcmp(r.mesh.indices, plain.indices, 3 * sizeof(uint32_t) * plain.triangle_count),
+                          "%s: %u vertices, %u triangles; untrimmed %u, %u", name, r.mesh.vertex_count,
+                          r.mesh.triangle_count, plain.vertex_count, plain.triangle_count);
+            }
+            tsr_ptess_result_free(&r);
+        }
+        tsr_pmodel_destroy(m);
+        tsr_patch_set_free(&set);
+        free(b.s);
+    }
+    tsr_mesh_free(&plain);
 }
 
 TEST(trim_loops_meet_the_lattice)
@@ -2079,12 +2213,14 @@ TEST(measure_passes_slivers_by)
  * and 55 zero-area triangles). And a rational sphere (collapsed poles, a
  * seam) trimmed by its domain is closed like the untrimmed one (it had 384
  * open edges and 256 zero-area triangles at the poles). */
-static void domain_trim(sbuf *b, int vp0, int curve)
+/* A loop around [0, 1]^2, inset by d (CAD files give it to 1e-6 .. 1e-4;
+ * 0 trims nothing, TSR_PMODEL_VOID_TRIM). */
+static void domain_trim(sbuf *b, int vp0, double d)
 {
-    (void)curve;
-    sb_printf(b, "vp 0 0\nvp 1 0\nvp 1 1\nvp 0 1\nvp 0 0\ncstype bspline\ndeg 1\ncurv2 %d %d %d %d %d\n"
-                 "parm u 0 0 1 2 3 4 4\nend\n",
-              vp0 + 1, vp0 + 2, vp0 + 3, vp0 + 4, vp0 + 5);
+    sb_printf(b, "vp %.17g %.17g\nvp %.17g %.17g\nvp %.17g %.17g\nvp %.17g %.17g\nvp %.17g %.17g\n", d, d, 1 - d, d,
+              1 - d, 1 - d, d, 1 - d, d, d);
+    sb_printf(b, "cstype bspline\ndeg 1\ncurv2 %d %d %d %d %d\nparm u 0 0 1 2 3 4 4\nend\n", vp0 + 1, vp0 + 2, vp0 + 3,
+              vp0 + 4, vp0 + 5);
 }
 
 static void pair_check(void *user, const tsr_ptess_result *r, double E)
@@ -2121,11 +2257,13 @@ static void sphere_check(void *user, const tsr_ptess_result *r, double E)
 
 TEST(domain_trimmed_surfaces_weld)
 {
-    for (int trimmed = 0; trimmed < 2; trimmed++) {
+    /* trimmed: 0 no loop, 1 a loop along the border (no trim), 2 one 1e-7
+     * inside it (trimmed: the loop is snapped onto the border) */
+    for (int trimmed = 0; trimmed < 3; trimmed++) {
         sbuf b = {0};
         for (int side = 0; side < 2; side++) {
             if (trimmed)
-                domain_trim(&b, 5 * side, side + 1);
+                domain_trim(&b, 5 * side, trimmed == 2 ? 1e-7 : 0);
             for (int j = 0; j < 6; j++)
                 for (int i = 0; i < 6; i++) {
                     double x = 30.0 * side + 6.0 * i, y = 6.0 * j;
@@ -2139,18 +2277,25 @@ TEST(domain_trimmed_surfaces_weld)
                 sb_printf(&b, "trim 0 4 %d\n", side + 1);
             sb_printf(&b, "end\n");
         }
-        over_bounds(&b, trimmed ? "pair_trimmed.obj" : "pair.obj", 0.1, 0.001, pair_check, &trimmed);
+        over_bounds(&b,
+                    trimmed == 2 ? "pair_trimmed.obj"
+                    : trimmed    ? "pair_border.obj"
+                                 : "pair.obj",
+                    0.1, 0.001, pair_check, &trimmed);
         free(b.s);
     }
     /* the sphere: 9 x 5 rational control points, u around (0..4), v from
      * pole to pole (0..2), trimmed by its domain */
-    for (int trimmed = 0; trimmed < 2; trimmed++) {
+    for (int trimmed = 0; trimmed < 3; trimmed++) {
         sbuf b = {0};
         static const double C[9][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1}, {-1, 0}, {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
         static const double M[5][2] = {{0, -1}, {1, -1}, {1, 0}, {1, 1}, {0, 1}};
+        double d = trimmed == 2 ? 2e-7 : 0;
         if (trimmed)
-            sb_printf(&b, "vp 0 0\nvp 4 0\nvp 4 2\nvp 0 2\nvp 0 0\ncstype bspline\ndeg 1\ncurv2 1 2 3 4 5\n"
-                          "parm u 0 0 1 2 3 4 4\nend\n");
+            sb_printf(&b,
+                      "vp %.17g %.17g\nvp %.17g %.17g\nvp %.17g %.17g\nvp %.17g %.17g\nvp %.17g %.17g\n"
+                      "cstype bspline\ndeg 1\ncurv2 1 2 3 4 5\nparm u 0 0 1 2 3 4 4\nend\n",
+                      d, d, 4 - d, d, 4 - d, 2 - d, d, 2 - d, d, d);
         for (int j = 0; j < 5; j++)
             for (int i = 0; i < 9; i++)
                 sb_printf(&b, "v %.17g %.17g %.17g %.17g\n", 20 * C[i][0] * M[j][0], 20 * C[i][1] * M[j][0],
@@ -2159,7 +2304,11 @@ TEST(domain_trimmed_surfaces_weld)
         for (int k = 1; k <= 45; k++)
             sb_printf(&b, " %d", k);
         sb_printf(&b, "\nparm u 0 0 0 1 1 2 2 3 3 4 4 4\nparm v 0 0 0 1 1 2 2 2\n%send\n", trimmed ? "trim 0 4 1\n" : "");
-        over_bounds(&b, trimmed ? "sphere_trimmed.obj" : "sphere.obj", 0.3, 0.003, sphere_check, &trimmed);
+        over_bounds(&b,
+                    trimmed == 2 ? "sphere_trimmed.obj"
+                    : trimmed    ? "sphere_border.obj"
+                                 : "sphere.obj",
+                    0.3, 0.003, sphere_check, &trimmed);
         free(b.s);
     }
 }
@@ -4364,12 +4513,12 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
           T(piece_scale_tightens_one_piece), T(bspline_pieces_conform), T(partial_overlap_linked),
           T(t_configurations_linked), T(staggered_rows_linked_or_left_whole), T(stitched_tiles_within_bound),
           T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas),
-          T(trim_loops_meet_the_lattice), T(trim_loop_shapes), T(measure_passes_slivers_by),
-          T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
-          T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve),
-          T(rational_product_weights_within_bound), T(rational_cylinder_cut_near_its_strip), T(camera_near_finer),
-          T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
-          T(data_osd_corner_estimate), T(data_osd_half_tiles), T(crease_normals_box), T(crease_normals_smooth_sphere),
-          T(crease_normals_far_sphere), T(crease_normals_bspline_kink), T(small_faces_small_memory),
-          T(measure_threads_same_figures), T(data_osd_crease_normals), T(null_and_empty_inputs), T(data_teapot),
-          T(data_osd_cages))
+          T(trim_loops_meet_the_lattice), T(trim_loop_shapes), T(border_loops_trim_nothing),
+          T(measure_passes_slivers_by), T(domain_trimmed_surfaces_weld),
+          T(patch_edges_a_gap_apart_weld_within_the_link_distance), T(edges_of_other_knots_and_degrees_link),
+          T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
+          T(rational_cylinder_cut_near_its_strip), T(camera_near_finer), T(runs_share_model), T(bad_options),
+          T(subd_curve_faces_no_zero_area), T(allocation_failures), T(data_osd_corner_estimate), T(data_osd_half_tiles),
+          T(crease_normals_box), T(crease_normals_smooth_sphere), T(crease_normals_far_sphere),
+          T(crease_normals_bspline_kink), T(small_faces_small_memory), T(measure_threads_same_figures),
+          T(data_osd_crease_normals), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
