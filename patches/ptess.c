@@ -32,6 +32,7 @@ typedef struct plink {
     uint8_t reversed;
     uint8_t t0, t1; /* halves (0, 1, 2 = 0, 1/2, 1) on this edge */
     uint8_t s0, s1; /* on the neighbour's edge, s0 at t0 */
+    uint8_t nonmanifold; /* one of two links of an edge three patches share */
 } plink;
 
 typedef struct piece {
@@ -157,7 +158,7 @@ static void add_link(tsr_pmodel *m, uint32_t p, int e, uint32_t q, int f, bool r
     piece *pp = &m->pieces[p];
     if (pp->nlinks[e] >= 2)
         return;
-    pp->link[e][pp->nlinks[e]++] = (plink){q, (uint8_t)f, rev, (uint8_t)t0, (uint8_t)t1, (uint8_t)s0, (uint8_t)s1};
+    pp->link[e][pp->nlinks[e]++] = (plink){q, (uint8_t)f, rev, (uint8_t)t0, (uint8_t)t1, (uint8_t)s0, (uint8_t)s1, 0};
     m->links++;
 }
 
@@ -189,6 +190,8 @@ static tsr_status orient(tsr_pmodel *m)
             for (int e = 0; e < 4; e++)
                 for (int k = 0; k < pp->nlinks[e]; k++) {
                     const plink *l = &pp->link[e][k];
+                    if (l->nonmanifold)
+                        continue; /* no orientation agrees with two others */
                     int sign = edge_dir(e) * edge_dir(l->edge) * (l->reversed ? -1 : 1);
                     uint8_t want = sign < 0 ? pp->mirrored : !pp->mirrored;
                     if (!seen[l->piece]) {
@@ -370,12 +373,16 @@ static tsr_status link_set_edges(tsr_pmodel *m, double link_tol)
     qsort(rec, n, sizeof *rec, cmp_edge_rec);
     memset(used, 0, (size_t)m->npieces * 4);
     for (uint32_t i = 0; i < n; i++) {
-        /* an edge links only when exactly one other edge matches it */
-        uint32_t found = UINT32_MAX, matches = 0;
-        bool rev = false;
+        /* an edge links when exactly one other edge matches it, or, three
+         * patches sharing it (a fin on a plate), to both others when these
+         * match each other */
+        uint32_t found = UINT32_MAX, matches = 0, all[2];
+        bool rev = false, revs[2];
         for (uint32_t j = i + 1; j < n && rec[j].key - rec[i].key <= tol; j++) {
             bool r;
             if (edges_match(&m->pieces[rec[i].piece], rec[i].edge, &m->pieces[rec[j].piece], rec[j].edge, tol, &r)) {
+                if (matches < 2)
+                    all[matches] = j, revs[matches] = r;
                 matches++;
                 found = j;
                 rev = r;
@@ -383,8 +390,40 @@ static tsr_status link_set_edges(tsr_pmodel *m, double link_tol)
         }
         for (uint32_t j = i; j-- > 0 && rec[i].key - rec[j].key <= tol;) {
             bool r;
-            if (edges_match(&m->pieces[rec[i].piece], rec[i].edge, &m->pieces[rec[j].piece], rec[j].edge, tol, &r))
+            if (edges_match(&m->pieces[rec[i].piece], rec[i].edge, &m->pieces[rec[j].piece], rec[j].edge, tol, &r)) {
+                if (matches < 2)
+                    all[matches] = j, revs[matches] = r;
                 matches++;
+            }
+        }
+        if (matches == 2 && all[0] > i && all[1] > i) {
+            /* the first of three: links each pair of them once */
+            uint32_t t[3] = {i, all[0], all[1]};
+            bool r12;
+            if (!edges_match(&m->pieces[rec[t[1]].piece], rec[t[1]].edge, &m->pieces[rec[t[2]].piece], rec[t[2]].edge,
+                             tol, &r12))
+                continue;
+            bool ok = true;
+            for (int k = 0; k < 3; k++)
+                ok &= !used[4 * rec[t[k]].piece + rec[t[k]].edge] &&
+                      m->pieces[rec[t[k]].piece].nlinks[rec[t[k]].edge] == 0;
+            if (!ok || rec[t[0]].piece == rec[t[1]].piece || rec[t[0]].piece == rec[t[2]].piece ||
+                rec[t[1]].piece == rec[t[2]].piece)
+                continue;
+            bool rr[3][3] = {{false, revs[0], revs[1]}, {revs[0], false, r12}, {revs[1], r12, false}};
+            for (int x = 0; x < 3; x++) {
+                used[4 * rec[t[x]].piece + rec[t[x]].edge] = 1;
+                for (int y = 0; y < 3; y++) {
+                    if (x == y)
+                        continue;
+                    piece *px = &m->pieces[rec[t[x]].piece];
+                    int ex = rec[t[x]].edge;
+                    bool rv = rr[x][y];
+                    add_link(m, rec[t[x]].piece, ex, rec[t[y]].piece, rec[t[y]].edge, rv, 0, 2, rv ? 2 : 0, rv ? 0 : 2);
+                    px->link[ex][px->nlinks[ex] - 1].nonmanifold = 1;
+                }
+            }
+            continue;
         }
         if (matches != 1 || found == UINT32_MAX)
             continue;

@@ -164,7 +164,9 @@ typedef struct tsr_pmodel tsr_pmodel;
  * within TSR_PMODEL_LINK_TOL of the model's box diagonal (after the
  * pieces are cut at the breakpoints of the patches sharing an edge:
  * Links, above), and an edge whose control points all lie that close
- * together is collapsed. */
+ * together is collapsed. An edge three patches share (a fin on a plate) is
+ * linked to both others, which then sample it alike too; these links
+ * orient no piece (no orientation agrees with both). */
 #define TSR_PMODEL_LINK_TOL 1e-6
 /* A patch whose trim loops are one outer loop around its whole domain,
  * nowhere farther inside than this fraction of the domain's sides (a CAD

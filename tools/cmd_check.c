@@ -443,6 +443,70 @@ typedef struct boundary_report {
     uint32_t unlinked_junctions; /* (vertex, edge) T-junctions of tsr_mesh_validate whose edge is unlinked */
 } boundary_report;
 
+/* Mesh edges of three triangles where three patches of a set meet along
+ * one edge (a fin on a plate; ptess.h links them): each triangle from its
+ * own source, with the edge's two corners on one side of that source's
+ * domain. The validation counts them non-manifold, as the input is.
+ * UINT32_MAX when out of memory. */
+typedef struct tri_edge {
+    uint32_t a, b, tri;
+} tri_edge;
+
+static int tri_edge_cmp(const void *x, const void *y)
+{
+    const tri_edge *p = x, *q = y;
+    return p->a != q->a ? (p->a < q->a ? -1 : 1) : p->b != q->b ? (p->b < q->b ? -1 : 1) : 0;
+}
+
+static bool corner_pair_on_side(const tsr_pmodel *m, const tsr_ptess_result *r, uint32_t t, uint32_t va, uint32_t vb)
+{
+    tsr_psource_info si;
+    if (!tsr_pmodel_source_info(m, r->tri_source[t], &si))
+        return false;
+    const uint32_t *tv = r->mesh.indices + 3 * (size_t)t;
+    const double *uv[2] = {NULL, NULL};
+    for (int k = 0; k < 3; k++)
+        if (tv[k] == va || tv[k] == vb)
+            uv[tv[k] == vb] = r->tri_uv + 6 * (size_t)t + 2 * k;
+    if (!uv[0] || !uv[1])
+        return false;
+    for (int side = 0; side < 4; side++) {
+        int c = side / 2; /* u sides, then v sides */
+        double at = si.domain[side], eps = 1e-9 * (si.domain[2 * c + 1] - si.domain[2 * c]);
+        if (fabs(uv[0][c] - at) <= eps && fabs(uv[1][c] - at) <= eps)
+            return true;
+    }
+    return false;
+}
+
+static uint32_t three_patch_edges(const tsr_pmodel *m, const tsr_ptess_result *r)
+{
+    const tsr_mesh *me = &r->mesh;
+    size_t n = 3 * (size_t)me->triangle_count;
+    tri_edge *e = malloc((n ? n : 1) * sizeof *e);
+    if (!e)
+        return UINT32_MAX;
+    for (size_t h = 0; h < n; h++) {
+        uint32_t a = me->indices[h], b = me->indices[h - h % 3 + (h % 3 + 1) % 3];
+        e[h] = (tri_edge){a < b ? a : b, a < b ? b : a, (uint32_t)(h / 3)};
+    }
+    qsort(e, n, sizeof *e, tri_edge_cmp);
+    uint32_t count = 0;
+    for (size_t i = 0, j; i < n; i = j) {
+        for (j = i + 1; j < n && e[j].a == e[i].a && e[j].b == e[i].b;)
+            j++;
+        if (j - i != 3)
+            continue;
+        uint32_t s0 = r->tri_source[e[i].tri], s1 = r->tri_source[e[i + 1].tri], s2 = r->tri_source[e[i + 2].tri];
+        bool ok = s0 != s1 && s0 != s2 && s1 != s2;
+        for (size_t k = i; k < j && ok; k++)
+            ok = corner_pair_on_side(m, r, e[k].tri, e[k].a, e[k].b);
+        count += ok;
+    }
+    free(e);
+    return count;
+}
+
 /* Cracks: boundary edges (one triangle) of the welded mesh lying within
  * eps of another boundary edge (both endpoints within eps of its segment),
  * found by a sweep along x. Half-edges marked in `unlinked` (may be NULL)
@@ -613,6 +677,7 @@ typedef struct patch_run {
     uint32_t t_junctions_discounted; /* along unlinked patch edges (bnd.unlinked_junctions): no failure */
     uint32_t gaps;                   /* open edges facing another within the tolerance (tsr_mesh_find_gaps): failures */
     uint32_t gaps_open;              /* the same along unlinked patch edges or on trimmed patches: no failure */
+    uint32_t three_patch_edges;      /* mesh edges where three patches of a set meet: non-manifold by the input */
     bool watertight, conforming, ok;
     bool deeper;       /* run again at max level 12 (the default depth measured beyond the tolerance) */
     char failed[600];  /* why the tessellation itself failed, or "" */
@@ -728,9 +793,16 @@ static int patch_run_do(const tsr_pmodel *m, const tsr_pmodel_info *info, const 
         return CLI_FAIL;
     }
     free(unlinked);
+    /* three patches along one edge: non-manifold in the input */
+    uint32_t fins = !subd && val.nonmanifold_edges ? three_patch_edges(m, &res) : 0;
     tsr_ptess_result_free(&res);
+    if (fins == UINT32_MAX) {
+        cli_error("check", "out of memory");
+        return CLI_FAIL;
+    }
+    pr->three_patch_edges = fins;
     pr->watertight = val.bad_indices == 0 && val.nonfinite_positions == 0 && val.degenerate_triangles == 0 &&
-                     val.duplicate_triangles == 0 && val.nonmanifold_edges == 0 && val.misoriented_edges == 0 &&
+                     val.duplicate_triangles == 0 && val.nonmanifold_edges == fins && val.misoriented_edges == 0 &&
                      val.first_bad_triangle == UINT32_MAX && pr->bnd.cracks == 0 && pr->gaps == 0;
     /* The rule: a T-junction (a vertex inside an open edge) is a failure
      * unless that open edge lies on a patch edge without neighbour, where
@@ -813,6 +885,7 @@ static cJSON *patch_run_json(const patch_run *pr)
         cJSON_AddNumberToObject(c, "unjoined_gaps", pr->gaps_open);
     }
     cJSON_AddNumberToObject(c, "nonmanifold_seam_edges", pr->bnd.seams);
+    cJSON_AddNumberToObject(c, "three_patch_edges", pr->three_patch_edges);
     cJSON_AddNumberToObject(c, "unlinked_edge_t_junctions", pr->t_junctions_discounted);
     cJSON_AddNumberToObject(c, "boundary_edges", pr->bnd.boundary);
     cJSON_AddNumberToObject(c, "rounds", pr->rounds);

@@ -2064,6 +2064,88 @@ TEST(border_loops_trim_nothing)
     tsr_mesh_free(&plain);
 }
 
+/* Three patches along one edge (a fin on a plate): linked all three ways,
+ * so the edge's vertices are the same in each and every mesh edge along it
+ * has exactly three triangles, one of each patch; no open edge lies on it
+ * (a crack). The plate's two halves (one flat, one bumped, so they refine
+ * it differently) keep their common orientation: the fin's link orients
+ * neither (the fin comes first: oriented through it, one half would
+ * flip). The fin is curved too and runs the edge backwards. */
+TEST(three_patches_share_an_edge)
+{
+    sbuf b = {0};
+    for (int k = 0; k < 3; k++) {
+        int p = (k + 2) % 3; /* the fin, then the plate's halves */
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 4; i++) {
+                double x = 10.0 * i / 3, w = 10.0 * j / 3, P[3];
+                if (p == 0) /* y from -10 to 0, flat */
+                    P[0] = x, P[1] = w - 10, P[2] = 0;
+                else if (p == 1) /* y from 0 to 10, a bump inside */
+                    P[0] = x, P[1] = w, P[2] = (i % 3 && j % 3) ? 6 : 0;
+                else /* the fin: up in z, x backwards, waving in y */
+                    P[0] = 10 - x, P[1] = j ? 2.5 * sin(3.0 * i) : 0, P[2] = w;
+                sb_printf(&b, "v %.17g %.17g %.17g\n", P[0], P[1], P[2]);
+            }
+        sb_printf(&b, "cstype bezier\ndeg 3 3\nsurf 0 1 0 1");
+        for (int i = 1; i <= 16; i++)
+            sb_printf(&b, " %d", 16 * k + i);
+        sb_printf(&b, "\nend\n");
+    }
+    tsr_patch_set set;
+    tsr_pmodel *m = NULL;
+    if (parse_set(&b, "fin.obj", &set) && make_model(&set, &m)) {
+        for (int pass = 0; pass < 2; pass++) {
+            tsr_ptess_options o = {0};
+            o.max_error = pass ? 0.002 : 0.05;
+            tsr_ptess_result r;
+            if (!run_ptess(m, &o, &r))
+                break;
+            const tsr_mesh *me = &r.mesh;
+            uint32_t on_edge = 0, three = 0, open_on_edge = 0, plate_down = 0;
+            size_t n = 3 * (size_t)me->triangle_count;
+            for (size_t h = 0; h < n; h++) {
+                const float *pa = me->positions + 3 * (size_t)me->indices[h],
+                            *pb = me->positions + 3 * (size_t)me->indices[h - h % 3 + (h % 3 + 1) % 3];
+                if (!(pa[1] == 0 && pa[2] == 0 && pb[1] == 0 && pb[2] == 0))
+                    continue;
+                /* a half-edge along the shared edge: how many triangles use it */
+                uint32_t users = 0;
+                for (size_t g = 0; g < n; g++) {
+                    uint32_t a = me->indices[g], c = me->indices[g - g % 3 + (g % 3 + 1) % 3];
+                    users += (a == me->indices[h] && c == me->indices[h - h % 3 + (h % 3 + 1) % 3]) ||
+                             (c == me->indices[h] && a == me->indices[h - h % 3 + (h % 3 + 1) % 3]);
+                }
+                on_edge++;
+                three += users == 3;
+                open_on_edge += users == 1;
+            }
+            for (uint32_t t = 0; t < me->triangle_count; t++) {
+                if (r.tri_source[t] == 0)
+                    continue; /* the fin */
+                const float *q0 = me->positions + 3 * (size_t)me->indices[3 * t],
+                            *q1 = me->positions + 3 * (size_t)me->indices[3 * t + 1],
+                            *q2 = me->positions + 3 * (size_t)me->indices[3 * t + 2];
+                double nz = ((double)q1[0] - q0[0]) * ((double)q2[1] - q0[1]) -
+                            ((double)q1[1] - q0[1]) * ((double)q2[0] - q0[0]);
+                plate_down += nz < 0;
+            }
+            CHECK_MSG(on_edge >= 9 && three == on_edge && open_on_edge == 0 && plate_down == 0,
+                      "bound %g: %u half-edges on the shared edge, %u with three triangles, %u open; %u plate "
+                      "triangles facing down",
+                      o.max_error, on_edge, three, open_on_edge, plate_down);
+            tsr_validation v = validate(me);
+            CHECK_MSG(v.nonmanifold_edges == on_edge / 3 && v.t_junctions == 0,
+                      "bound %g: %u non-manifold edges (want %u), %u T-junctions", o.max_error, v.nonmanifold_edges,
+                      on_edge / 3, v.t_junctions);
+            tsr_ptess_result_free(&r);
+        }
+    }
+    tsr_pmodel_destroy(m);
+    tsr_patch_set_free(&set);
+    free(b.s);
+}
+
 TEST(trim_loops_meet_the_lattice)
 {
     static const double hole[9][3] = {{0.75, 0.5, 1},
@@ -4514,7 +4596,7 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
           T(t_configurations_linked), T(staggered_rows_linked_or_left_whole), T(stitched_tiles_within_bound),
           T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas),
           T(trim_loops_meet_the_lattice), T(trim_loop_shapes), T(border_loops_trim_nothing),
-          T(measure_passes_slivers_by), T(domain_trimmed_surfaces_weld),
+          T(three_patches_share_an_edge), T(measure_passes_slivers_by), T(domain_trimmed_surfaces_weld),
           T(patch_edges_a_gap_apart_weld_within_the_link_distance), T(edges_of_other_knots_and_degrees_link),
           T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
           T(rational_cylinder_cut_near_its_strip), T(camera_near_finer), T(runs_share_model), T(bad_options),
