@@ -211,6 +211,26 @@ echo "ok T-configuration linked: one disc, no gap"
 grep -q "^view-independent .* FAIL.* gaps [1-9]" "$dir/tcrack.txt" || fail "tcrack: no gaps: $(grep ^view "$dir/tcrack.txt")"
 echo "ok a crack narrower than the tolerance fails:$(grep -o ' FAIL.*' "$dir/tcrack.txt" | head -1)"
 
+# a fin on a plate: three bilinear patches along one edge, the plate's half
+# split at u = 0.3 and the fin at v = 0.7 so that they sample the edge
+# differently unless linked all three ways: the check passes, counting the
+# edge's mesh edges as three-patch edges (each has three triangles), and no gap
+{
+  printf 'v 0 0 0\nv 0 0 1\nv 1 0 0\nv 1 0 1\nv 0 1 0\nv 0 1 1\nv -1 -1 0\nv -1 -1 1\n'
+  printf 'v 0.3 0 0\nv 0.3 0 1\nv 0 0 0.7\nv -1 -1 0.7\ncstype bspline\ndeg 1 1\n'
+  printf 'surf 0 1 0 1 1 9 3 2 10 4\nparm u 0 0 0.3 1 1\nparm v 0 0 1 1\nend\n'
+  printf 'surf 0 1 0 1 1 5 2 6\nparm u 0 0 1 1\nparm v 0 0 1 1\nend\n'
+  printf 'surf 0 1 0 1 1 7 11 12 2 8\nparm u 0 0 1 1\nparm v 0 0 0.7 1 1\nend\n'
+} > "$dir/fin.obj"
+expect_ok "a fin on a plate" "$dir/fin.obj" --cameras 1
+"$tessera" check patches "$dir/fin.obj" --cameras 0 --json > "$dir/fin.json" || fail "fin: json check"
+python3 - "$dir/fin.json" <<'PY' || fail "fin: $(cat "$dir/fin.json" | head -c 600)"
+import json, sys
+v = json.load(open(sys.argv[1]))["view_independent"]
+assert v["three_patch_edges"] >= 2 and v["gaps"] == 0, (v["three_patch_edges"], v["gaps"])
+print("ok a fin on a plate: %d three-patch edges, no gap" % v["three_patch_edges"])
+PY
+
 # two unit squares side by side, each trimmed by its own border given to
 # 1e-6 (as CAD files give it): the loops' points that near the border go
 # onto it, so the faces meet without a sliver between them
