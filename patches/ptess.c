@@ -91,6 +91,7 @@ struct tsr_pmodel {
     double lo[3], hi[3];
     uint32_t links, collapsed, mirrored, trimmed;
     uint32_t void_loops;     /* loops along their patch's whole border: no trim */
+    double link_tol;         /* the distance edges were linked within (model units) */
     uint32_t flat;           /* subd patches without area, left out */
     uint32_t conform_breaks; /* breakpoints a patch took from a neighbour */
     uint32_t partial_unlinked; /* partial overlaps left unlinked (the breakpoint budget) */
@@ -343,6 +344,7 @@ static bool edge_collapsed(const piece *p, int e, double tol)
 static tsr_status link_set_edges(tsr_pmodel *m, double link_tol)
 {
     double tol = link_tol > 0 ? link_tol : TSR_PMODEL_LINK_TOL * model_diag(m);
+    m->link_tol = tol;
     const tsr_allocator *a = ma(m);
     /* collapsed edges first; they take no links */
     for (uint32_t p = 0; p < m->npieces; p++)
@@ -3273,7 +3275,16 @@ typedef struct builder {
     uint32_t *grid, *grid_mem; /* (grid_mem: the block, grid_cap entries) */
     size_t grid_cap;
     uint32_t grid_row, grid_shift, grid_piece;
+    /* trim points of trimmed sources on a linked border (where a hole
+     * crosses a patch edge): welded to the other side's (weld_trim_points) */
+    struct etrim *et;
+    uint32_t net, capet;
 } builder;
+
+typedef struct etrim {
+    uint32_t v, src;
+    float p[3];
+} etrim;
 
 static uint32_t new_vertex(builder *b, const piece *p, const double pos[3], const double *nrm)
 {
@@ -4201,6 +4212,125 @@ static bool trim_regions(const tsr_triangulation *tr, const tloop *loops, uint32
  * trim loops, triangulated in (u, v) with the loops as constraints, the
  * triangles the loops keep (trim_keeps, once per region: trim_regions)
  * lifted. */
+/* Whether (u, v) lies on the border of source s where a piece's edge is
+ * linked. */
+static bool on_linked_border(const tsr_pmodel *m, const psource *s, const double uv[2])
+{
+    for (int e = 0; e < 4; e++) {
+        bool on = e == 0   ? uv[1] == s->domain[2]
+                  : e == 1 ? uv[0] == s->domain[1]
+                  : e == 2 ? uv[1] == s->domain[3]
+                           : uv[0] == s->domain[0];
+        if (!on)
+            continue;
+        uint32_t n = e & 1 ? s->pv : s->pu;
+        for (uint32_t k = 0; k < n; k++) {
+            uint32_t a2 = e == 1 ? s->pu - 1 : e == 3 ? 0 : k, b2 = e == 0 ? 0 : e == 2 ? s->pv - 1 : k;
+            const piece *p = &m->pieces[s->first_piece + b2 * s->pu + a2];
+            double lo = e & 1 ? p->rect[2] : p->rect[0], hi = e & 1 ? p->rect[3] : p->rect[1], x = uv[(e & 1) ? 1 : 0];
+            if (x >= lo && x <= hi && p->nlinks[e])
+                return true;
+        }
+    }
+    return false;
+}
+
+static bool push_etrim(builder *b, uint32_t v, uint32_t src, const float p[3])
+{
+    if (b->net == b->capet) {
+        uint32_t cap = b->capet ? 2 * b->capet : 64;
+        etrim *n = tsr_realloc(b->a, b->et, (size_t)cap * sizeof *n);
+        if (!n)
+            return false;
+        b->et = n;
+        b->capet = cap;
+    }
+    b->et[b->net++] = (etrim){v, src, {p[0], p[1], p[2]}};
+    return true;
+}
+
+static int etrim_cmp(const void *x, const void *y)
+{
+    const etrim *a = x, *c = y;
+    return a->p[0] < c->p[0] ? -1 : a->p[0] > c->p[0] ? 1 : (a->v > c->v) - (a->v < c->v);
+}
+
+static uint32_t uf_find(uint32_t *par, uint32_t i)
+{
+    while (par[i] != i)
+        i = par[i] = par[par[i]];
+    return i;
+}
+
+/* Where a trim loop crosses a linked patch edge (a hole across the edge
+ * between two faces), each side made its own vertex there: those within
+ * the link distance become one (the lowest-numbered), triangles left with
+ * a repeated corner are dropped and the vertices no triangle uses
+ * removed. */
+static tsr_status weld_trim_points(builder *b)
+{
+    uint32_t n = b->net;
+    if (n < 2)
+        return TSR_OK;
+    const tsr_allocator *a = b->a;
+    tsr_ptess_result *r = b->out;
+    double tol = b->m->link_tol;
+    qsort(b->et, n, sizeof *b->et, etrim_cmp);
+    uint32_t *par = tsr_alloc(a, (size_t)n * sizeof *par);
+    if (!par)
+        return TSR_ERR_NOMEM;
+    for (uint32_t i = 0; i < n; i++)
+        par[i] = i;
+    bool any = false;
+    for (uint32_t i = 0; i < n; i++)
+        for (uint32_t j = i + 1; j < n && (double)b->et[j].p[0] - b->et[i].p[0] <= tol; j++) {
+            double d2 = 0;
+            for (int c = 0; c < 3; c++)
+                d2 += ((double)b->et[j].p[c] - b->et[i].p[c]) * ((double)b->et[j].p[c] - b->et[i].p[c]);
+            uint32_t x = uf_find(par, i), y = uf_find(par, j);
+            if (d2 <= tol * tol && x != y) {
+                if (b->et[y].v < b->et[x].v)
+                    par[x] = y;
+                else
+                    par[y] = x;
+                any = true;
+            }
+        }
+    if (!any) {
+        tsr_free(a, par);
+        return TSR_OK;
+    }
+    uint32_t nv = r->mesh.vertex_count;
+    uint32_t *to = tsr_alloc(a, (size_t)nv * sizeof *to);
+    if (!to) {
+        tsr_free(a, par);
+        return TSR_ERR_NOMEM;
+    }
+    for (uint32_t v = 0; v < nv; v++)
+        to[v] = v;
+    for (uint32_t i = 0; i < n; i++)
+        to[b->et[i].v] = b->et[uf_find(par, i)].v;
+    tsr_free(a, par);
+    uint32_t kept = 0, first = UINT32_MAX;
+    for (uint32_t t = 0; t < r->mesh.triangle_count; t++) {
+        uint32_t *tv = r->mesh.indices + 3 * (size_t)t, w[3] = {to[tv[0]], to[tv[1]], to[tv[2]]};
+        for (int k = 0; k < 3; k++)
+            if (w[k] != tv[k] && tv[k] < first)
+                first = tv[k];
+        if (w[0] == w[1] || w[1] == w[2] || w[2] == w[0])
+            continue;
+        memcpy(r->mesh.indices + 3 * (size_t)kept, w, sizeof w);
+        r->tri_source[kept] = r->tri_source[t];
+        memmove(r->tri_uv + 6 * (size_t)kept, r->tri_uv + 6 * (size_t)t, 6 * sizeof *r->tri_uv);
+        kept++;
+    }
+    r->mesh.triangle_count = kept;
+    tsr_free(a, to);
+    if (first != UINT32_MAX && tsr_mesh_drop_unused(&r->mesh, first) == UINT32_MAX)
+        return TSR_ERR_NOMEM;
+    return TSR_OK;
+}
+
 static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr_error *err)
 {
     const tsr_pmodel *m = b->m;
@@ -4461,6 +4591,8 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
                         float fp[3] = {(float)pos[0], (float)pos[1], (float)pos[2]},
                               fn[3] = {(float)nr[0], (float)nr[1], (float)nr[2]};
                         mv[o] = tsr_mesh_add_vertex(&b->out->mesh, fp, b->opt->normals ? fn : NULL, NULL);
+                        if (mv[o] != UINT32_MAX && on_linked_border(m, s, uv + 2 * k) && !push_etrim(b, mv[o], src, fp))
+                            st = TSR_ERR_NOMEM;
                     }
                     if (mv[o] == UINT32_MAX)
                         st = TSR_ERR_NOMEM;
@@ -4805,6 +4937,8 @@ tsr_status tsr_ptess_run(const tsr_pmodel *m, const tsr_ptess_options *opt_in, c
         if (st != TSR_OK && st != TSR_ERR_NOMEM)
             goto done;
     }
+    if (st == TSR_OK)
+        st = weld_trim_points(&b);
     if (st == TSR_OK && (out->mesh.vertex_count >= UINT32_MAX - 2 || out->mesh.triangle_count >= UINT32_MAX - 2))
         st = TSR_ERR_TOO_LARGE;
     out->bound = bound;
@@ -4825,6 +4959,7 @@ done:
     tsr_free(a, b.grid_mem);
     tsr_keymap_free(&b.map, a);
     tsr_free(a, b.cb.p);
+    tsr_free(a, b.et);
     for (uint32_t p = 0; ctx && p < m->npieces; p++) {
         tsr_quadtree_destroy(ctx[p].qt);
         tsr_keymap_free(&ctx[p].memo, a);

@@ -2146,6 +2146,70 @@ TEST(three_patches_share_an_edge)
     free(b.s);
 }
 
+/* A round hole across the edge two flat patches share, crossing it at
+ * v = 0.3 and 0.8 (no lattice point): each patch trims its half, and the
+ * two crossings, one vertex per side before, are welded (they left a
+ * crack: the open edges along x = 1 on both sides). The second patch's
+ * circle is also moved by 1e-9 (a CAD file's two curves meet within its
+ * tolerance, not exactly). Oracle: no open edge lies along the shared
+ * edge, no two vertices coincide, no T-junction. */
+TEST(hole_across_a_linked_edge)
+{
+    for (int moved = 0; moved < 2; moved++) {
+        sbuf b = {0};
+        static const double C[9][3] = {{0.25, 0, 1},      {0.25, 0.25, H2},  {0, 0.25, 1},
+                                       {-0.25, 0.25, H2}, {-0.25, 0, 1},     {-0.25, -0.25, H2},
+                                       {0, -0.25, 1},     {0.25, -0.25, H2}, {0.25, 0, 1}};
+        for (int side = 0; side < 2; side++)
+            for (int k = 0; k < 9; k++)
+                sb_printf(&b, "vp %.17g %.17g %.17g\n", (side ? 0.0 : 1.0) + C[k][0],
+                          0.55 + C[k][1] + (side && moved ? 1e-9 : 0), C[k][2]);
+        sb_printf(&b, "cstype rat bspline\ndeg 2\n");
+        for (int side = 0; side < 2; side++) {
+            sb_printf(&b, "curv2");
+            for (int k = 1; k <= 9; k++)
+                sb_printf(&b, " %d", 9 * side + k);
+            sb_printf(&b, "\nparm u 0 0 0 1 1 2 2 3 3 4 4 4\nend\n");
+        }
+        sb_printf(&b, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 0 0\nv 2 1 0\ncstype bezier\ndeg 1 1\n"
+                      "surf 0 1 0 1 1 2 3 4\nhole 0 4 1\nend\nsurf 0 1 0 1 2 5 4 6\nhole 0 4 2\nend\n");
+        tsr_patch_set set;
+        tsr_pmodel *m = NULL;
+        if (parse_set(&b, "hole_across.obj", &set) && make_model(&set, &m)) {
+            for (int pass = 0; pass < 2; pass++) {
+                tsr_ptess_options o = {0};
+                o.max_error = pass ? 1e-4 : 3e-3;
+                tsr_ptess_result r;
+                if (!run_ptess(m, &o, &r))
+                    break;
+                const tsr_mesh *me = &r.mesh;
+                tsr_halfedges he;
+                CHECK(tsr_halfedges_build(&he, me, NULL) == TSR_OK);
+                uint32_t along = 0, same = 0;
+                for (uint32_t h = 0; h < he.count; h++) {
+                    const float *pa = me->positions + 3 * (size_t)me->indices[h],
+                                *pb = me->positions + 3 * (size_t)me->indices[h - h % 3 + (h % 3 + 1) % 3];
+                    along += he.twin[h] == TSR_NO_TWIN && pa[0] == 1 && pb[0] == 1;
+                }
+                tsr_halfedges_free(&he);
+                for (uint32_t i = 0; i < me->vertex_count; i++)
+                    for (uint32_t j = i + 1; j < me->vertex_count; j++)
+                        same +=
+                            !memcmp(me->positions + 3 * (size_t)i, me->positions + 3 * (size_t)j, 3 * sizeof(float));
+                tsr_validation v = validate(me);
+                CHECK_MSG(along == 0 && same == 0 && v.t_junctions == 0 && v.nonmanifold_edges == 0,
+                          "moved %d, bound %g: %u open edges along the shared edge, %u coincident vertex pairs, %u "
+                          "T-junctions",
+                          moved, o.max_error, along, same, v.t_junctions);
+                tsr_ptess_result_free(&r);
+            }
+        }
+        tsr_pmodel_destroy(m);
+        tsr_patch_set_free(&set);
+        free(b.s);
+    }
+}
+
 TEST(trim_loops_meet_the_lattice)
 {
     static const double hole[9][3] = {{0.75, 0.5, 1},
@@ -4596,11 +4660,12 @@ TEST_MAIN(T(plane_parallelogram_exact), T(plane_trapezoid_bilinear), T(quarter_c
           T(t_configurations_linked), T(staggered_rows_linked_or_left_whole), T(stitched_tiles_within_bound),
           T(linked_rates_differ_conform), T(trimmed_linked_conform), T(trim_loops_keep_exact_areas),
           T(trim_loops_meet_the_lattice), T(trim_loop_shapes), T(border_loops_trim_nothing),
-          T(three_patches_share_an_edge), T(measure_passes_slivers_by), T(domain_trimmed_surfaces_weld),
-          T(patch_edges_a_gap_apart_weld_within_the_link_distance), T(edges_of_other_knots_and_degrees_link),
-          T(split_error_cuts_extrusions_across_their_curve), T(rational_product_weights_within_bound),
-          T(rational_cylinder_cut_near_its_strip), T(camera_near_finer), T(runs_share_model), T(bad_options),
-          T(subd_curve_faces_no_zero_area), T(allocation_failures), T(data_osd_corner_estimate), T(data_osd_half_tiles),
-          T(crease_normals_box), T(crease_normals_smooth_sphere), T(crease_normals_far_sphere),
-          T(crease_normals_bspline_kink), T(small_faces_small_memory), T(measure_threads_same_figures),
-          T(data_osd_crease_normals), T(null_and_empty_inputs), T(data_teapot), T(data_osd_cages))
+          T(three_patches_share_an_edge), T(hole_across_a_linked_edge), T(measure_passes_slivers_by),
+          T(domain_trimmed_surfaces_weld), T(patch_edges_a_gap_apart_weld_within_the_link_distance),
+          T(edges_of_other_knots_and_degrees_link), T(split_error_cuts_extrusions_across_their_curve),
+          T(rational_product_weights_within_bound), T(rational_cylinder_cut_near_its_strip), T(camera_near_finer),
+          T(runs_share_model), T(bad_options), T(subd_curve_faces_no_zero_area), T(allocation_failures),
+          T(data_osd_corner_estimate), T(data_osd_half_tiles), T(crease_normals_box), T(crease_normals_smooth_sphere),
+          T(crease_normals_far_sphere), T(crease_normals_bspline_kink), T(small_faces_small_memory),
+          T(measure_threads_same_figures), T(data_osd_crease_normals), T(null_and_empty_inputs), T(data_teapot),
+          T(data_osd_cages))
