@@ -1912,8 +1912,11 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
                            "is part of the mesh", o.border_error, target,
                            o.max_error > 0 ? "" : " (the default, 0.1% of the heightfield's height range)");
     else if (o.method == TSR_TIN_DELAUNAY) {
-        /* a hair below the bound, for the float rounding of the output */
-        double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(hs.max), fabs(hs.min)) * hf->dz;
+        /* a hair below the bound, for the float rounding of the output:
+         * from the whole heightfield's heights, so that windows meshed with
+         * the same options simplify their common border alike (each
+         * window's own heights gave tolerances apart: cracks) */
+        double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(whole.max), fabs(whole.min)) * hf->dz;
         double t = target > margin ? target - margin : target;
         double b = btol > margin ? btol - margin : btol;
         /* with a bound, the border is fixed first (seams); with a budget
@@ -1927,7 +1930,7 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
         st = mesh_delaunay_blocks(hf, src, clean, wx, wy, ww, wh, t / hf->dz, b / hf->dz, fixed, &o, mesh, rep,
                                   err);
     } else if (o.method == TSR_TIN_QUADTREE && o.tile_n == 0) {
-        double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(hs.max), fabs(hs.min)) * hf->dz;
+        double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(whole.max), fabs(whole.min)) * hf->dz;
         double t = target > margin ? target - margin : target;
         st = tsr__rqt_mesh(src, t / hf->dz, hs.max - hs.min, o.full_border, o.max_triangles, o.max_vertices,
                            o.threads, mesh, rep, err);
