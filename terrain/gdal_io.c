@@ -308,8 +308,8 @@ __attribute__((visibility("default"))) const tsr_io_api *tsr_io_module_api(void)
 
 const tsr_io_api *tsr_io_module_api(void)
 {
-    static const tsr_io_api api = {TSR_IO_MODULE_VERSION, sizeof(tsr_io_api), tsr_io_image_read, tsr_io_image_write,
-                                   tsr_io_image_save_check, tsr_io_image_save_u8_rows, tsr_io_gdal_georef,
-                                   tsr_io_gdal_read};
+    static const tsr_io_api api = {TSR_IO_MODULE_VERSION, sizeof(tsr_io_api),      tsr_io_image_read,
+                                   tsr_io_image_write,    tsr_io_image_save_check, tsr_io_image_save_u8_rows,
+                                   tsr_io_gdal_georef,    tsr_io_gdal_read,        tsr_atomic_remove_pending};
     return &api;
 }

@@ -41,6 +41,8 @@ static bool try_open(const char *path)
         return false;
     }
     api = a;
+    /* an interrupted command removes the module's temporaries too */
+    tsr__atomic_remove_also = a->remove_pending;
     return true;
 }
 

@@ -23,7 +23,7 @@ extern "C" {
 
 #define TSR_IO_MODULE_FILE "libtessera_io.so"
 #define TSR_IO_MODULE_SYMBOL "tsr_io_module_api"
-#define TSR_IO_MODULE_VERSION 3
+#define TSR_IO_MODULE_VERSION 4
 
 typedef struct tsr_io_api {
     int version; /* TSR_IO_MODULE_VERSION */
@@ -40,6 +40,9 @@ typedef struct tsr_io_api {
     bool (*gdal_georef)(const char *path, uint32_t w, uint32_t h, tsr_georef *g);
     tsr_status (*gdal_read)(const char *path, const tsr_allocator *alloc, uint64_t max_samples, float **pixels,
                             uint32_t *w, uint32_t *h, char format[64], tsr_georef *g, tsr_error *err);
+    /* the module's own tsr_atomic_remove_pending (its image temporaries):
+     * async-signal-safe, for the command's signal handler */
+    void (*remove_pending)(void);
 } tsr_io_api;
 
 /* The module's implementations (not exported; reached through the table). */

@@ -204,6 +204,10 @@ void tsr_atomic_abort(const char *tmp);
  * handler of SIGINT or SIGTERM, so an interrupted command leaves no hidden
  * partial file. Async-signal-safe (unlink). */
 void tsr_atomic_remove_pending(void);
+/* Internal: another copy's tsr_atomic_remove_pending, which this one calls
+ * too (the I/O module compiles its own copy of these functions, and its
+ * image temporaries are pending there; terrain/io_loader.c sets it). */
+extern void (*volatile tsr__atomic_remove_also)(void);
 /* Whether an output could be made at path: creates the temporary that
  * tsr_atomic_begin would and removes it, leaving the disk as it was. For
  * commands to refuse an unwritable output before long work, not after. */

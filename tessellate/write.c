@@ -48,11 +48,16 @@ static void pending_drop(const char *tmp)
         }
 }
 
+void (*volatile tsr__atomic_remove_also)(void);
+
 void tsr_atomic_remove_pending(void)
 {
     for (int k = 0; k < PENDING; k++)
         if (atomic_load(&pending_state[k]) == 2)
             unlink(pending_path[k]);
+    void (*also)(void) = tsr__atomic_remove_also;
+    if (also)
+        also();
 }
 
 /* The file an output to path lands in: path itself, or, where path is a

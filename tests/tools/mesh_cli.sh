@@ -331,3 +331,34 @@ for up in "" --north-up; do
   awk -v v="$vol" 'BEGIN { exit !(v > 0) }' || fail "solid $up: signed volume $vol (inward-facing)"
   echo "ok ${up:-default} orientation: $faces solid triangles, volume $vol"
 done
+
+# Interrupted while an image is written (SIGINT as Ctrl-C sends it, the
+# moment the normal map's or the hillshade's temporary appears): no hidden
+# temporary is left. The images' temporaries are the I/O module's, which
+# the command's signal handler did not know of (a GIS audit found
+# .k_n.tsr-tmp-*.png left behind).
+"$tessera" generate --size 1025 --seed 3 -o "$dir/big.tif" --quiet 2>/dev/null ||
+  "$tessera" generate --size 1025 --seed 3 -o "$dir/big.tif" > /dev/null || fail "generate big.tif"
+for img in n h; do
+  mkdir -p "$dir/intr_$img"
+  python3 - "$dir/intr_$img" ".k_$img.tsr-tmp" "$tessera" mesh "$dir/big.tif" --max-error 0.5 -o "$dir/intr_$img/k.ply" \
+    --normal-map "$dir/intr_$img/k_n.png" --hillshade "$dir/intr_$img/k_h.png" --quiet <<'PY' || fail "interrupted while writing k_$img.png"
+import os, signal, subprocess, sys, time
+folder, pat, cmd = sys.argv[1], sys.argv[2], sys.argv[3:]
+p = subprocess.Popen(cmd, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+sent = False
+while p.poll() is None:
+    if any(f.startswith(pat) for f in os.listdir(folder)):
+        p.send_signal(signal.SIGINT)
+        sent = True
+        break
+    time.sleep(0.002)
+rc = p.wait()
+left = [f for f in os.listdir(folder) if '.tsr-tmp' in f]
+if not sent:
+    sys.exit("the temporary %s* was never seen (rc %d)" % (pat, rc))
+if rc != -signal.SIGINT or left:
+    sys.exit("rc %d, left behind: %s" % (rc, left))
+print("ok interrupted while %s* was written: rc %d, no temporary left" % (pat, rc))
+PY
+done
