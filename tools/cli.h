@@ -53,7 +53,8 @@ extern void (*volatile cli_signal_cleanup)(void);
     "  --raw W H TYPE        headerless little-endian samples, TYPE u16, i16 or f32\n"                                 \
     "  --nodata V            samples equal to V are no-data (holes); default: the file's own\n"                        \
     "                        (GeoTIFF GDAL_NODATA, a GIS format's header). V is a stored value,\n"                     \
-    "                        compared before a scale and offset the file names, as GDAL does\n"                        \
+    "                        compared before a scale and offset the file names, as GDAL does;\n"                       \
+    "                        +-3.4028235e38 (the float extremes) are always no-data\n"                                 \
     "  --dx S, --dy S        sample spacing in x and y (default: a GIS file's own, in metres,\n"                       \
     "                        else 1; --dy defaults to --dx)\n"                                                         \
     "  --dz S                height scale: z = h * S (default 1)\n"

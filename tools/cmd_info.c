@@ -2,6 +2,7 @@
 #include "cli.h"
 
 #include <cjson/cJSON.h>
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -96,8 +97,15 @@ static int run(int argc, char **argv)
         else
             printf("min:     %.9g\nmax:     %.9g\nmean:    %.9g\nnodata:  %llu", st.min, st.max, st.mean,
                    (unsigned long long)st.nodata);
-        if (g && g->has_nodata)
-            printf(" (the file's no-data value: %.9g%s)", g->nodata, o.load.has_nodata ? ", replaced by --nodata" : "");
+        if (g && g->has_nodata) {
+            /* the float extremes are no-data whatever --nodata says
+             * (tsr_heightfield_load) */
+            bool extreme = (float)g->nodata == FLT_MAX || (float)g->nodata == -FLT_MAX;
+            printf(" (the file's no-data value: %.9g%s)", g->nodata,
+                   !o.load.has_nodata ? ""
+                   : extreme          ? "; still no-data beside --nodata's: the float extremes always are"
+                                      : ", replaced by --nodata");
+        }
         printf("\nspacing: %s\n", spacing);
         if (o.dz > 0 && !none)
             printf("z:       %.9g to %.9g (heights * %.9g, --dz: what meshes get)\n", st.min * o.dz, st.max * o.dz,

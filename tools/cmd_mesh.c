@@ -449,7 +449,10 @@ static int run(int argc, char **argv)
                 to.tile_n = v;
         } else if (!strcmp(a, "--window") && has_value) {
             if (!parse_window(argv[++i], win) || win[2] < 2 || win[3] < 2) {
-                cli_error("mesh", "--window %s: give X,Y,W,H (integers, W and H at least 2)", argv[i]);
+                cli_error("mesh",
+                          "--window %s: give X,Y,W,H in samples: whole numbers below 2^32, X and Y 0 or more (the "
+                          "first column and row), W and H 2 or more",
+                          argv[i]);
                 return CLI_USAGE;
             }
             has_window = true;
