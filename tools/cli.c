@@ -442,6 +442,16 @@ void cli_progress_cb(void *user, double f)
     p->shown = true;
 }
 
+void cli_progress_phase(cli_progress *p, const char *what)
+{
+    if (!p->on || cli_now() - p->t0 < 1.0)
+        return;
+    cli_progress_end(p);
+    fprintf(stderr, "tessera %s: %.50s ...", p->cmd, what);
+    fflush(stderr);
+    p->shown = true;
+}
+
 void cli_progress_end(cli_progress *p)
 {
     if (p->shown)

@@ -107,6 +107,10 @@ void cli_progress_start(cli_progress *p, const char *cmd, bool on);
 /* A progress callback of the library (user: the cli_progress). */
 void cli_progress_cb(void *user, double fraction);
 void cli_progress_end(cli_progress *p);
+/* Names the step now under way in place of the bar ("tessera mesh:
+ * writing the normal map ..."), on the same terms (a terminal, after the
+ * first second); cli_progress_end erases it. */
+void cli_progress_phase(cli_progress *p, const char *what);
 
 /* Checks, before long work, that outputs can be written: for each of the
  * n paths not NULL (NULL: not asked for), that a file can be made there

@@ -9,6 +9,7 @@
 #include <cjson/cJSON.h>
 #include <float.h>
 #include <math.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -171,6 +172,18 @@ static bool parse_window(const char *s, uint32_t w[4])
         s = end ? end + 1 : s + n;
     }
     return true;
+}
+
+/* The outputs written so far (the normal map, the hillshade, the mesh):
+ * removed by a signal before the last is written (cli_signal_cleanup;
+ * unlink is async-signal-safe). */
+static const char *written[3];
+static volatile sig_atomic_t nwritten;
+
+static void remove_written(void)
+{
+    for (int k = 0; k < nwritten; k++)
+        unlink(written[k]);
 }
 
 static const char *method_name(tsr_tin_method m)
@@ -666,23 +679,29 @@ static int run(int argc, char **argv)
     to.max_triangles = budget_t; /* the stats give the budget asked for */
     to.max_vertices = budget_v;
     cli_progress_end(&pr);
-    /* the files written so far, removed when a later one fails: no
-     * partial set of outputs is left behind */
-    const char *written[3];
-    int nwritten = 0;
+    /* the files written so far, removed when a later one fails or a signal
+     * stops the command: no partial set of outputs is left behind */
+    nwritten = 0;
+    cli_signal_cleanup = remove_written;
     if (rc == CLI_OK && normal_map) {
-        if (tsr_heightfield_normal_map_window(hf, mx, my, mw, mh, normal_map, &err) != TSR_OK) {
+        cli_progress_phase(&pr, "writing the normal map");
+        tsr_status s = tsr_heightfield_normal_map_window(hf, mx, my, mw, mh, normal_map, &err);
+        cli_progress_end(&pr);
+        if (s != TSR_OK) {
             cli_error("mesh", "%s", err.message);
             rc = CLI_FAIL;
         } else
-            written[nwritten++] = normal_map;
+            written[nwritten] = normal_map, nwritten = nwritten + 1;
     }
     if (rc == CLI_OK && hillshade) {
-        if (tsr_heightfield_hillshade_window(hf, mx, my, mw, mh, hillshade, 315, 45, &err) != TSR_OK) {
+        cli_progress_phase(&pr, "writing the hillshade");
+        tsr_status s = tsr_heightfield_hillshade_window(hf, mx, my, mw, mh, hillshade, 315, 45, &err);
+        cli_progress_end(&pr);
+        if (s != TSR_OK) {
             cli_error("mesh", "%s", err.message);
             rc = CLI_FAIL;
         } else
-            written[nwritten++] = hillshade;
+            written[nwritten] = hillshade, nwritten = nwritten + 1;
     }
     tsr_mesh_format fmt = tsr_mesh_format_from_path(out);
     if (rc == CLI_OK && (want_uvs || normal_map || hillshade) && fmt != TSR_FORMAT_STL &&
@@ -693,15 +712,19 @@ static int run(int argc, char **argv)
     if (rc == CLI_OK && north_up)
         mirror_rows(&mesh);
     if (rc == CLI_OK) {
-        if (tsr_mesh_write(&mesh, out, TSR_FORMAT_UNKNOWN, &err) != TSR_OK) {
+        cli_progress_phase(&pr, "writing the mesh");
+        tsr_status s = tsr_mesh_write(&mesh, out, TSR_FORMAT_UNKNOWN, &err);
+        cli_progress_end(&pr);
+        if (s != TSR_OK) {
             cli_error("mesh", "%s", err.message);
             rc = CLI_FAIL;
         } else
-            written[nwritten++] = out;
+            written[nwritten] = out, nwritten = nwritten + 1;
     }
     double secs = cli_now() - t0;
     if (rc == CLI_OK && stats)
         rc = write_stats(stats, &mesh, &er, secs, &to, hf, &o, &st, bound, &rep);
+    cli_signal_cleanup = NULL;
     for (int k = 0; rc != CLI_OK && k < nwritten; k++)
         unlink(written[k]);
     if (rc == CLI_OK && !quiet) {

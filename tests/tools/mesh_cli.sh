@@ -334,9 +334,10 @@ done
 
 # Interrupted while an image is written (SIGINT as Ctrl-C sends it, the
 # moment the normal map's or the hillshade's temporary appears): no hidden
-# temporary is left. The images' temporaries are the I/O module's, which
-# the command's signal handler did not know of (a GIS audit found
-# .k_n.tsr-tmp-*.png left behind).
+# temporary is left, nor the normal map written before the hillshade. The
+# images' temporaries are the I/O module's, which the command's signal
+# handler did not know of (a GIS audit found .k_n.tsr-tmp-*.png left
+# behind, and k_n.png without the rest).
 "$tessera" generate --size 1025 --seed 3 -o "$dir/big.tif" --quiet 2>/dev/null ||
   "$tessera" generate --size 1025 --seed 3 -o "$dir/big.tif" > /dev/null || fail "generate big.tif"
 for img in n h; do
@@ -354,11 +355,11 @@ while p.poll() is None:
         break
     time.sleep(0.002)
 rc = p.wait()
-left = [f for f in os.listdir(folder) if '.tsr-tmp' in f]
+left = os.listdir(folder)  # no temporary, and no part of the set (the normal map before the hillshade)
 if not sent:
     sys.exit("the temporary %s* was never seen (rc %d)" % (pat, rc))
 if rc != -signal.SIGINT or left:
     sys.exit("rc %d, left behind: %s" % (rc, left))
-print("ok interrupted while %s* was written: rc %d, no temporary left" % (pat, rc))
+print("ok interrupted while %s* was written: rc %d, nothing left" % (pat, rc))
 PY
 done
