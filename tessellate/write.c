@@ -7,6 +7,8 @@
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -142,9 +144,18 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
                              path);
     if (exists && !(old.st_mode & (S_IWUSR | S_IWGRP | S_IWOTH)))
         return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: the file is read-only", path);
+    /* made and registered with signals held, so a signal between the two
+     * cannot leave the temporary behind */
+    sigset_t all, old_mask;
+    sigfillset(&all);
+    pthread_sigmask(SIG_BLOCK, &all, &old_mask);
     int fd = mkstemps(tmp, (int)strlen(ext));
+    int e = errno;
+    if (fd >= 0)
+        pending_add(tmp);
+    pthread_sigmask(SIG_SETMASK, &old_mask, NULL);
     if (fd < 0)
-        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: %s", path, strerror(errno));
+        return tsr_error_set(err, TSR_ERR_IO, "%s: cannot write: %s", path, strerror(e));
     /* mkstemps makes the file 0600; the output gets the permissions of the
      * file it replaces, else those any new file would (0666 less the
      * umask) */
@@ -152,7 +163,6 @@ tsr_status tsr_atomic_begin(const char *path, char *tmp, size_t cap, tsr_error *
     umask(mask);
     fchmod(fd, exists ? old.st_mode & 01777 : 0666 & ~mask);
     close(fd);
-    pending_add(tmp);
     return TSR_OK;
 }
 

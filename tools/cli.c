@@ -357,6 +357,48 @@ void cli_georef_json(cJSON *j, const tsr_heightfield *hf, const cli_heightfield_
     }
 }
 
+/* A file that names no no-data value (a raw file, a GeoTIFF without
+ * GDAL_NODATA) may still hold one of the values GIS tools write for it:
+ * warned of when its lowest height is such a value and lies far below the
+ * rest (a tenth of their range or more), as no real terrain does. */
+static void warn_sentinel(const char *cmd, const char *path, const tsr_heightfield *hf,
+                          const cli_heightfield_options *o)
+{
+    const tsr_georef *g = tsr_heightfield_georef(hf);
+    if (o->load.has_nodata || o->load.decode != TSR_DECODE_NONE || (g && g->has_nodata))
+        return;
+    const float *d = tsr_heightfield_cdata(hf);
+    size_t n = (size_t)tsr_heightfield_width(hf) * tsr_heightfield_height(hf);
+    float lo = INFINITY, next = INFINITY, hi = -INFINITY;
+    uint64_t at = 0;
+    for (size_t i = 0; i < n; i++) {
+        float v = d[i];
+        if (v != v)
+            continue;
+        hi = v > hi ? v : hi;
+        if (v < lo) {
+            next = lo;
+            lo = v;
+            at = 1;
+        } else if (v == lo)
+            at++;
+        else if (v < next)
+            next = v;
+    }
+    static const float sentinels[] = {-9999.0f, -32768.0f, -32767.0f, -99999.0f};
+    bool common = false;
+    for (size_t k = 0; k < sizeof sentinels / sizeof sentinels[0]; k++)
+        common |= lo == sentinels[k];
+    if (!common || !(next < INFINITY) || !(next - lo >= 0.1 * (hi - next)))
+        return;
+    fprintf(stderr,
+            "tessera %s: warning: %s: %llu sample%s hold%s %g, a value GIS tools write for no-data, far below the "
+            "others (from %g); the file names no no-data value, so they are heights: give --nodata %g if they are "
+            "holes\n",
+            cmd, path, (unsigned long long)at, at == 1 ? "" : "s", at == 1 ? "s" : "", (double)lo, (double)next,
+            (double)lo);
+}
+
 tsr_heightfield *cli_load_heightfield(const char *cmd, const char *path, const cli_heightfield_options *o)
 {
     tsr_heightfield *hf = NULL;
@@ -379,6 +421,7 @@ tsr_heightfield *cli_load_heightfield(const char *cmd, const char *path, const c
         cli_error(cmd, "%s", err.message);
         return NULL;
     }
+    warn_sentinel(cmd, path, hf, o);
     double dx, dy, dz = o->dz > 0 ? o->dz : 1;
     cli_spacing(hf, o, &dx, &dy);
     tsr_heightfield_set_spacing(hf, dx, dy, dz);

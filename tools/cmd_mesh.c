@@ -72,7 +72,10 @@ static void help(FILE *f)
                "                        --triangles and --vertices count the walls and bottom too\n"
                "  --north-up            y = -r*dy: +y is the image's up (north in a north-up GIS raster),\n"
                "                        so x east, y north, z up is right-handed and the terrain is not\n"
-               "                        mirrored in a z-up viewer (the default's y runs down the rows)\n"
+               "                        mirrored in a z-up viewer (the default's y runs down the rows);\n"
+               "                        in a .glb (glTF viewers: +y up) the default shows the map\n"
+               "                        mirrored, its first row nearest the viewer; --north-up puts\n"
+               "                        the first row (north) at the back, as a map reads\n"
                "  --normals             per-vertex normals from the heightfield's gradients (with --base,\n"
                "                        the walls and bottom flat-shaded: their vertices are written apart\n"
                "                        from the top's, except in .stl, which has facet normals)\n"
@@ -519,6 +522,11 @@ static int run(int argc, char **argv)
                   to.border_error, max_error);
         return CLI_USAGE;
     }
+    if (has_window && !quiet && to.method == TSR_TIN_DELAUNAY && (to.max_triangles || to.max_vertices) &&
+        !(max_error > 0) && !(to.border_error > 0))
+        fprintf(stderr, "tessera mesh: note: with a budget and no bound the window's border is refined like its "
+                        "interior, so adjacent windows' borders will not match; give --max-error or --border-error "
+                        "for tiles that fit together\n");
     if (to.block && to.method != TSR_TIN_DELAUNAY) {
         cli_error("mesh", "--block applies to --method delaunay only");
         return CLI_USAGE;

@@ -347,9 +347,16 @@ for img in n h; do
 import os, signal, subprocess, sys, time
 folder, pat, cmd = sys.argv[1], sys.argv[2], sys.argv[3:]
 p = subprocess.Popen(cmd, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+def size(f):
+    try:
+        return os.path.getsize(f)
+    except OSError:
+        return 0
 sent = False
 while p.poll() is None:
-    if any(f.startswith(pat) for f in os.listdir(folder)):
+    # (a temporary with bytes in it: the image being written, not the
+    # empty one the output check at the start makes and removes)
+    if any(f.startswith(pat) and size(os.path.join(folder, f)) > 0 for f in os.listdir(folder)):
         p.send_signal(signal.SIGINT)
         sent = True
         break
@@ -363,3 +370,23 @@ if rc != -signal.SIGINT or left:
 print("ok interrupted while %s* was written: rc %d, nothing left" % (pat, rc))
 PY
 done
+
+# A file naming no no-data value whose lowest samples are -9999 far below
+# the rest: a warning names the value and --nodata; with --nodata -9999,
+# none, and those samples are holes (fewer triangles)
+python3 - "$dir/sent.f32" <<'PY' || fail "write sent.f32"
+import math, struct, sys
+w = h = 40
+v = [(-9999.0 if (c - 20) ** 2 + (r - 20) ** 2 < 36 else 100 + 10 * math.sin(c / 5.0) + r * 0.3)
+     for r in range(h) for c in range(w)]
+open(sys.argv[1], "wb").write(struct.pack("<%df" % len(v), *v))
+PY
+"$tessera" mesh "$dir/sent.f32" --raw 40 40 f32 -o "$dir/sent.obj" --quiet 2> "$dir/sent.err" || fail "mesh sent.f32"
+grep -q "warning: .*sent.f32: [0-9]* samples hold -9999, .*--nodata -9999" "$dir/sent.err" ||
+  fail "no sentinel warning: $(cat "$dir/sent.err")"
+"$tessera" mesh "$dir/sent.f32" --raw 40 40 f32 --nodata -9999 -o "$dir/sent2.obj" --quiet 2> "$dir/sent2.err" ||
+  fail "mesh sent.f32 --nodata"
+[ ! -s "$dir/sent2.err" ] || fail "a warning with --nodata given: $(cat "$dir/sent2.err")"
+"$tessera" mesh "${raw[@]}" -o "$dir/nosent.obj" --quiet 2> "$dir/nosent.err" || fail "mesh without sentinel"
+[ ! -s "$dir/nosent.err" ] || fail "a warning on an ordinary file: $(cat "$dir/nosent.err")"
+echo "ok a -9999 the file does not name is warned of: $(head -c 90 "$dir/sent.err")..."
