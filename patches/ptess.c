@@ -3283,6 +3283,7 @@ typedef struct builder {
 
 typedef struct etrim {
     uint32_t v, src;
+    int side; /* of the source's domain (piece edge numbering) */
     float p[3];
 } etrim;
 
@@ -4212,9 +4213,9 @@ static bool trim_regions(const tsr_triangulation *tr, const tloop *loops, uint32
  * trim loops, triangulated in (u, v) with the loops as constraints, the
  * triangles the loops keep (trim_keeps, once per region: trim_regions)
  * lifted. */
-/* Whether (u, v) lies on the border of source s where a piece's edge is
- * linked. */
-static bool on_linked_border(const tsr_pmodel *m, const psource *s, const double uv[2])
+/* The side of source s's domain (0 south, 1 east, 2 north, 3 west) that
+ * (u, v) lies on where a piece's edge there is linked; -1 for none. */
+static int on_linked_border(const tsr_pmodel *m, const psource *s, const double uv[2])
 {
     for (int e = 0; e < 4; e++) {
         bool on = e == 0   ? uv[1] == s->domain[2]
@@ -4229,13 +4230,13 @@ static bool on_linked_border(const tsr_pmodel *m, const psource *s, const double
             const piece *p = &m->pieces[s->first_piece + b2 * s->pu + a2];
             double lo = e & 1 ? p->rect[2] : p->rect[0], hi = e & 1 ? p->rect[3] : p->rect[1], x = uv[(e & 1) ? 1 : 0];
             if (x >= lo && x <= hi && p->nlinks[e])
-                return true;
+                return e;
         }
     }
-    return false;
+    return -1;
 }
 
-static bool push_etrim(builder *b, uint32_t v, uint32_t src, const float p[3])
+static bool push_etrim(builder *b, uint32_t v, uint32_t src, int side, const float p[3])
 {
     if (b->net == b->capet) {
         uint32_t cap = b->capet ? 2 * b->capet : 64;
@@ -4245,7 +4246,7 @@ static bool push_etrim(builder *b, uint32_t v, uint32_t src, const float p[3])
         b->et = n;
         b->capet = cap;
     }
-    b->et[b->net++] = (etrim){v, src, {p[0], p[1], p[2]}};
+    b->et[b->net++] = (etrim){v, src, side, {p[0], p[1], p[2]}};
     return true;
 }
 
@@ -4264,9 +4265,10 @@ static uint32_t uf_find(uint32_t *par, uint32_t i)
 
 /* Where a trim loop crosses a linked patch edge (a hole across the edge
  * between two faces), each side made its own vertex there: those within
- * the link distance become one (the lowest-numbered), triangles left with
- * a repeated corner are dropped and the vertices no triangle uses
- * removed. */
+ * the link distance become one (the lowest-numbered), at most one of each
+ * side of each source (two crossings of one side stay apart, however
+ * near), triangles left with a repeated corner are dropped and the
+ * vertices no triangle uses removed. */
 static tsr_status weld_trim_points(builder *b)
 {
     uint32_t n = b->net;
@@ -4276,25 +4278,37 @@ static tsr_status weld_trim_points(builder *b)
     tsr_ptess_result *r = b->out;
     double tol = b->m->link_tol;
     qsort(b->et, n, sizeof *b->et, etrim_cmp);
-    uint32_t *par = tsr_alloc(a, (size_t)n * sizeof *par);
+    uint32_t *par = tsr_alloc(a, (size_t)2 * n * sizeof *par);
     if (!par)
         return TSR_ERR_NOMEM;
+    uint32_t *next = par + n; /* the members of a cluster, from its root, UINT32_MAX ending */
     for (uint32_t i = 0; i < n; i++)
-        par[i] = i;
+        par[i] = i, next[i] = UINT32_MAX;
     bool any = false;
     for (uint32_t i = 0; i < n; i++)
         for (uint32_t j = i + 1; j < n && (double)b->et[j].p[0] - b->et[i].p[0] <= tol; j++) {
             double d2 = 0;
             for (int c = 0; c < 3; c++)
                 d2 += ((double)b->et[j].p[c] - b->et[i].p[c]) * ((double)b->et[j].p[c] - b->et[i].p[c]);
+            if (d2 > tol * tol)
+                continue;
             uint32_t x = uf_find(par, i), y = uf_find(par, j);
-            if (d2 <= tol * tol && x != y) {
-                if (b->et[y].v < b->et[x].v)
-                    par[x] = y;
-                else
-                    par[y] = x;
-                any = true;
+            bool clash = x == y;
+            for (uint32_t p = x; p != UINT32_MAX && !clash; p = next[p])
+                for (uint32_t q = y; q != UINT32_MAX && !clash; q = next[q])
+                    clash = b->et[p].src == b->et[q].src && b->et[p].side == b->et[q].side;
+            if (clash)
+                continue;
+            if (b->et[y].v < b->et[x].v) {
+                uint32_t t = x;
+                x = y, y = t;
             }
+            par[y] = x; /* y's members after x's */
+            uint32_t last = x;
+            while (next[last] != UINT32_MAX)
+                last = next[last];
+            next[last] = y;
+            any = true;
         }
     if (!any) {
         tsr_free(a, par);
@@ -4591,7 +4605,8 @@ static tsr_status emit_trimmed(builder *b, uint32_t src, double trim_tol_uv, tsr
                         float fp[3] = {(float)pos[0], (float)pos[1], (float)pos[2]},
                               fn[3] = {(float)nr[0], (float)nr[1], (float)nr[2]};
                         mv[o] = tsr_mesh_add_vertex(&b->out->mesh, fp, b->opt->normals ? fn : NULL, NULL);
-                        if (mv[o] != UINT32_MAX && on_linked_border(m, s, uv + 2 * k) && !push_etrim(b, mv[o], src, fp))
+                        int side = mv[o] != UINT32_MAX ? on_linked_border(m, s, uv + 2 * k) : -1;
+                        if (side >= 0 && !push_etrim(b, mv[o], src, side, fp))
                             st = TSR_ERR_NOMEM;
                     }
                     if (mv[o] == UINT32_MAX)

@@ -1917,8 +1917,8 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
          * the same options simplify their common border alike (each
          * window's own heights gave tolerances apart: cracks) */
         double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(whole.max), fabs(whole.min)) * hf->dz;
-        double t = target > margin ? target - margin : target;
-        double b = btol > margin ? btol - margin : btol;
+        double t = target > margin ? target - margin : 0.5 * target; /* (the same for every window) */
+        double b = btol > margin ? btol - margin : 0.5 * btol;
         /* with a bound, the border is fixed first (seams); with a budget
          * alone, it is refined by the greedy pass like the interior */
         bool fixed = target > 0 || o.border_error > 0;
@@ -1931,7 +1931,7 @@ tsr_status tsr_terrain_mesh(const tsr_heightfield *hf, const tsr_tin_options *op
                                   err);
     } else if (o.method == TSR_TIN_QUADTREE && o.tile_n == 0) {
         double margin = 1e-6 * target + 4 * 6e-8 * fmax(fabs(whole.max), fabs(whole.min)) * hf->dz;
-        double t = target > margin ? target - margin : target;
+        double t = target > margin ? target - margin : 0.5 * target; /* (the same for every window) */
         st = tsr__rqt_mesh(src, t / hf->dz, hs.max - hs.min, o.full_border, o.max_triangles, o.max_vertices,
                            o.threads, mesh, rep, err);
     } else if (o.method == TSR_TIN_QUADTREE)

@@ -498,7 +498,7 @@ void cli_progress_phase(cli_progress *p, const char *what)
 void cli_progress_end(cli_progress *p)
 {
     if (p->shown)
-        fprintf(stderr, "\r%*s\r", (int)strlen(p->cmd) + 58, "");
+        fprintf(stderr, "\r%*s\r", (int)strlen(p->cmd) + 66, "");
     p->shown = false;
 }
 

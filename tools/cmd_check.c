@@ -460,25 +460,27 @@ static int tri_edge_cmp(const void *x, const void *y)
     return p->a != q->a ? (p->a < q->a ? -1 : 1) : p->b != q->b ? (p->b < q->b ? -1 : 1) : 0;
 }
 
-static bool corner_pair_on_side(const tsr_pmodel *m, const tsr_ptess_result *r, uint32_t t, uint32_t va, uint32_t vb)
+/* The side of its source's domain (0 u = u0, 1 u = u1, 2 v = v0, 3 v =
+ * v1) that both corners va, vb of triangle t lie on; -1 for none. */
+static int corner_pair_side(const tsr_pmodel *m, const tsr_ptess_result *r, uint32_t t, uint32_t va, uint32_t vb)
 {
     tsr_psource_info si;
     if (!tsr_pmodel_source_info(m, r->tri_source[t], &si))
-        return false;
+        return -1;
     const uint32_t *tv = r->mesh.indices + 3 * (size_t)t;
     const double *uv[2] = {NULL, NULL};
     for (int k = 0; k < 3; k++)
         if (tv[k] == va || tv[k] == vb)
             uv[tv[k] == vb] = r->tri_uv + 6 * (size_t)t + 2 * k;
     if (!uv[0] || !uv[1])
-        return false;
+        return -1;
     for (int side = 0; side < 4; side++) {
         int c = side / 2; /* u sides, then v sides */
         double at = si.domain[side], eps = 1e-9 * (si.domain[2 * c + 1] - si.domain[2 * c]);
         if (fabs(uv[0][c] - at) <= eps && fabs(uv[1][c] - at) <= eps)
-            return true;
+            return side;
     }
-    return false;
+    return -1;
 }
 
 static uint32_t three_patch_edges(const tsr_pmodel *m, const tsr_ptess_result *r)
@@ -499,11 +501,16 @@ static uint32_t three_patch_edges(const tsr_pmodel *m, const tsr_ptess_result *r
             j++;
         if (j - i != 3)
             continue;
-        uint32_t s0 = r->tri_source[e[i].tri], s1 = r->tri_source[e[i + 1].tri], s2 = r->tri_source[e[i + 2].tri];
-        bool ok = s0 != s1 && s0 != s2 && s1 != s2;
-        for (size_t k = i; k < j && ok; k++)
-            ok = corner_pair_on_side(m, r, e[k].tri, e[k].a, e[k].b);
-        count += ok;
+        /* three distinct patch edges: sources, or sides of one source
+         * (a fin along a closed surface's seam) */
+        uint64_t key[3];
+        bool ok = true;
+        for (int k = 0; k < 3 && ok; k++) {
+            int side = corner_pair_side(m, r, e[i + k].tri, e[i + k].a, e[i + k].b);
+            ok = side >= 0;
+            key[k] = (uint64_t)r->tri_source[e[i + k].tri] << 2 | (uint64_t)(side & 3);
+        }
+        count += ok && key[0] != key[1] && key[0] != key[2] && key[1] != key[2];
     }
     free(e);
     return count;

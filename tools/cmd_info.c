@@ -100,7 +100,7 @@ static int run(int argc, char **argv)
         if (g && g->has_nodata) {
             /* the float extremes are no-data whatever --nodata says
              * (tsr_heightfield_load) */
-            bool extreme = (float)g->nodata == FLT_MAX || (float)g->nodata == -FLT_MAX;
+            bool extreme = fabs(g->nodata) >= FLT_MAX;
             printf(" (the file's no-data value: %.9g%s)", g->nodata,
                    !o.load.has_nodata ? ""
                    : extreme          ? "; still no-data beside --nodata's: the float extremes always are"

@@ -3,6 +3,7 @@
  * (terrain/tin.c) builds; the bound is then measured independently
  * (tsr_terrain_measure_window) and the measured figures are the ones
  * reported. */
+#define _DEFAULT_SOURCE /* realpath, strdup */
 #include "cli.h"
 #include "terrain/shade.h"
 
@@ -177,11 +178,24 @@ static bool parse_window(const char *s, uint32_t w[4])
     return true;
 }
 
-/* The outputs written so far (the normal map, the hillshade, the mesh):
- * removed by a signal before the last is written (cli_signal_cleanup;
- * unlink is async-signal-safe). */
-static const char *written[3];
+/* The outputs written so far (the normal map, the hillshade, the mesh),
+ * as the files they landed in (an output path that is a symbolic link
+ * writes the file it points to, which stays a link): removed by a signal
+ * before the last is written (cli_signal_cleanup; unlink is
+ * async-signal-safe) or by a later failure. Volatile, so each path is
+ * stored before the count that makes the handler read it. */
+static char *volatile written[3];
 static volatile sig_atomic_t nwritten;
+
+/* Records output path, written: the file it resolves to (itself if that
+ * cannot be found). */
+static void add_written(const char *path)
+{
+    char *real = realpath(path, NULL);
+    written[nwritten] = real ? real : strdup(path);
+    if (written[nwritten])
+        nwritten = nwritten + 1;
+}
 
 static void remove_written(void)
 {
@@ -699,7 +713,7 @@ static int run(int argc, char **argv)
             cli_error("mesh", "%s", err.message);
             rc = CLI_FAIL;
         } else
-            written[nwritten] = normal_map, nwritten = nwritten + 1;
+            add_written(normal_map);
     }
     if (rc == CLI_OK && hillshade) {
         cli_progress_phase(&pr, "writing the hillshade");
@@ -709,7 +723,7 @@ static int run(int argc, char **argv)
             cli_error("mesh", "%s", err.message);
             rc = CLI_FAIL;
         } else
-            written[nwritten] = hillshade, nwritten = nwritten + 1;
+            add_written(hillshade);
     }
     tsr_mesh_format fmt = tsr_mesh_format_from_path(out);
     if (rc == CLI_OK && (want_uvs || normal_map || hillshade) && fmt != TSR_FORMAT_STL &&
@@ -727,14 +741,18 @@ static int run(int argc, char **argv)
             cli_error("mesh", "%s", err.message);
             rc = CLI_FAIL;
         } else
-            written[nwritten] = out, nwritten = nwritten + 1;
+            add_written(out);
     }
     double secs = cli_now() - t0;
     if (rc == CLI_OK && stats)
         rc = write_stats(stats, &mesh, &er, secs, &to, hf, &o, &st, bound, &rep);
     cli_signal_cleanup = NULL;
-    for (int k = 0; rc != CLI_OK && k < nwritten; k++)
-        unlink(written[k]);
+    for (int k = 0; k < nwritten; k++) {
+        if (rc != CLI_OK)
+            unlink(written[k]);
+        free(written[k]);
+    }
+    nwritten = 0;
     if (rc == CLI_OK && !quiet) {
         fprintf(stderr, "tessera mesh: wrote %s (%s, %s, %u vertices, %u triangles", out,
                 tsr_mesh_format_name(tsr_mesh_format_from_path(out)), method_name(to.method), mesh.vertex_count,

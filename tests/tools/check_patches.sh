@@ -230,6 +230,20 @@ v = json.load(open(sys.argv[1]))["view_independent"]
 assert v["three_patch_edges"] >= 2 and v["gaps"] == 0, (v["three_patch_edges"], v["gaps"])
 print("ok a fin on a plate: %d three-patch edges, no gap" % v["three_patch_edges"])
 PY
+# a fin along a closed cylinder's seam: two of the three patch edges are
+# sides of one patch (u = 0 and u = 4), which the check counted as no
+# three-patch edge (a reviewer's case)
+{
+  for z in 0 1; do
+    awk -v z=$z 'BEGIN { h = sqrt(2) / 2
+      split("1 1 0 -1 -1 -1 0 1 1", x, " "); split("0 1 1 1 0 -1 -1 -1 0", y, " ")
+      for (i = 1; i <= 9; i++) printf "v %g %g %g %.17g\n", x[i], y[i], z, i % 2 ? 1 : h }'
+  done
+  echo "cstype rat bspline"; echo "deg 2 1"; echo "surf 0 4 0 1 $(seq -s ' ' 1 18)"
+  echo "parm u 0 0 0 1 1 2 2 3 3 4 4 4"; echo "parm v 0 0 1 1"; echo "end"
+  printf 'v 1 0 0\nv 2 0 0\nv 1 0 1\nv 2 0 1\ncstype bezier\ndeg 1 1\nsurf 0 1 0 1 19 20 21 22\nend\n'
+} > "$dir/cyl_fin.obj"
+expect_ok "a fin along a cylinder's seam" "$dir/cyl_fin.obj" --cameras 1
 
 # two unit squares side by side, each trimmed by its own border given to
 # 1e-6 (as CAD files give it): the loops' points that near the border go
