@@ -367,6 +367,16 @@ static void warn_sentinel(const char *cmd, const char *path, const tsr_heightfie
     const tsr_georef *g = tsr_heightfield_georef(hf);
     if (o->load.has_nodata || o->load.decode != TSR_DECODE_NONE || (g && g->has_nodata))
         return;
+    /* the lowest height first (the statistics' vector pass): most files
+     * stop here, without the counting pass below */
+    static const float sentinels[] = {-9999.0f, -32768.0f, -32767.0f, -99999.0f};
+    tsr_heightfield_stats st;
+    tsr_heightfield_stats_compute(hf, &st);
+    bool common = false;
+    for (size_t k = 0; k < sizeof sentinels / sizeof sentinels[0]; k++)
+        common |= st.valid && (float)st.min == sentinels[k];
+    if (!common)
+        return;
     const float *d = tsr_heightfield_cdata(hf);
     size_t n = (size_t)tsr_heightfield_width(hf) * tsr_heightfield_height(hf);
     float lo = INFINITY, next = INFINITY, hi = -INFINITY;
@@ -385,11 +395,7 @@ static void warn_sentinel(const char *cmd, const char *path, const tsr_heightfie
         else if (v < next)
             next = v;
     }
-    static const float sentinels[] = {-9999.0f, -32768.0f, -32767.0f, -99999.0f};
-    bool common = false;
-    for (size_t k = 0; k < sizeof sentinels / sizeof sentinels[0]; k++)
-        common |= lo == sentinels[k];
-    if (!common || !(next < INFINITY) || !(next - lo >= 0.1 * (hi - next)))
+    if (!(next < INFINITY) || !(next - lo >= 0.1 * (hi - next)))
         return;
     fprintf(stderr,
             "tessera %s: warning: %s: %llu sample%s hold%s %g, a value GIS tools write for no-data, far below the "

@@ -445,11 +445,6 @@ typedef struct boundary_report {
     uint32_t unlinked_junctions; /* (vertex, edge) T-junctions of tsr_mesh_validate whose edge is unlinked */
 } boundary_report;
 
-/* Mesh edges of three triangles where three patches of a set meet along
- * one edge (a fin on a plate; ptess.h links them): each triangle from its
- * own source, with the edge's two corners on one side of that source's
- * domain. The validation counts them non-manifold, as the input is.
- * UINT32_MAX when out of memory. */
 typedef struct tri_edge {
     uint32_t a, b, tri;
 } tri_edge;
@@ -483,6 +478,12 @@ static int corner_pair_side(const tsr_pmodel *m, const tsr_ptess_result *r, uint
     return -1;
 }
 
+/* Mesh edges of three triangles where three patches of a set meet along
+ * one edge (a fin on a plate; ptess.h links them): each triangle with the
+ * edge's two corners on one side of its source's domain, the three
+ * (source, side) pairs distinct (two may be sides of one closed surface's
+ * seam). The validation counts them non-manifold, as the input is.
+ * UINT32_MAX when out of memory. */
 static uint32_t three_patch_edges(const tsr_pmodel *m, const tsr_ptess_result *r)
 {
     const tsr_mesh *me = &r->mesh;
